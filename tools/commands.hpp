@@ -1,0 +1,27 @@
+// The `netvmo` subcommands. Each add_<name> registers its subcommand with its options (all
+// with defaults shown in --help) and a callback that stores the process exit code.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <exception>
+#include <functional>
+#include <string>
+
+namespace netvmo::tools {
+
+/// Runs a command body; a thrown error becomes one line on stderr and exit code 1.
+inline int guarded(const std::string& command, const std::function<int()>& body) {
+  try {
+    return body();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "netvmo %s: error: %s\n", command.c_str(), e.what());
+    return 1;
+  }
+}
+
+void add_simulate(CLI::App& app, int& exit_code);
+void add_render(CLI::App& app, int& exit_code);
+void add_detect(CLI::App& app, int& exit_code);
+
+}  // namespace netvmo::tools

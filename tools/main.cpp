@@ -1,0 +1,19 @@
+// netvmo: cooperative 3D pose estimation of a tagged target by a camera network, with the
+// networked visual motion observer under imperfect visibility.
+#include "commands.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "netvmo: a network of cameras cooperatively estimates the pose of an AprilTag-tagged target\n"
+      "with the networked visual motion observer (Hatanaka, Nishi, Fujita)."};
+  app.set_version_flag("--version", "netvmo 0.1.0");
+  app.require_subcommand(0, 1);
+  app.fallthrough(false);
+  int exit_code = 0;
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  return exit_code;
+}
