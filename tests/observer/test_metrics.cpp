@@ -1,0 +1,64 @@
+// The paper's metrics: g* (eq:g_ave) with the Section 5 numbers, optimality of g*, energies and
+// epsilon-levels against closed forms.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "netvmo/observer/metrics.hpp"
+
+using namespace netvmo::obs;
+
+namespace {
+std::vector<SE3> paper_targets() {
+  return {make_pose({0.55, 1.00, -1.91}, {0.30, 0.19, 0.21}),
+          make_pose({0.30, 0.80, -1.84}, {0.21, 0.30, 0.19}),
+          make_pose({0.56, 1.05, -2.00}, {0.29, 0.20, 0.31})};
+}
+double objective(const SE3& g, const std::vector<SE3>& targets) {
+  double s = 0.0;
+  for (const auto& t : targets) s += psi(g.inverse() * t);  // (eq:g_ave)
+  return s;
+}
+}  // namespace
+
+TEST(Metrics, PaperAverageToThePrintedDecimals) {
+  const SE3 g = average_pose(paper_targets());
+  const Vec3 p = g.translation();
+  const Vec3 r = rotvec(g);
+  const Vec3 p_paper(0.47, 0.95, -1.92), r_paper(0.27, 0.23, 0.24);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(p[k], p_paper[k], 0.005) << k;
+    EXPECT_NEAR(r[k], r_paper[k], 0.005) << k;
+  }
+}
+
+TEST(Metrics, AverageMinimisesTheObjective) {
+  const auto t = paper_targets();
+  const SE3 g = average_pose(t);
+  const double f0 = objective(g, t);
+  for (int k = 0; k < 6; ++k) {
+    for (double s : {1e-3, -1e-3}) {
+      Vec6 d = Vec6::Zero();
+      d[k] = s;
+      EXPECT_GT(objective(g * exp_se3(d), t), f0) << k;
+    }
+  }
+}
+
+TEST(Metrics, EnergiesAndLevelsMatchClosedForms) {
+  const SE3 g_star = make_pose({1, 2, 3}, {0.1, 0.0, 0.0});
+  const double th = 0.3;
+  std::vector<SE3> est = {g_star, g_star * make_pose({0.2, 0, 0}, {0, 0, th})};
+  const Energies e = energies(est, g_star);
+  EXPECT_NEAR(e.U_p, 0.5 * 0.04, 1e-14);
+  EXPECT_NEAR(e.U_R, 2.0 * (1.0 - std::cos(th)), 1e-14);
+  const std::vector<SE3> targets = {g_star * make_pose({0.1, 0, 0}, {0.2, 0, 0}),
+                                    g_star * make_pose({-0.1, 0, 0}, {-0.2, 0, 0})};
+  const Spread s = spread(targets, g_star);
+  EXPECT_NEAR(s.rho_p, 0.02, 1e-14);
+  EXPECT_NEAR(s.rho_R, 2 * 2.0 * (1.0 - std::cos(0.2)), 1e-14);
+  EXPECT_NEAR(s.phi_m, 2.0 * (1.0 - std::cos(0.2)), 1e-14);
+  const EpsLevels l = eps_levels(est, g_star, s, 2);
+  EXPECT_NEAR(l.eps_p, (0.04 / 2) / (0.02 / 2), 1e-12);
+  EXPECT_NEAR(l.eps_R, (e.U_R / 2) / (s.rho_R / 2), 1e-12);
+}
