@@ -1,15 +1,24 @@
 // netvmo: cooperative 3D pose estimation of a tagged target by a camera network, with the
 // networked visual motion observer under imperfect visibility.
+#include <cstdio>
+
 #include "commands.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{
       "netvmo: a network of cameras cooperatively estimates the pose of an AprilTag-tagged target\n"
       "with the networked visual motion observer (Hatanaka, Nishi, Fujita)."};
+  app.name("netvmo");
   app.set_version_flag("--version", "netvmo 0.1.0");
-  app.require_subcommand(0, 1);
+  app.footer("Run 'netvmo <command> --help' for a command's options and defaults.");
+  app.require_subcommand(1, 1);
   app.fallthrough(false);
   int exit_code = 0;
+  netvmo::tools::add_simulate(app, exit_code);
+  if (argc == 1) {
+    std::fputs(app.help().c_str(), stdout);
+    return 1;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

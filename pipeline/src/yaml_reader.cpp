@@ -1,8 +1,16 @@
 #include "netvmo/pipeline/yaml_reader.hpp"
 
+#include <cstdio>
+
 #include "netvmo/pipeline/error.hpp"
 
 namespace netvmo::yaml {
+
+std::string format_number(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
 
 YAML::Node load_file(const std::filesystem::path& file) {
   if (!std::filesystem::exists(file)) throw InputError(file.string() + ": file not found");

@@ -15,6 +15,9 @@
 
 namespace netvmo::yaml {
 
+/// Shortest text for a number in a message: 9, 0.5, 1e-07.
+std::string format_number(double v);
+
 /// Parses a YAML file; throws InputError "<file>: ..." if missing or malformed.
 YAML::Node load_file(const std::filesystem::path& file);
 
