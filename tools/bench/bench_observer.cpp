@@ -1,0 +1,67 @@
+// One networked-observer frame (all sub-steps) for n = 5 ... 10,000 cameras on ring-with-chords
+// graphs (every node has degree 4, so the sub-step count is the same for every n). The
+// reported complexity is fitted against n + |E|.
+#include <benchmark/benchmark.h>
+
+#include "netvmo/observer/observer.hpp"
+
+using namespace netvmo::obs;
+
+namespace {
+Graph ring_with_chords(int n) {
+  std::vector<Graph::Edge> e;
+  const int chord = n < 8 ? 2 : n / 3;  // (i, i + chord) never coincides with a ring edge
+  for (int i = 0; i < n; ++i) {
+    e.emplace_back(i, (i + 1) % n);
+    e.emplace_back(i, (i + chord) % n);
+  }
+  return Graph(n, e);
+}
+
+void BM_ObserverFrame(benchmark::State& state, VisualError error) {
+  const int n = static_cast<int>(state.range(0));
+  const Graph g = ring_with_chords(n);
+  ObserverSettings s;  // k_e = 1, k_s = 50
+  s.error = error;
+  NetworkedObserver obs(g, s);
+  std::vector<SE3> g_wi(static_cast<size_t>(n)), g_bar(static_cast<size_t>(n));
+  std::vector<VisualMeasurement> z(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    const double a = 2.0 * 3.14159265358979 * i / n;
+    // Cameras on a circle looking at the origin region, every third one seeing the target.
+    g_wi[static_cast<size_t>(i)] = make_pose(Vec3(3 * std::cos(a), 3 * std::sin(a), 0), Vec3(0, 0, a));
+    g_bar[static_cast<size_t>(i)] = make_pose(Vec3(0, 0, 2), Vec3(3.0, 0, 0));
+    if (i % 3 == 0) {
+      auto& zi = z[static_cast<size_t>(i)];
+      zi.visible = true;
+      zi.g_io = make_pose(Vec3(0.01 * (i % 7), 0.0, 2.0), Vec3(3.05, 0.02, 0.0));
+      zi.f = project(zi.g_io, s.features);
+    }
+  }
+  obs.set_camera_poses(g_wi);
+  obs.reset(g_bar);
+  const double dt = 1.0 / 30.0;
+  for (auto _ : state) {
+    obs.step(dt, z);
+    benchmark::DoNotOptimize(obs.estimates().data());
+  }
+  const auto work = static_cast<int64_t>(n + static_cast<int>(g.edges().size()));
+  state.SetComplexityN(work);
+  state.counters["cameras"] = n;
+  state.counters["substeps"] = obs.substeps(dt);
+  state.counters["ns_per_(n+|E|)"] = benchmark::Counter(
+      static_cast<double>(work), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.SetItemsProcessed(state.iterations() * work);
+}
+}  // namespace
+
+BENCHMARK_CAPTURE(BM_ObserverFrame, pose_error, VisualError::Pose)
+    ->Arg(5)->Arg(100)->Arg(1000)->Arg(10000)
+    ->Unit(benchmark::kMicrosecond)
+    ->Complexity(benchmark::oN);
+BENCHMARK_CAPTURE(BM_ObserverFrame, feature_error, VisualError::Features)
+    ->Arg(5)->Arg(100)->Arg(1000)->Arg(10000)
+    ->Unit(benchmark::kMicrosecond)
+    ->Complexity(benchmark::oN);
+
+BENCHMARK_MAIN();
