@@ -33,6 +33,15 @@ int stable_substeps(double dt, const ObserverSettings& s, int max_degree) {
   return std::max(1, static_cast<int>(std::ceil(dt * lambda_max / s.step_factor - 1e-12)));
 }
 
+void InProcessTransport::exchange(const Graph& graph, const std::vector<SE3>& published,
+                                  std::vector<std::vector<SE3>>& inbox) {
+  for (int i = 0; i < graph.size(); ++i) {
+    auto& box = inbox[static_cast<size_t>(i)];
+    const auto& nb = graph.neighbors(i);
+    for (size_t k = 0; k < nb.size(); ++k) box[k] = published[static_cast<size_t>(nb[k])];
+  }
+}
+
 NetworkedObserver::NetworkedObserver(Graph graph, ObserverSettings settings)
     : graph_(std::move(graph)), settings_(std::move(settings)) {
   if (!graph_.connected())
@@ -47,7 +56,16 @@ NetworkedObserver::NetworkedObserver(Graph graph, ObserverSettings settings)
   g_wi_.assign(n, SE3::Identity());
   V_wi_.assign(n, Vec6::Zero());
   u_.assign(n, Vec6::Zero());
-  world_scratch_.assign(n, SE3::Identity());
+  active_.assign(n, true);
+  published_.assign(n, SE3::Identity());
+  inbox_.resize(n);
+  for (size_t i = 0; i < n; ++i)
+    inbox_[i].assign(static_cast<size_t>(graph_.degree(static_cast<int>(i))), SE3::Identity());
+}
+
+void NetworkedObserver::set_active(const std::vector<bool>& active) {
+  if (active.size() != active_.size()) throw std::invalid_argument("active mask: wrong count");
+  active_ = active;
 }
 
 void NetworkedObserver::reset(const std::vector<SE3>& g_bar) {
@@ -76,20 +94,27 @@ void NetworkedObserver::step(double dt, const std::vector<VisualMeasurement>& z)
   const double h = dt / N;
   const int n = graph_.size();
   for (int k = 0; k < N; ++k) {
-    // One exchange round: every camera publishes its estimate in the world frame.
-    for (int i = 0; i < n; ++i) world_scratch_[static_cast<size_t>(i)] = g_wi_[static_cast<size_t>(i)] * g_bar_[static_cast<size_t>(i)];
+    // One exchange round: every camera publishes its estimate in the world frame,
+    // g_wi g_bar_i, so that g_bar_i^-1 g_ij g_bar_j = (g_wi g_bar_i)^-1 (g_wj g_bar_j).
     for (int i = 0; i < n; ++i) {
       const auto si = static_cast<size_t>(i);
+      published_[si] = g_wi_[si] * g_bar_[si];
+    }
+    transport_->exchange(graph_, published_, inbox_);
+    for (int i = 0; i < n; ++i) {
+      const auto si = static_cast<size_t>(i);
+      if (!active_[si]) continue;
       Vec6 mutual = Vec6::Zero();
-      for (int j : graph_.neighbors(i))
-        mutual += mutual_error(world_scratch_[si], world_scratch_[static_cast<size_t>(j)]);
+      const auto& nb = graph_.neighbors(i);
+      for (size_t m = 0; m < nb.size(); ++m)
+        if (active_[static_cast<size_t>(nb[m])]) mutual += mutual_error(published_[si], inbox_[si][m]);
       Vec6 u = settings_.k_s * mutual;  // (eq:input_f-)
       if (z[si].visible) u += settings_.k_e * visual_error(g_bar_[si], z[si], settings_);
       u_[si] = u;
     }
     for (int i = 0; i < n; ++i) {
       const auto si = static_cast<size_t>(i);
-      g_bar_[si] = integrate(g_bar_[si], V_wi_[si], u_[si], h);  // (eq:EsRRBM)
+      if (active_[si]) g_bar_[si] = integrate(g_bar_[si], V_wi_[si], u_[si], h);  // (eq:EsRRBM)
     }
   }
 }

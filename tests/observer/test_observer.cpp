@@ -183,3 +183,60 @@ TEST(Observer, MutualErrorEqualsTheDefinition) {
   const Vec6 ref = E_R(gbi.inverse() * (g_wi.inverse() * g_wj) * gbj);
   EXPECT_LT((mutual_error(g_wi * gbi, g_wj * gbj) - ref).norm(), 1e-13);
 }
+
+namespace {
+// Delivers every message except those from one camera, for which the last value received
+// before the cut is repeated.
+class DroppingTransport final : public Transport {
+ public:
+  explicit DroppingTransport(int silent) : silent_(silent) {}
+  void exchange(const Graph& g, const std::vector<SE3>& published,
+                std::vector<std::vector<SE3>>& inbox) override {
+    ++calls;
+    for (int i = 0; i < g.size(); ++i)
+      for (size_t k = 0; k < g.neighbors(i).size(); ++k)
+        if (g.neighbors(i)[k] != silent_) inbox[static_cast<size_t>(i)][k] = published[static_cast<size_t>(g.neighbors(i)[k])];
+  }
+  int calls = 0;
+
+ private:
+  int silent_;
+};
+}  // namespace
+
+TEST(Observer, ExchangesGoThroughTheTransportOncePerSubstep) {
+  PaperSetup p;
+  ObserverSettings s;
+  NetworkedObserver a(p.graph, s), b(p.graph, s);
+  DroppingTransport drop(/*silent=*/4);
+  b.set_transport(&drop);
+  for (auto* o : {&a, &b}) {
+    o->set_camera_poses(p.g_wi);
+    o->reset(std::vector<SE3>(5, make_pose({0, 0, 1}, Vec3::Zero())));
+  }
+  const auto z = p.measurements();
+  for (int k = 0; k < 30; ++k) {
+    a.step(1.0 / 30.0, z);
+    b.step(1.0 / 30.0, z);
+  }
+  EXPECT_EQ(drop.calls, 30 * a.substeps(1.0 / 30.0));
+  // Camera 5's neighbours (1 and 4) never hear from it, so the runs differ.
+  EXPECT_GT((a.estimates_world()[0].translation() - b.estimates_world()[0].translation()).norm(), 1e-3);
+}
+
+TEST(Observer, InactiveCamerasAreFrozenAndIgnored) {
+  PaperSetup p;
+  NetworkedObserver obs(p.graph, ObserverSettings{});
+  obs.set_camera_poses(p.g_wi);
+  // Camera 5 starts at an absurd estimate but is inactive: nobody is pulled towards it.
+  std::vector<SE3> init(5, make_pose({0, 0, 1}, Vec3::Zero()));
+  init[4] = make_pose({100, 100, 100}, Vec3(1, 2, 0.5));
+  obs.reset(init);
+  obs.set_active({true, true, true, true, false});
+  const auto z = p.measurements();
+  for (int k = 0; k < 600; ++k) obs.step(1.0 / 30.0, z);
+  EXPECT_TRUE(obs.estimates()[4].isApprox(init[4]));
+  const SE3 g_star = average_pose(p.g_wo);
+  for (int i = 0; i < 4; ++i)
+    EXPECT_LT((obs.estimates_world()[static_cast<size_t>(i)].translation() - g_star.translation()).norm(), 0.05);
+}

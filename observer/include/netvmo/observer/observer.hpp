@@ -65,7 +65,25 @@ SE3 integrate(const SE3& g_bar, const Vec6& V_wi, const Vec6& u, double h);
 /// Smallest N with (dt/N) (k_e + 2 k_s d_max) <= step_factor.
 int stable_substeps(double dt, const ObserverSettings& s, int max_degree);
 
-/// All cameras' observers, exchanging estimates in process.
+/// How estimates travel between cameras in one exchange round. Implementations must fill
+/// inbox[i][k] with the estimate camera i received from graph.neighbors(i)[k], given what every
+/// camera published (its estimate in the world frame, g_wi g_bar_i). A transport may deliver a
+/// stale value (e.g. the last one received) when a message is lost.
+class Transport {
+ public:
+  virtual ~Transport() = default;
+  virtual void exchange(const Graph& graph, const std::vector<SE3>& published,
+                        std::vector<std::vector<SE3>>& inbox) = 0;
+};
+
+/// Direct in-process delivery (the default).
+class InProcessTransport final : public Transport {
+ public:
+  void exchange(const Graph& graph, const std::vector<SE3>& published,
+                std::vector<std::vector<SE3>>& inbox) override;
+};
+
+/// All cameras' observers, exchanging estimates through a Transport (in process by default).
 class NetworkedObserver {
  public:
   /// Throws std::invalid_argument if the graph is disconnected (Assumption 1) or a gain is
@@ -82,6 +100,13 @@ class NetworkedObserver {
   void set_camera_poses(const std::vector<SE3>& g_wi);
   /// Camera body velocities V_wi = [v; w] (the -hat(V_wi) g_bar term). Default: zero.
   void set_camera_velocities(const std::vector<Vec6>& V_wi);
+
+  /// Cameras that take part: an inactive camera keeps its estimate and its neighbours leave it
+  /// out of their mutual term (used while a camera has no initial estimate yet). Default: all.
+  void set_active(const std::vector<bool>& active);
+  const std::vector<bool>& active() const { return active_; }
+  /// Replaces the in-process exchange (the transport must outlive the observer).
+  void set_transport(Transport* transport) { transport_ = transport ? transport : &in_process_; }
 
   /// Sub-steps used for a frame of length dt.
   int substeps(double dt) const;
@@ -101,7 +126,11 @@ class NetworkedObserver {
   std::vector<SE3> g_wi_;
   std::vector<Vec6> V_wi_;
   std::vector<Vec6> u_;
-  std::vector<SE3> world_scratch_;
+  std::vector<bool> active_;
+  std::vector<SE3> published_;
+  std::vector<std::vector<SE3>> inbox_;
+  InProcessTransport in_process_;
+  Transport* transport_ = &in_process_;
 };
 
 }  // namespace netvmo::obs
