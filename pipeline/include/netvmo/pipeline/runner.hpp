@@ -1,0 +1,114 @@
+// The frame-by-frame runner: front-end measurements in, the networked observer and its
+// baselines stepped, the paper's metrics evaluated against ground truth when it is known.
+// Images never reach this file: it consumes one CameraInput per camera and frame.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "netvmo/observer/graph.hpp"
+#include "netvmo/observer/metrics.hpp"
+#include "netvmo/observer/observer.hpp"
+
+namespace netvmo::run {
+
+using obs::SE3;
+
+/// The visual error term of (eq:input_f-).
+enum class ErrorModel {
+  Jacobian,  ///< e = J^dagger(g_bar) (f - f_bar) from the four normalized tag corners (eq:eei)
+  Pnp,       ///< e = E_R(g_bar^-1 g_io,PnP) with the camera's own ViSP pose
+  Exact      ///< e = E_R(g_bar^-1 g_io,true): ground truth (rendered data), gated by detection
+};
+enum class InitMode {
+  Pnp,   ///< a camera starts from its first PnP pose, or from its neighbours' estimates
+  Paper  ///< every camera starts at g_bar(0) = ([0,0,1], R_facing) (see RunnerSettings)
+};
+ErrorModel parse_error_model(const std::string& s);
+InitMode parse_init_mode(const std::string& s);
+const char* to_string(ErrorModel e);
+const char* to_string(InitMode m);
+
+struct RunnerSettings {
+  double k_e = 1.0;                     ///< visual feedback gain
+  double k_s = 50.0;                    ///< mutual feedback gain
+  ErrorModel error = ErrorModel::Pnp;   ///< visual error model
+  InitMode init = InitMode::Pnp;        ///< initial estimates
+  int rounds = 0;                       ///< exchange rounds (sub-steps) per frame; 0 = stable
+  double tag_size = 0.2;                ///< side of the tag's black square [m]
+  /// A feature-model estimate whose tag corner comes closer to the camera plane than this is
+  /// re-initialised from PnP when the camera sees the target (its image features are undefined).
+  double min_feature_depth = 0.05;
+};
+
+/// The paper's initial estimate for image runs: 1 m in front of the camera, tag facing it
+/// (R = diag(1,-1,-1), the camera-frame form of the printed identity orientation).
+SE3 paper_initial_estimate();
+
+/// One camera's input for one frame.
+struct CameraInput {
+  bool delta = false;                  ///< delta_i(t): the target tag was decoded
+  Eigen::Matrix<double, 8, 1> f = Eigen::Matrix<double, 8, 1>::Zero();  ///< normalized corners
+  std::optional<SE3> g_io_pnp;         ///< the camera's PnP pose of the tag (when delta)
+  std::optional<SE3> g_io_true;        ///< true relative pose (rendered data only)
+};
+
+/// One camera's state after a frame.
+struct CameraRecord {
+  bool delta = false;
+  bool initialized = false;        ///< the networked estimate exists
+  SE3 est_w = SE3::Identity();     ///< networked estimate in the world, g_wi g_bar_i
+  std::optional<SE3> indep_w;      ///< independent observer (k_s = 0), once it has seen the tag
+  std::optional<SE3> pnp_w;        ///< g_wi g_io,PnP (when delta)
+  std::optional<SE3> fictitious_w; ///< g_wi g_io,true: the fictitious target o_i (with truth)
+};
+
+struct FrameRecord {
+  int frame = 0;
+  double t = 0.0;
+  std::vector<CameraRecord> cameras;
+  std::optional<SE3> central_w;  ///< centralized average of the detecting cameras' PnP poses
+  std::optional<SE3> g_star;     ///< average of the detecting cameras' fictitious poses (truth)
+  std::optional<SE3> g_wo_true;  ///< true target pose (truth)
+  std::optional<obs::Energies> energies;        ///< networked, against g_star
+  std::optional<obs::Energies> energies_indep;  ///< independent observers (initialised ones)
+  std::optional<obs::EpsLevels> eps;            ///< networked, Definition 1 at this frame
+};
+
+class NetworkRunner {
+ public:
+  /// g_wi: believed camera poses (the source of g_ij). Throws std::invalid_argument on a
+  /// disconnected graph.
+  NetworkRunner(const obs::Graph& graph, std::vector<SE3> g_wi, RunnerSettings settings);
+
+  /// Processes frame `frame` (time t): initialises cameras, advances the networked observer and
+  /// the independent observers by dt with this frame's measurements, evaluates, and returns the
+  /// record of the estimates after the frame.
+  const FrameRecord& process(int frame, double t, double dt, const std::vector<CameraInput>& in,
+                             const std::optional<SE3>& g_wo_true = std::nullopt);
+
+  const std::vector<FrameRecord>& history() const { return history_; }
+  int substeps(double dt) const { return net_.substeps(dt); }
+  const RunnerSettings& settings() const { return settings_; }
+  const obs::Graph& graph() const { return graph_; }
+  const std::vector<SE3>& camera_poses() const { return g_wi_; }
+  /// h (k_e + 2 k_s d_max) for a frame of dt: < 2 stable, <= 1 non-oscillating.
+  double step_factor(double dt) const;
+  /// Replaces the in-process exchange of the networked observer.
+  void set_transport(obs::Transport* t) { net_.set_transport(t); }
+
+ private:
+  void initialise(const std::vector<CameraInput>& in);
+  obs::VisualMeasurement measurement(const CameraInput& c) const;
+
+  obs::Graph graph_;
+  std::vector<SE3> g_wi_;
+  RunnerSettings settings_;
+  obs::NetworkedObserver net_;
+  obs::NetworkedObserver indep_;
+  std::vector<bool> net_init_, indep_init_;
+  std::vector<FrameRecord> history_;
+};
+
+}  // namespace netvmo::run
