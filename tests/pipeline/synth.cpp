@@ -1,0 +1,280 @@
+#include "synth.hpp"
+
+#include <apriltag/apriltag.h>
+#include <apriltag/tag16h5.h>
+#include <apriltag/tag25h9.h>
+#include <apriltag/tag36h11.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <memory>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+#include <random>
+#include <stdexcept>
+
+#include "netvmo/observer/jacobian.hpp"
+
+namespace netvmo::testing {
+namespace fs = std::filesystem;
+using pipeline::Calibration;
+
+namespace {
+
+struct Bitmap {
+  cv::Mat bits;  // total_width x total_width, 255 white / 0 black
+  int total = 0, border = 0;
+};
+
+Bitmap tag_bitmap(const std::string& family, int id) {
+  apriltag_family_t* (*create)() = nullptr;
+  void (*destroy)(apriltag_family_t*) = nullptr;
+  if (family == "tag36h11") create = tag36h11_create, destroy = tag36h11_destroy;
+  else if (family == "tag25h9") create = tag25h9_create, destroy = tag25h9_destroy;
+  else if (family == "tag16h5") create = tag16h5_create, destroy = tag16h5_destroy;
+  else throw std::invalid_argument("synth: unsupported family " + family);
+  apriltag_family_t* fam = create();
+  if (id < 0 || static_cast<uint32_t>(id) >= fam->ncodes) {
+    destroy(fam);
+    throw std::invalid_argument("synth: tag id out of range");
+  }
+  image_u8_t* im = apriltag_to_image(fam, id);
+  Bitmap b;
+  b.total = fam->total_width;
+  b.border = (fam->total_width - fam->width_at_border) / 2;
+  b.bits = cv::Mat(im->height, im->width, CV_8UC1);
+  for (int r = 0; r < im->height; ++r)
+    for (int c = 0; c < im->width; ++c) b.bits.at<uchar>(r, c) = im->buf[r * im->stride + c];
+  // libapriltag 3.3 does not export image_u8_destroy; it is free(buf) + free(im).
+  std::free(im->buf);
+  std::free(im);
+  destroy(fam);
+  return b;
+}
+
+/// Undistorted normalized ray (x, y) of every sub-sample, cached per calibration.
+const std::vector<cv::Point2d>& subsample_rays(const Calibration& c, int ss) {
+  static Calibration last;
+  static int last_ss = -1;
+  static std::vector<cv::Point2d> rays;
+  if (last_ss == ss && last.width == c.width && last.height == c.height &&
+      cv::norm(cv::Mat(last.K), cv::Mat(c.K)) == 0 && cv::norm(last.dist - c.dist) == 0)
+    return rays;
+  std::vector<cv::Point2d> px;
+  px.reserve(static_cast<size_t>(c.width) * c.height * ss * ss);
+  for (int r = 0; r < c.height; ++r)
+    for (int sr = 0; sr < ss; ++sr)
+      for (int col = 0; col < c.width; ++col)
+        for (int sc = 0; sc < ss; ++sc)
+          px.emplace_back(col - 0.5 + (sc + 0.5) / ss, r - 0.5 + (sr + 0.5) / ss);
+  if (c.has_distortion()) {
+    rays = pipeline::normalize_points(px, c);
+  } else {
+    rays.resize(px.size());
+    const cv::Matx33d Ki = c.K.inv();
+    for (size_t i = 0; i < px.size(); ++i) {
+      const cv::Vec3d q = Ki * cv::Vec3d(px[i].x, px[i].y, 1.0);
+      rays[i] = cv::Point2d(q[0] / q[2], q[1] / q[2]);
+    }
+  }
+  last = c;
+  last_ss = ss;
+  return rays;
+}
+
+}  // namespace
+
+cv::Mat render_tags(const Calibration& calib, const std::vector<SynthTag>& tags,
+                    const SynthOptions& opt) {
+  const int ss = opt.supersample;
+  const auto& rays = subsample_rays(calib, ss);
+  struct Prepared {
+    Bitmap bm;
+    obs::Mat3 R;
+    obs::Vec3 t, n;
+    double cell, half;
+  };
+  std::vector<Prepared> prep;
+  for (const auto& tag : tags) {
+    Prepared p;
+    p.bm = tag_bitmap(opt.family, tag.id);
+    for (const auto& [r, c] : tag.flipped_cells)
+      p.bm.bits.at<uchar>(r, c) = static_cast<uchar>(255 - p.bm.bits.at<uchar>(r, c));
+    p.R = tag.g_io.linear();
+    p.t = tag.g_io.translation();
+    p.n = p.R.col(2);
+    const int at_border = p.bm.total - 2 * p.bm.border;
+    p.cell = tag.size / at_border;
+    p.half = 0.5 * tag.size;
+    // the printed face is visible only from the side its z axis points to
+    const obs::Vec3 cam_in_tag = -p.R.transpose() * p.t;
+    if (cam_in_tag.z() > 0) prep.push_back(std::move(p));
+  }
+  const double wq = opt.quiet_zone_cells;
+  cv::Mat out(calib.height, calib.width, CV_8UC1);
+  std::mt19937_64 rng(opt.seed);
+  std::normal_distribution<double> noise(0.0, opt.noise_sigma > 0 ? opt.noise_sigma : 1.0);
+  size_t i = 0;
+  std::vector<double> row_acc(static_cast<size_t>(calib.width));
+  for (int r = 0; r < calib.height; ++r) {
+    std::fill(row_acc.begin(), row_acc.end(), 0.0);
+    for (int sr = 0; sr < ss; ++sr)
+      for (int col = 0; col < calib.width; ++col)
+        for (int sc = 0; sc < ss; ++sc, ++i) {
+          const obs::Vec3 ray(rays[i].x, rays[i].y, 1.0);
+          double best = 1e300, value = opt.background;
+          for (const auto& p : prep) {
+            const double den = p.n.dot(ray);
+            if (std::abs(den) < 1e-12) continue;
+            const double lambda = p.n.dot(p.t) / den;
+            if (!(lambda > 0) || lambda >= best) continue;
+            const obs::Vec3 q = p.R.transpose() * (lambda * ray - p.t);
+            const double cx = (q.x() + p.half) / p.cell + p.bm.border;  // bitmap column
+            const double cy = (p.half - q.y()) / p.cell + p.bm.border;  // bitmap row (+y up)
+            if (cx < -wq || cy < -wq || cx >= p.bm.total + wq || cy >= p.bm.total + wq) continue;
+            best = lambda;
+            if (cx >= 0 && cy >= 0 && cx < p.bm.total && cy < p.bm.total)
+              value = p.bm.bits.at<uchar>(static_cast<int>(cy), static_cast<int>(cx)) > 127
+                          ? opt.white
+                          : opt.black;
+            else
+              value = opt.white;
+          }
+          row_acc[static_cast<size_t>(col)] += value;
+        }
+    for (int col = 0; col < calib.width; ++col) {
+      double v = row_acc[static_cast<size_t>(col)] / (ss * ss);
+      for (const auto& o : opt.occluders)
+        if (o.contains(cv::Point(col, r))) v = opt.occluder_level;
+      if (opt.noise_sigma > 0) v += noise(rng);
+      out.at<uchar>(r, col) = cv::saturate_cast<uchar>(v);
+    }
+  }
+  return out;
+}
+
+std::array<cv::Point2d, 4> project_corners(const Calibration& calib, const obs::SE3& g_io,
+                                           double size) {
+  const auto model = obs::FeatureModel::square(size);
+  std::vector<cv::Point3d> cam_pts;
+  for (const auto& p : model.points_o) {
+    const obs::Vec3 q = g_io * p;
+    cam_pts.emplace_back(q.x(), q.y(), q.z());
+  }
+  std::vector<cv::Point2d> px;
+  cv::projectPoints(cam_pts, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(calib.K),
+                    cv::Mat(calib.dist), px);
+  return {px[0], px[1], px[2], px[3]};
+}
+
+Calibration test_calibration(bool distortion) {
+  Calibration c;
+  c.width = 640;
+  c.height = 480;
+  c.K = cv::Matx33d(610.0, 0, 321.7, 0, 605.0, 238.4, 0, 0, 1);
+  if (distortion) c.dist = {-0.12, 0.05, 4e-4, -3e-4, 0.0};
+  return c;
+}
+
+obs::SE3 facing_pose(double distance, double dx, double dy, const obs::Vec3& tilt) {
+  obs::SE3 g = obs::SE3::Identity();
+  g.linear() = obs::exp_so3(obs::Vec3(M_PI, 0, 0)) * obs::exp_so3(tilt);
+  g.translation() = obs::Vec3(dx, dy, distance);
+  return g;
+}
+
+double corner_rms(const std::array<cv::Point2d, 4>& a, const std::array<cv::Point2d, 4>& b) {
+  double s = 0;
+  for (size_t k = 0; k < 4; ++k) {
+    const cv::Point2d d = a[k] - b[k];
+    s += d.dot(d);
+  }
+  return std::sqrt(s / 4.0);
+}
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("netvmo_test_" + name);
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+std::vector<std::vector<std::array<cv::Point2d, 4>>> write_synth_dataset(
+    const fs::path& dir, const SynthDatasetSpec& spec) {
+  fs::create_directories(dir / "calib");
+  std::ofstream net(dir / "network.yaml");
+  net.precision(17);
+  net << "fps: " << spec.fps << "\n";
+  net << "target: {family: " << spec.options.family << ", id: " << spec.target_id
+      << ", size: " << spec.tag_size << "}\n";
+  net << "cameras:\n";
+  for (const auto& c : spec.cameras) {
+    const obs::Vec3 p = c.g_wi.translation(), w = obs::rotvec(c.g_wi);
+    net << "  - {id: " << c.id << ", p_wi: [" << p.x() << ", " << p.y() << ", " << p.z()
+        << "], r_wi: [" << w.x() << ", " << w.y() << ", " << w.z() << "]}\n";
+  }
+  net << "edges: [";
+  for (size_t k = 1; k < spec.cameras.size(); ++k)
+    net << (k > 1 ? ", " : "") << "[" << spec.cameras[k - 1].id << ", " << spec.cameras[k].id
+        << "]";
+  net << "]\n";
+  net.close();
+
+  std::ofstream truth(dir / "truth.csv"), target(dir / "target.csv");
+  truth.precision(10);
+  target.precision(12);
+  truth << "frame,t,camera,in_fov,visible_fraction,u0,v0,u1,v1,u2,v2,u3,v3\n";
+  target << "frame,t,px,py,pz,rx,ry,rz\n";
+  for (size_t f = 0; f < spec.g_wo.size(); ++f) {
+    const obs::Vec3 p = spec.g_wo[f].translation(), w = obs::rotvec(spec.g_wo[f]);
+    target << f << "," << f / spec.fps << "," << p.x() << "," << p.y() << "," << p.z() << ","
+           << w.x() << "," << w.y() << "," << w.z() << "\n";
+  }
+
+  std::vector<std::vector<std::array<cv::Point2d, 4>>> corners(spec.cameras.size());
+  for (size_t ci = 0; ci < spec.cameras.size(); ++ci) {
+    const auto& cam = spec.cameras[ci];
+    const std::string name = "cam_" + std::to_string(cam.id);
+    pipeline::save_calibration_opencv(dir / "calib" / (name + ".yaml"), cam.calib);
+    cv::VideoWriter vw;
+    if (spec.video) {
+      vw.open((dir / (name + ".avi")).string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'),
+              spec.fps, cv::Size(cam.calib.width, cam.calib.height), false);
+      if (!vw.isOpened()) throw std::runtime_error("synth: cannot open MJPG VideoWriter");
+    } else {
+      fs::create_directories(dir / name);
+    }
+    for (size_t f = 0; f < spec.g_wo.size(); ++f) {
+      const obs::SE3 g_io = cam.g_wi.inverse() * spec.g_wo[f];
+      SynthOptions opt = spec.options;
+      opt.seed = spec.options.seed + 1000 * static_cast<std::uint64_t>(cam.id) + f;
+      const cv::Mat img = render_tags(cam.calib, {{spec.target_id, spec.tag_size, g_io, {}}}, opt);
+      if (spec.video) {
+        vw.write(img);
+      } else {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%06zu.png", f);
+        cv::imwrite((dir / name / buf).string(), img);
+      }
+      const auto c = project_corners(cam.calib, g_io, spec.tag_size);
+      corners[ci].push_back(c);
+      const bool front = (g_io * obs::Vec3(0, 0, 0)).z() > 0;
+      bool in_fov = front;
+      for (const auto& p : c)
+        in_fov = in_fov && p.x >= -0.5 && p.y >= -0.5 && p.x <= cam.calib.width - 0.5 &&
+                 p.y <= cam.calib.height - 0.5;
+      truth << f << "," << f / spec.fps << "," << cam.id << "," << (in_fov ? 1 : 0) << ","
+            << (in_fov ? 1.0 : 0.0);
+      for (const auto& p : c) {
+        if (front) truth << "," << p.x << "," << p.y;
+        else truth << ",,";
+      }
+      truth << "\n";
+    }
+  }
+  return corners;
+}
+
+}  // namespace netvmo::testing

@@ -1,0 +1,90 @@
+// Test utility (not part of the library): synthesizes camera images of AprilTags at known poses
+// by exact supersampled inverse mapping, and small dataset folders around them. Reusable by
+// later acceptance tests: link the `netvmo_test_synth` library and include "synth.hpp".
+//
+// Image model: each output pixel (col,row) covers [col-0.5, col+0.5] x [row-0.5, row+0.5]
+// (OpenCV convention). Each of supersample^2 sub-samples is back-projected (through the
+// distortion model with cv::undistortPoints iterated to convergence when the calibration has
+// distortion), its ray is intersected with every tag plane facing the camera, and the nearest
+// hit looks up the tag bitmap (libapriltag's apriltag_to_image, row 0 = top of the printed tag =
+// +y) surrounded by an extra white quiet zone; rays that miss show the background level.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "netvmo/observer/lie.hpp"
+#include "netvmo/pipeline/calibration.hpp"
+
+namespace netvmo::testing {
+
+struct SynthTag {
+  int id = 0;
+  double size = 0.2;                      ///< black border side, metres
+  obs::SE3 g_io = obs::SE3::Identity();   ///< tag -> camera
+  std::vector<std::pair<int, int>> flipped_cells;  ///< (row, col) bitmap cells to invert
+};
+
+struct SynthOptions {
+  std::string family = "tag36h11";
+  int supersample = 4;          ///< sub-samples per pixel side
+  double background = 128.0;    ///< gray level where no tag is hit
+  double black = 20.0, white = 230.0;
+  double quiet_zone_cells = 1.0;  ///< white margin added around the bitmap (cells)
+  double noise_sigma = 0.0;     ///< Gaussian noise (gray levels), seeded
+  std::uint64_t seed = 1;
+  std::vector<cv::Rect> occluders;  ///< image rectangles painted with `occluder_level`
+  double occluder_level = 90.0;
+};
+
+/// 8-bit gray image of the tags seen by a camera.
+cv::Mat render_tags(const pipeline::Calibration& calib, const std::vector<SynthTag>& tags,
+                    const SynthOptions& opt = {});
+
+/// The true corners of a tag (obs::FeatureModel::square order) in OpenCV pixels, with
+/// distortion (cv::projectPoints).
+std::array<cv::Point2d, 4> project_corners(const pipeline::Calibration& calib,
+                                           const obs::SE3& g_io, double size);
+
+/// A 640x480 calibration (fx 610, fy 605, cx 321.7, cy 238.4), optionally with moderate
+/// distortion (k1 -0.12, k2 0.05, p1 4e-4, p2 -3e-4, k3 0).
+pipeline::Calibration test_calibration(bool distortion = false);
+
+/// g_io for a tag at `distance` along the optical axis offset by (dx, dy) metres, facing the
+/// camera (tag z toward -z_camera) and then tilted by the rotation vector `tilt` (tag frame).
+obs::SE3 facing_pose(double distance, double dx = 0.0, double dy = 0.0,
+                     const obs::Vec3& tilt = obs::Vec3::Zero());
+
+/// RMS of corner differences (pixels).
+double corner_rms(const std::array<cv::Point2d, 4>& a, const std::array<cv::Point2d, 4>& b);
+
+/// One camera of a synthetic dataset: its id, calibration and per-frame tag pose g_io.
+struct SynthCamera {
+  int id = 1;
+  pipeline::Calibration calib;
+  obs::SE3 g_wi = obs::SE3::Identity();
+};
+
+struct SynthDatasetSpec {
+  std::vector<SynthCamera> cameras;
+  std::vector<obs::SE3> g_wo;   ///< target pose per frame
+  int target_id = 0;
+  double tag_size = 0.2;
+  double fps = 30.0;
+  bool video = false;           ///< write cam_<id>.avi (MJPG) instead of cam_<id>/%06d.png
+  SynthOptions options;
+};
+
+/// Writes network.yaml (edges: a path 1-2-...), calib/cam_<id>.yaml, frames, truth.csv and
+/// target.csv into `dir` (created). Returns the true corners [camera][frame] (tag in front).
+std::vector<std::vector<std::array<cv::Point2d, 4>>> write_synth_dataset(
+    const std::filesystem::path& dir, const SynthDatasetSpec& spec);
+
+/// A fresh empty temporary directory for a test (removed first if it exists).
+std::filesystem::path fresh_dir(const std::string& name);
+
+}  // namespace netvmo::testing

@@ -1,0 +1,252 @@
+// Detection geometry on synthesized images with exactly known corners: pixel convention,
+// corner order, corner accuracy of each refinement mode, acceptance rules.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "netvmo/observer/jacobian.hpp"
+#include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/front_end.hpp"
+#include "netvmo/pipeline/tag_detector.hpp"
+#include "synth.hpp"
+
+namespace netvmo {
+namespace {
+using namespace pipeline;
+using testing::facing_pose;
+using testing::project_corners;
+using testing::render_tags;
+using testing::SynthOptions;
+
+constexpr double kSize = 0.2;
+
+std::vector<obs::SE3> accuracy_poses() {
+  return {facing_pose(1.0, 0.05, -0.03, {0.3, -0.2, 0.4}),
+          facing_pose(1.5, -0.2, 0.1, {-0.4, 0.1, 1.2}),
+          facing_pose(2.0, 0.3, 0.2, {0.2, 0.5, -2.5}),
+          facing_pose(0.8, -0.1, -0.15, {0.6, 0.0, 0.1}),
+          facing_pose(2.0, -0.1, 0.05, {-0.3, -0.35, 0.8})};
+}
+
+DetectorSettings settings_with(Refinement r) {
+  DetectorSettings s;
+  s.refinement = r;
+  return s;
+}
+
+// libapriltag's pixel convention: after TagDetector's conversion the corners carry no bias,
+// while libapriltag's raw corners sit +0.5 px (pixel centres at +0.5) from OpenCV's.
+TEST(Detector, PixelOffsetConvertedToOpenCV) {
+  const auto calib = testing::test_calibration();
+  TagDetector det(settings_with(Refinement::none));
+  double bias_x = 0, bias_y = 0;
+  int n = 0;
+  for (const auto& g : accuracy_poses()) {
+    const cv::Mat img = render_tags(calib, {{0, kSize, g, {}}});
+    const auto d = det.detect(img);
+    ASSERT_EQ(d.status, TargetStatus::detected);
+    const auto truth = project_corners(calib, g, kSize);
+    for (size_t k = 0; k < 4; ++k) {
+      bias_x += d.target()->corners[k].x - truth[k].x;
+      bias_y += d.target()->corners[k].y - truth[k].y;
+      ++n;
+    }
+  }
+  bias_x /= n;
+  bias_y /= n;
+  std::printf("mean corner bias after -0.5 conversion: (%.4f, %.4f) px; raw libapriltag: "
+              "(%.4f, %.4f)\n", bias_x, bias_y, bias_x + 0.5, bias_y + 0.5);
+  EXPECT_LT(std::abs(bias_x), 0.1);
+  EXPECT_LT(std::abs(bias_y), 0.1);
+}
+
+// Detected corner k is the image of FeatureModel::square(s).points_o[k], index by index, for
+// several in-plane rotations of the tag.
+TEST(Detector, CornerOrderMatchesObjectPoints) {
+  const auto calib = testing::test_calibration();
+  TagDetector det;
+  for (double roll : {0.0, 0.7, 1.9, -2.6}) {
+    const obs::SE3 g = facing_pose(1.2, 0.02, -0.04, {0.15, -0.1, roll});
+    const auto d = det.detect(render_tags(calib, {{0, kSize, g, {}}}));
+    ASSERT_EQ(d.status, TargetStatus::detected) << "roll " << roll;
+    const auto truth = project_corners(calib, g, kSize);
+    for (size_t k = 0; k < 4; ++k) {
+      EXPECT_LT(cv::norm(d.target()->corners[k] - truth[k]), 0.5) << "roll " << roll << " k " << k;
+      // and clearly not any other object corner
+      for (size_t j = 0; j < 4; ++j)
+        if (j != k) {
+          EXPECT_GT(cv::norm(d.target()->corners[k] - truth[j]), 10.0);
+        }
+    }
+  }
+}
+
+struct RmsTable {
+  double rms[3][2];  // [mode][clean, noisy]
+};
+
+RmsTable measure(const Calibration& calib) {
+  // Each image is rendered once and detected with all three modes.
+  const Refinement modes[3] = {Refinement::none, Refinement::corner_subpix,
+                               Refinement::edge_lines};
+  std::vector<TagDetector> dets;
+  for (auto m : modes) dets.emplace_back(settings_with(m));
+  RmsTable t{};
+  int n[2] = {0, 0};
+  std::uint64_t seed = 7;
+  for (int noisy = 0; noisy < 2; ++noisy)
+    for (const auto& g : accuracy_poses())
+      for (int s = 0; s < (noisy ? 3 : 1); ++s) {
+        SynthOptions opt;
+        opt.noise_sigma = noisy ? 2.0 : 0.0;
+        opt.seed = seed++;
+        const cv::Mat img = render_tags(calib, {{0, kSize, g, {}}}, opt);
+        const auto truth = project_corners(calib, g, kSize);
+        for (int m = 0; m < 3; ++m) {
+          const auto d = dets[static_cast<size_t>(m)].detect(img, &calib);
+          EXPECT_EQ(d.status, TargetStatus::detected);
+          if (!d.target()) return RmsTable{{{1e9, 1e9}, {1e9, 1e9}, {1e9, 1e9}}};
+          for (size_t k = 0; k < 4; ++k) {
+            const cv::Point2d e = d.target()->corners[k] - truth[k];
+            t.rms[m][noisy] += e.dot(e);
+          }
+        }
+        n[noisy] += 4;
+      }
+  for (int m = 0; m < 3; ++m)
+    for (int c = 0; c < 2; ++c) t.rms[m][c] = std::sqrt(t.rms[m][c] / n[c]);
+  std::printf("corner RMS (px), 640x480, 4x4 supersampling, 5 poses 0.8-2 m:\n"
+              "| refinement | clean | noise sigma 2 |\n|---|---|---|\n");
+  for (int m = 0; m < 3; ++m)
+    std::printf("| %s | %.3f | %.3f |\n", to_string(modes[m]), t.rms[m][0], t.rms[m][1]);
+  return t;
+}
+
+// Accuracy of the default refinement against exactly projected corners, and the default is
+// the best of the three modes (within 0.005 px).
+TEST(Detector, CornerAccuracyAndBestRefinementIsDefault) {
+  for (bool distortion : {false, true}) {
+    const auto calib = testing::test_calibration(distortion);
+    std::printf("%s distortion\n", distortion ? "with" : "without");
+    const RmsTable t = measure(calib);
+    const int def = static_cast<int>(DetectorSettings{}.refinement);
+    EXPECT_LE(t.rms[def][0], 0.1);
+    EXPECT_LE(t.rms[def][1], 0.3);
+    for (int m = 0; m < 3; ++m) {
+      EXPECT_LE(t.rms[def][0], t.rms[m][0] + 0.005) << "mode " << m << " beats the default";
+      EXPECT_LE(t.rms[def][1], t.rms[m][1] + 0.005) << "mode " << m << " beats the default";
+    }
+  }
+}
+
+TEST(Detector, OtherIdsReportedNotUsed) {
+  const auto calib = testing::test_calibration();
+  DetectorSettings s;
+  s.target_id = 5;
+  TagDetector det(s);
+  const cv::Mat img = render_tags(calib, {{3, kSize, facing_pose(1.5, -0.3, 0.0), {}},
+                                          {7, kSize, facing_pose(1.5, 0.3, 0.0), {}}});
+  const auto d = det.detect(img);
+  EXPECT_EQ(d.status, TargetStatus::not_found);
+  EXPECT_EQ(d.target(), nullptr);
+  ASSERT_EQ(d.all.size(), 2u);
+  std::vector<int> ids{d.all[0].id, d.all[1].id};
+  std::sort(ids.begin(), ids.end());
+  EXPECT_EQ(ids, (std::vector<int>{3, 7}));
+
+  // the same image with the target among the others: exactly the target is used
+  const cv::Mat img2 = render_tags(calib, {{3, kSize, facing_pose(1.5, -0.3, 0.0), {}},
+                                           {5, kSize, facing_pose(1.5, 0.3, 0.0), {}}});
+  const auto d2 = det.detect(img2);
+  ASSERT_EQ(d2.status, TargetStatus::detected);
+  EXPECT_EQ(d2.target()->id, 5);
+  EXPECT_EQ(d2.all.size(), 2u);
+}
+
+TEST(Detector, DuplicateTargetIdRejected) {
+  const auto calib = testing::test_calibration();
+  TagDetector det;  // target id 0
+  const cv::Mat img = render_tags(calib, {{0, kSize, facing_pose(1.5, -0.3, 0.0), {}},
+                                          {0, kSize, facing_pose(1.5, 0.3, 0.0), {}}});
+  const auto d = det.detect(img);
+  EXPECT_EQ(d.all.size(), 2u);
+  EXPECT_EQ(d.status, TargetStatus::duplicate_id);
+  EXPECT_EQ(d.target(), nullptr);
+}
+
+TEST(Detector, TagOutsideImageOrBehindNotDetected) {
+  const auto calib = testing::test_calibration();
+  TagDetector det;
+  // laterally out of the field of view
+  EXPECT_EQ(det.detect(render_tags(calib, {{0, kSize, facing_pose(1.5, 2.0, 0.0), {}}})).status,
+            TargetStatus::not_found);
+  // behind the camera
+  EXPECT_EQ(det.detect(render_tags(calib, {{0, kSize, facing_pose(-1.5, 0.0, 0.0), {}}})).status,
+            TargetStatus::not_found);
+  // half out of the image (corners cut off)
+  EXPECT_EQ(det.detect(render_tags(calib, {{0, kSize, facing_pose(1.0, 0.52, 0.0), {}}})).status,
+            TargetStatus::not_found);
+  // fully occluded
+  SynthOptions occ;
+  occ.occluders = {cv::Rect(200, 150, 250, 200)};
+  EXPECT_EQ(det.detect(render_tags(calib, {{0, kSize, facing_pose(1.5, 0.0, 0.0), {}}}, occ)).status,
+            TargetStatus::not_found);
+  // and the same pose unoccluded is detected (the negatives above are not vacuous)
+  EXPECT_EQ(det.detect(render_tags(calib, {{0, kSize, facing_pose(1.5, 0.0, 0.0), {}}})).status,
+            TargetStatus::detected);
+}
+
+TEST(Detector, HammingAndMarginThresholds) {
+  const auto calib = testing::test_calibration();
+  // one data cell inverted -> decoded with hamming 1
+  testing::SynthTag tag{0, kSize, facing_pose(1.2, 0.0, 0.0, {0.1, 0.1, 0.3}), {{4, 4}}};
+  const cv::Mat img = render_tags(calib, {tag});
+  DetectorSettings strict;
+  strict.max_hamming = 0;
+  const auto d0 = TagDetector(strict).detect(img);
+  ASSERT_EQ(d0.all.size(), 1u);
+  EXPECT_EQ(d0.all[0].hamming, 1);
+  EXPECT_EQ(d0.status, TargetStatus::high_hamming);
+  DetectorSettings lenient;
+  lenient.max_hamming = 1;
+  EXPECT_EQ(TagDetector(lenient).detect(img).status, TargetStatus::detected);
+
+  DetectorSettings margin;
+  margin.min_decision_margin = 1e6;
+  const auto dm = TagDetector(margin).detect(render_tags(calib, {{0, kSize, facing_pose(1.2), {}}}));
+  ASSERT_EQ(dm.all.size(), 1u);
+  EXPECT_EQ(dm.status, TargetStatus::low_margin);
+}
+
+TEST(Detector, InvalidSettingsRejected) {
+  DetectorSettings s;
+  s.family = "tag99h1";
+  EXPECT_THROW(TagDetector{s}, InputError);
+  s = {};
+  s.quad_decimate = 0.5;
+  EXPECT_THROW(TagDetector{s}, InputError);
+  EXPECT_THROW(parse_refinement("bogus"), InputError);
+  EXPECT_EQ(parse_refinement("edges"), Refinement::edge_lines);
+}
+
+// The front end: normalized coordinates are the undistorted corners, in object-point order.
+TEST(FrontEnd, NormalizedFeaturesMatchProjection) {
+  for (bool distortion : {false, true}) {
+    const auto calib = testing::test_calibration(distortion);
+    const obs::SE3 g = facing_pose(1.3, 0.1, -0.05, {0.2, -0.3, 0.9});
+    FrontEnd fe;
+    const auto o = fe.observe(render_tags(calib, {{0, kSize, g, {}}}), calib);
+    ASSERT_TRUE(o.detected);
+    EXPECT_EQ(o.tag_id, 0);
+    const Eigen::VectorXd f_true = obs::project(g, obs::FeatureModel::square(kSize));
+    // 0.1 px / 600 px focal length
+    EXPECT_LT((o.f_normalized - f_true).cwiseAbs().maxCoeff(), 0.15 / 600.0)
+        << "distortion " << distortion;
+  }
+  FrontEnd fe;
+  const auto blind = fe.observe(cv::Mat(), testing::test_calibration());
+  EXPECT_FALSE(blind.detected);
+}
+
+}  // namespace
+}  // namespace netvmo
