@@ -35,26 +35,26 @@ std::string short_number(double v) {
 
 void make_plots(const sim::SimScenario& s, const sim::SimResult& r, const fs::path& dir,
                 const std::optional<std::pair<double, fs::path>>& compare) {
-  std::vector<plot::Series> runs;
-  char title[64];
-  std::snprintf(title, sizeof title, "k_s = %g", s.k_s);
-  runs.push_back({dir / "energies.csv", title, 2, -1, "lines lw 2 lc rgb '#d62728'"});
+  plot::Panel up{"position error energy U_p", "U_p [m^2]", true, {}, std::nullopt};
+  plot::Panel ur{"orientation error energy U_R", "U_R", true, {}, std::nullopt};
+  const std::string solid = "lines lw 2 lc rgb '#d62728'", dashed = "lines lw 2 dt 2 lc rgb '#1f77b4'";
+  up.series.push_back({dir / "energies.csv", "k_s = " + short_number(s.k_s), 2, 1, solid});
+  ur.series.push_back({dir / "energies.csv", "k_s = " + short_number(s.k_s), 3, 1, solid});
   if (compare) {
-    std::snprintf(title, sizeof title, "k_s = %g", compare->first);
-    runs.push_back({compare->second / "energies.csv", title, 2, -1,
-                    "lines lw 2 dt 2 lc rgb '#1f77b4'"});
+    const fs::path c = compare->second / "energies.csv";
+    up.series.push_back({c, "k_s = " + short_number(compare->first), 2, 1, dashed});
+    ur.series.push_back({c, "k_s = " + short_number(compare->first), 3, 1, dashed});
   }
-  plot::energies_figure(runs, dir / "energies.png",
-                        "Estimation error energies (" + std::string(sim::to_string(s.error)) +
-                            " error, k_e = " + short_number(s.k_e) + ")");
-  std::vector<plot::Series> cams;
+  plot::panels_figure({up, ur}, dir / "energies.png",
+                      "Estimation error energies (" + std::string(sim::to_string(s.error)) +
+                          " error, k_e = " + short_number(s.k_e) + ")");
+  plot::Panel ori{"first element of ξ̄ sin θ̄ (world frame)", "(ξ̄ sin θ̄)_x", false, {},
+                  std::make_pair(std::string("average g*"), obs::e_R(r.g_star.linear()).x())};
   for (size_t i = 0; i < s.cameras.size(); ++i)
-    cams.push_back({dir / "orientation_x.csv", "camera " + std::to_string(s.cameras[i].id),
-                    static_cast<int>(i) + 2, -1, "lines lw 2"});
-  plot::series_figure(cams, dir / "orientation_x.png",
-                      "First element of ξ̄ sin θ̄ per camera (k_s = " + short_number(s.k_s) + ")",
-                      "(ξ̄ sin θ̄)_x", false, "average g*",
-                      obs::e_R(r.g_star.linear()).x());
+    ori.series.push_back({dir / "orientation_x.csv", "camera " + std::to_string(s.cameras[i].id),
+                          static_cast<int>(i) + 2, 1, "lines lw 2"});
+  plot::panels_figure({ori}, dir / "orientation_x.png",
+                      "Orientation estimates, k_s = " + short_number(s.k_s));
 }
 }  // namespace
 

@@ -23,5 +23,6 @@ inline int guarded(const std::string& command, const std::function<int()>& body)
 void add_simulate(CLI::App& app, int& exit_code);
 void add_render(CLI::App& app, int& exit_code);
 void add_detect(CLI::App& app, int& exit_code);
+void add_run(CLI::App& app, int& exit_code);
 
 }  // namespace netvmo::tools

@@ -100,7 +100,7 @@ void NetworkedObserver::step(double dt, const std::vector<VisualMeasurement>& z)
       const auto si = static_cast<size_t>(i);
       published_[si] = g_wi_[si] * g_bar_[si];
     }
-    transport_->exchange(graph_, published_, inbox_);
+    (transport_ ? *transport_ : static_cast<Transport&>(in_process_)).exchange(graph_, published_, inbox_);
     for (int i = 0; i < n; ++i) {
       const auto si = static_cast<size_t>(i);
       if (!active_[si]) continue;

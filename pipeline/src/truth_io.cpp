@@ -162,4 +162,20 @@ std::string format_detection_row(const DetectionRow& r) {
   return s;
 }
 
+std::vector<CameraTruthRow> read_truth_cameras_csv(const fs::path& file) {
+  std::vector<CameraTruthRow> rows;
+  read_csv(file, kTruthCamerasHeader,
+           [&](const auto& f, const auto& names, const std::string& where) {
+             CameraTruthRow r;
+             r.camera = integer(f, names, 0, where);
+             const obs::Vec3 p(num(f, names, 1, where), num(f, names, 2, where),
+                               num(f, names, 3, where));
+             const obs::Vec3 w(num(f, names, 4, where), num(f, names, 5, where),
+                               num(f, names, 6, where));
+             r.g_wi = obs::make_pose(p, w);
+             rows.push_back(r);
+           });
+  return rows;
+}
+
 }  // namespace netvmo::pipeline

@@ -106,7 +106,7 @@ class NetworkedObserver {
   void set_active(const std::vector<bool>& active);
   const std::vector<bool>& active() const { return active_; }
   /// Replaces the in-process exchange (the transport must outlive the observer).
-  void set_transport(Transport* transport) { transport_ = transport ? transport : &in_process_; }
+  void set_transport(Transport* transport) { transport_ = transport; }
 
   /// Sub-steps used for a frame of length dt.
   int substeps(double dt) const;
@@ -130,7 +130,7 @@ class NetworkedObserver {
   std::vector<SE3> published_;
   std::vector<std::vector<SE3>> inbox_;
   InProcessTransport in_process_;
-  Transport* transport_ = &in_process_;
+  Transport* transport_ = nullptr;  // nullptr: in_process_ (keeps the object copyable)
 };
 
 }  // namespace netvmo::obs

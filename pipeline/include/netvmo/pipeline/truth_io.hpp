@@ -55,6 +55,15 @@ std::vector<TruthRow> read_truth_csv(const std::filesystem::path& file);
 std::vector<TargetTruthRow> read_target_csv(const std::filesystem::path& file);
 std::vector<DetectionRow> read_detections_csv(const std::filesystem::path& file);
 
+/// truth_cameras.csv: the true (rendering) pose of every camera, header
+/// camera,px,py,pz,rx,ry,rz (position, rotation vector of R_wi).
+inline constexpr const char* kTruthCamerasHeader = "camera,px,py,pz,rx,ry,rz";
+struct CameraTruthRow {
+  int camera = 0;
+  obs::SE3 g_wi = obs::SE3::Identity();
+};
+std::vector<CameraTruthRow> read_truth_cameras_csv(const std::filesystem::path& file);
+
 /// One detections.csv line (without newline). Corners with 4 decimals, margin with 2.
 std::string format_detection_row(const DetectionRow& row);
 

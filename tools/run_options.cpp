@@ -1,0 +1,123 @@
+#include "run_options.hpp"
+
+#include <cstdio>
+
+#include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/overlay.hpp"
+#include "netvmo/pipeline/run_report.hpp"
+#include "run_plots.hpp"
+
+namespace netvmo::tools {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+void add_run_options(CLI::App& cmd, RunCliOptions& o) {
+  cmd.add_option("--ke", o.k_e, "Visual feedback gain k_e")->capture_default_str();
+  cmd.add_option("--ks", o.k_s, "Mutual feedback gain k_s (0: independent observers)")
+      ->capture_default_str();
+  cmd.add_option("--error", o.error,
+                 "Visual error: pnp = E_R(g_bar^-1 g_io,PnP), jacobian = J^+(g_bar) f_e from the "
+                 "corners, exact = ground truth (rendered data)")
+      ->check(CLI::IsMember({"pnp", "jacobian", "exact"}))
+      ->capture_default_str();
+  cmd.add_option("--init", o.init,
+                 "Initial estimates: pnp = first PnP pose, blind cameras from their neighbours; "
+                 "paper = ([0,0,1], tag facing the camera)")
+      ->check(CLI::IsMember({"pnp", "paper"}))
+      ->capture_default_str();
+  cmd.add_option("--rounds", o.rounds,
+                 "Consensus (exchange) rounds per frame; 0 = the smallest stable count")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  cmd.add_flag("--keep-going", o.keep_going,
+               "Treat a camera whose image cannot be read as blind for that frame instead of "
+               "stopping");
+  cmd.add_flag("!--no-overlays", o.overlays, "Do not write overlays/");
+  cmd.add_flag("!--no-plots", o.plots, "Do not draw energies.png and errors.png");
+  cmd.add_option("--max-frames", o.max_frames, "Stop after this many frames (0 = all)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  cmd.add_option("--decimate", o.decimate, "libapriltag quad_decimate")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 8.0));
+  cmd.add_option("--refine", o.refine, "Corner refinement: none, subpix or edges")
+      ->check(CLI::IsMember({"none", "subpix", "edges"}))
+      ->capture_default_str();
+}
+
+pipeline::ImageRunOptions to_image_run_options(const RunCliOptions& o) {
+  if (!(o.k_e > 0) || !(o.k_s >= 0)) throw InputError("--ke must be > 0 and --ks >= 0");
+  pipeline::ImageRunOptions r;
+  r.runner.k_e = o.k_e;
+  r.runner.k_s = o.k_s;
+  r.runner.error = run::parse_error_model(o.error);
+  r.runner.init = run::parse_init_mode(o.init);
+  r.runner.rounds = o.rounds;
+  r.keep_going = o.keep_going;
+  if (o.max_frames > 0) r.max_frames = o.max_frames;
+  r.detector.quad_decimate = o.decimate;
+  r.detector.refinement = pipeline::parse_refinement(o.refine);
+  return r;
+}
+
+json run_and_report(pipeline::FrameProvider& provider, const RunCliOptions& o, const fs::path& dir) {
+  const auto options = to_image_run_options(o);
+  for (const auto& w : provider.warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  std::unique_ptr<pipeline::OverlayWriter> overlays;
+  pipeline::FrameHook hook;
+  if (o.overlays) {
+    overlays = std::make_unique<pipeline::OverlayWriter>(dir, provider);
+    hook = [&](int k, const std::vector<cv::Mat>& images,
+               const std::vector<pipeline::CameraFrame>& cams, const run::FrameRecord& r) {
+      (*overlays)(k, images, cams, r);
+    };
+  }
+  const auto result = pipeline::run_images(provider, options, hook);
+  if (overlays) overlays->finish();
+  for (size_t k = provider.warnings().size(); k < result.warnings.size(); ++k)
+    std::fprintf(stderr, "warning: %s\n", result.warnings[k].c_str());
+  const json s = pipeline::write_run_outputs(dir, provider, options, result);
+  if (o.plots) {
+    std::vector<int> ids;
+    for (const auto& c : provider.network().cameras) ids.push_back(c.id);
+    plot_run(dir, ids);
+  }
+  return s;
+}
+
+namespace {
+std::string cell(const json& stats, const char* key, double scale, const char* fmt) {
+  if (stats.is_null()) return "-";
+  char b[32];
+  std::snprintf(b, sizeof b, fmt, stats[key].get<double>() * scale);
+  return b;
+}
+}  // namespace
+
+void print_run_summary(const json& s, const fs::path& dir) {
+  std::printf("%s: %d frames, k_e = %g, k_s = %g, error %s, init %s, %d rounds/frame, %.1f network frames/s\n",
+              s["dataset"].get<std::string>().c_str(), s["frames"].get<int>(), s["k_e"].get<double>(),
+              s["k_s"].get<double>(), s["error"].get<std::string>().c_str(),
+              s["init"].get<std::string>().c_str(), s["rounds_per_frame"].get<int>(),
+              s["timing"]["network_frames_per_second"].get<double>());
+  const bool truth = !s["final"].is_null();
+  std::printf("camera  seen   %s\n", truth ? "final error to g*: networked | independent | PnP   [mm, deg]" : "(no ground truth: no errors)");
+  for (const auto& c : s["cameras"]) {
+    std::printf("%6d  %3.0f%%", c["id"].get<int>(), 100.0 * c["seen_fraction"].get<double>());
+    if (truth) {
+      for (const char* m : {"networked", "independent", "pnp"}) {
+        const auto& st = c[m]["vs_g_star"];
+        std::printf("   %7s %6s", cell(st, "final_position_m", 1000.0, "%.1f").c_str(),
+                    cell(st, "final_orientation_deg", 1.0, "%.2f").c_str());
+      }
+    }
+    std::printf("\n");
+  }
+  if (truth)
+    std::printf("final U_p = %.3e, U_R = %.3e, eps_p = %.3g, eps_R = %.3g\n",
+                s["final"]["U_p"].get<double>(), s["final"]["U_R"].get<double>(),
+                s["final"]["eps_p"].get<double>(), s["final"]["eps_R"].get<double>());
+  std::printf("results in %s/\n", dir.string().c_str());
+}
+
+}  // namespace netvmo::tools
