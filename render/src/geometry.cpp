@@ -62,7 +62,7 @@ Pose look_at(const Vec3& eye, const Vec3& target, const Vec3& up) {
   const Vec3 z = target - eye;
   if (z.norm() < 1e-9) throw std::invalid_argument("look_at: eye and target coincide");
   const Vec3 zc = z.normalized();
-  Vec3 x = zc.cross(-up);  // x right = forward x down
+  Vec3 x = (-up).cross(zc);  // x right = y (down) x z (forward)
   if (x.norm() < 1e-9) throw std::invalid_argument("look_at: viewing direction parallel to up");
   x.normalize();
   const Vec3 y = zc.cross(x);

@@ -526,7 +526,9 @@ cv::Mat Renderer::render(int ci, int frame) {
           if (n.dot(D) > 0) n = -n;
           n.normalize();
           const Vec3 pl = gi.to_local * (in.g_bw * P.cast<double>());
-          lane_alb[j] = float(gi.tag ? gi.tag->albedo(pl.x(), pl.y()) : gi.material.eval(pl));
+          lane_alb[j] = float(gi.tag ? gi.tag->albedo(pl.x(), pl.y())
+                                     : gi.material.eval(pl, gi.to_local.linear() * (in.g_bw.linear() *
+                                                                                   n.cast<double>())));
           lane_p[j] = P;
           lane_n[j] = n;
           lane_rad[j] = lane_alb[j] * ambient;

@@ -92,13 +92,16 @@ TagTexture::TagTexture(const TagSpec& spec) : spec_(spec) {
       dark_[static_cast<size_t>(r * total_width_ + c)] = im->buf[r * im->stride + c] < 128 ? 1 : 0;
 }
 
-double Material::eval(const Vec3& p) const {
+double Material::eval(const Vec3& p, const Vec3& n) const {
   switch (pattern) {
     case Pattern::Solid:
       return albedo;
     case Pattern::Checker: {
-      const long s = long(std::floor(p.x() / scale)) + long(std::floor(p.y() / scale)) +
-                     long(std::floor(p.z() / scale));
+      int skip = 0;
+      n.cwiseAbs().maxCoeff(&skip);
+      long s = 0;
+      for (int a = 0; a < 3; ++a)
+        if (a != skip) s += long(std::floor(p[a] / scale));
       return (s & 1) ? albedo2 : albedo;
     }
     case Pattern::Noise: {

@@ -90,3 +90,39 @@ TEST(Visibility, MovingOccluderChangesVisibilityOverTime) {
 
 }  // namespace
 }  // namespace netvmo::render
+
+namespace netvmo::render {
+namespace {
+
+// look_at builds an OpenCV camera (x right, y down, z forward): a point up and to the right of
+// the viewing direction appears above and right of the principal point.
+TEST(Camera, LookAtIsUprightAndRightHanded) {
+  const Pose g_wi = look_at(Vec3(0, -2, 1), Vec3(0, 0, 1), Vec3(0, 0, 1));
+  EXPECT_NEAR(g_wi.linear().determinant(), 1.0, 1e-12);
+  Intrinsics k;
+  const auto uv = k.project(g_wi.inverse() * Vec3(0.1, 0, 1.2));
+  ASSERT_TRUE(uv.has_value());
+  EXPECT_GT(uv->x(), k.cx);
+  EXPECT_LT(uv->y(), k.cy);
+}
+
+// Distortion: undistort inverts distort, and project() matches the OpenCV model.
+TEST(Camera, DistortionRoundTrip) {
+  Intrinsics k;
+  k.dist = {-0.08, 0.02, 0.001, -0.001, 0.003};
+  for (double x : {-0.5, -0.1, 0.0, 0.3, 0.55})
+    for (double y : {-0.4, 0.0, 0.2, 0.4}) {
+      const Vec2 xd = k.distort(Vec2(x, y));
+      const auto back = k.undistort(xd);
+      ASSERT_TRUE(back.has_value());
+      EXPECT_NEAR(back->x(), x, 1e-10);
+      EXPECT_NEAR(back->y(), y, 1e-10);
+    }
+  // Radial-only value by hand: r^2 = 0.25, factor 1 - 0.08*0.25 + 0.02*0.0625 + 0.003*0.015625.
+  k.dist = {-0.08, 0.02, 0, 0, 0.003};
+  const double f = 1 - 0.02 + 0.00125 + 0.003 * 0.015625;
+  EXPECT_NEAR(k.distort(Vec2(0.3, 0.4)).x(), 0.3 * f, 1e-15);
+}
+
+}  // namespace
+}  // namespace netvmo::render

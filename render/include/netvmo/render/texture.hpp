@@ -66,7 +66,10 @@ struct Material {
   double scale = 0.25;   ///< checker square side / noise feature size [m]
   std::uint32_t seed = 0;  ///< noise pattern seed
 
-  double eval(const Vec3& p) const;
+  /// Albedo at point p with unit normal n, both in the shape frame. The checker ignores the
+  /// coordinate along the dominant normal axis, so a face lying on a cell boundary (a floor at
+  /// z = 0) does not flicker between cells with rounding.
+  double eval(const Vec3& p, const Vec3& n) const;
 };
 
 /// Parses "solid", "checker", "noise"; throws std::invalid_argument otherwise.
