@@ -1,0 +1,59 @@
+#include "netvmo/render/camera.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace netvmo::render {
+
+bool Intrinsics::has_distortion() const {
+  for (double d : dist)
+    if (d != 0) return true;
+  return false;
+}
+
+Vec2 Intrinsics::distort(const Vec2& xn) const {
+  const double x = xn.x(), y = xn.y();
+  const double k1 = dist[0], k2 = dist[1], p1 = dist[2], p2 = dist[3], k3 = dist[4];
+  const double r2 = x * x + y * y;
+  const double radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3));
+  return {x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x),
+          y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y};
+}
+
+std::optional<Vec2> Intrinsics::undistort(const Vec2& xd) const {
+  if (!has_distortion()) return xd;
+  Vec2 x = xd;
+  const double h = 1e-7;
+  for (int it = 0; it < 50; ++it) {
+    const Vec2 f = distort(x) - xd;
+    if (f.norm() < 1e-13) return x;
+    Eigen::Matrix2d J;
+    J.col(0) = (distort(x + Vec2(h, 0)) - distort(x - Vec2(h, 0))) / (2 * h);
+    J.col(1) = (distort(x + Vec2(0, h)) - distort(x - Vec2(0, h))) / (2 * h);
+    if (std::abs(J.determinant()) < 1e-9) return std::nullopt;
+    x -= J.inverse() * f;
+    if (!x.allFinite()) return std::nullopt;
+  }
+  return (distort(x) - xd).norm() < 1e-9 ? std::optional<Vec2>(x) : std::nullopt;
+}
+
+std::optional<Vec2> Intrinsics::project(const Vec3& p) const {
+  if (!(p.z() > 0)) return std::nullopt;
+  const Vec2 d = distort(Vec2(p.x() / p.z(), p.y() / p.z()));
+  return Vec2(fx * d.x() + cx, fy * d.y() + cy);
+}
+
+std::optional<Vec2> Intrinsics::unproject(const Vec2& uv) const {
+  return undistort(Vec2((uv.x() - cx) / fx, (uv.y() - cy) / fy));
+}
+
+void Intrinsics::validate() const {
+  if (width <= 0 || height <= 0 || width > 16384 || height > 16384)
+    throw std::invalid_argument("image size must be between 1 and 16384 pixels");
+  if (!(fx > 0) || !(fy > 0)) throw std::invalid_argument("focal lengths fx, fy must be positive");
+  if (!std::isfinite(cx) || !std::isfinite(cy)) throw std::invalid_argument("cx, cy must be finite");
+  for (double d : dist)
+    if (!std::isfinite(d)) throw std::invalid_argument("distortion coefficients must be finite");
+}
+
+}  // namespace netvmo::render

@@ -1,0 +1,124 @@
+#include "netvmo/render/texture.hpp"
+
+#include <apriltag/apriltag.h>
+#include <apriltag/tag16h5.h>
+#include <apriltag/tag25h9.h>
+#include <apriltag/tag36h11.h>
+#include <apriltag/tagStandard41h12.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <functional>
+#include <memory>
+#include <stdexcept>
+
+namespace netvmo::render {
+namespace {
+
+struct Family {
+  apriltag_family_t* (*create)();
+  void (*destroy)(apriltag_family_t*);
+};
+
+Family family_by_name(const std::string& name) {
+  if (name == "tag36h11") return {tag36h11_create, tag36h11_destroy};
+  if (name == "tag25h9") return {tag25h9_create, tag25h9_destroy};
+  if (name == "tag16h5") return {tag16h5_create, tag16h5_destroy};
+  if (name == "tagStandard41h12") return {tagStandard41h12_create, tagStandard41h12_destroy};
+  throw std::invalid_argument("unknown tag family '" + name +
+                              "' (use tag36h11, tag25h9, tag16h5 or tagStandard41h12)");
+}
+
+// 32-bit integer hash (lowbias32) for procedural textures.
+std::uint32_t hash32(std::uint32_t x) {
+  x ^= x >> 16;
+  x *= 0x7feb352dU;
+  x ^= x >> 15;
+  x *= 0x846ca68bU;
+  x ^= x >> 16;
+  return x;
+}
+
+double lattice(long i, long j, long k, std::uint32_t seed) {
+  std::uint32_t h = hash32(seed ^ 0x9e3779b9U);
+  h = hash32(h ^ std::uint32_t(i));
+  h = hash32(h ^ std::uint32_t(j));
+  h = hash32(h ^ std::uint32_t(k));
+  return (h >> 8) * (2.0 / 16777216.0) - 1.0;  // [-1, 1)
+}
+
+double smooth(double t) { return t * t * (3 - 2 * t); }
+
+// Trilinear value noise in [-1, 1].
+double value_noise(const Vec3& p, std::uint32_t seed) {
+  const double fx = std::floor(p.x()), fy = std::floor(p.y()), fz = std::floor(p.z());
+  const long i = long(fx), j = long(fy), k = long(fz);
+  const double tx = smooth(p.x() - fx), ty = smooth(p.y() - fy), tz = smooth(p.z() - fz);
+  double acc = 0;
+  for (int c = 0; c < 8; ++c) {
+    const int a = c & 1, b = (c >> 1) & 1, d = (c >> 2) & 1;
+    const double w = (a ? tx : 1 - tx) * (b ? ty : 1 - ty) * (d ? tz : 1 - tz);
+    acc += w * lattice(i + a, j + b, k + d, seed);
+  }
+  return acc;
+}
+
+}  // namespace
+
+TagTexture::TagTexture(const TagSpec& spec) : spec_(spec) {
+  if (!(spec.size > 0)) throw std::invalid_argument("tag size must be positive");
+  if (spec.quiet_cells < 0) throw std::invalid_argument("tag quiet_cells must be >= 0");
+  const Family fam = family_by_name(spec.family);
+  std::unique_ptr<apriltag_family_t, void (*)(apriltag_family_t*)> f(fam.create(), fam.destroy);
+  if (spec.id < 0 || static_cast<std::uint32_t>(spec.id) >= f->ncodes)
+    throw std::invalid_argument("tag id " + std::to_string(spec.id) + " out of range for " +
+                                spec.family + " (0.." + std::to_string(f->ncodes - 1) + ")");
+  // image_u8_destroy is not exported by Debian's libapriltag 3.3; it frees the pixel buffer and
+  // the struct, both allocated with calloc by image_u8_create_stride, so do the same here.
+  auto free_image = [](image_u8_t* p) {
+    if (p) std::free(p->buf);
+    std::free(p);
+  };
+  std::unique_ptr<image_u8_t, decltype(free_image)> im(apriltag_to_image(f.get(), spec.id), free_image);
+  if (!im) throw std::runtime_error("apriltag_to_image failed");
+  total_width_ = f->total_width;
+  width_at_border_ = f->width_at_border;
+  if (im->width != total_width_ || im->height != total_width_)
+    throw std::runtime_error("apriltag_to_image returned an unexpected bitmap size");
+  cell_ = spec.size / width_at_border_;
+  dark_.resize(static_cast<size_t>(total_width_ * total_width_));
+  for (int r = 0; r < total_width_; ++r)
+    for (int c = 0; c < total_width_; ++c)
+      dark_[static_cast<size_t>(r * total_width_ + c)] = im->buf[r * im->stride + c] < 128 ? 1 : 0;
+}
+
+double Material::eval(const Vec3& p, const Vec3& n) const {
+  switch (pattern) {
+    case Pattern::Solid:
+      return albedo;
+    case Pattern::Checker: {
+      int skip = 0;
+      n.cwiseAbs().maxCoeff(&skip);
+      long s = 0;
+      for (int a = 0; a < 3; ++a)
+        if (a != skip) s += long(std::floor(p[a] / scale));
+      return (s & 1) ? albedo2 : albedo;
+    }
+    case Pattern::Noise: {
+      const Vec3 q = p / scale;
+      const double n = 0.6 * value_noise(q, seed) + 0.3 * value_noise(2.03 * q, seed + 1) +
+                       0.1 * value_noise(4.01 * q, seed + 2);
+      return std::clamp(albedo + albedo2 * n, 0.0, 1.0);
+    }
+  }
+  return albedo;
+}
+
+Material::Pattern parse_pattern(const std::string& name) {
+  if (name == "solid") return Material::Pattern::Solid;
+  if (name == "checker") return Material::Pattern::Checker;
+  if (name == "noise") return Material::Pattern::Noise;
+  throw std::invalid_argument("unknown pattern '" + name + "' (use solid, checker or noise)");
+}
+
+}  // namespace netvmo::render
