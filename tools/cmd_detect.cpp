@@ -141,6 +141,9 @@ void add_detect(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   cmd->add_option("--sharpening", o->det.decode_sharpening, "libapriltag decode_sharpening")
       ->capture_default_str();
+  cmd->add_option("--min-contrast", o->det.min_white_black_diff,
+                  "libapriltag qtp.min_white_black_diff (gray levels; libapriltag's own default is 5)")
+      ->capture_default_str();
   cmd->add_option("--min-margin", o->det.min_decision_margin,
                   "Minimum decision margin to accept the target")
       ->capture_default_str();
