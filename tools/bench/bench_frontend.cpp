@@ -84,6 +84,7 @@ void BM_FrontEnd(benchmark::State& state) {
   s.quad_decimate = static_cast<double>(state.range(0));
   s.nthreads = 2;
   s.refinement = static_cast<Refinement>(state.range(1));
+  s.min_white_black_diff = static_cast<int>(state.range(2));
   FrontEnd fe(s);
   int detected = 0, n = 0;
   for (auto _ : state) {
@@ -94,7 +95,8 @@ void BM_FrontEnd(benchmark::State& state) {
   }
   if (detected != n) state.SkipWithError("target not detected in the benchmark frame");
   state.SetLabel(std::string("decimate ") + std::to_string(state.range(0)) + ", refine " +
-                 to_string(s.refinement));
+                 to_string(s.refinement) + ", min_white_black_diff " +
+                 std::to_string(state.range(2)));
 }
 
 // libapriltag alone (no refinement, no undistortion), nthreads from the argument.
@@ -137,13 +139,15 @@ void BM_RefineOnly(benchmark::State& state) {
 BENCHMARK(BM_AprilTagOnly)->Args({2, 1})->Args({2, 2})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RefineOnly)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
 
-// args: quad_decimate, refinement (0 none, 1 subpix, 2 edges)
+// args: quad_decimate, refinement (0 none, 1 subpix, 2 edges), min_white_black_diff
 BENCHMARK(BM_FrontEnd)
-    ->Args({1, 0})
-    ->Args({1, 2})
-    ->Args({2, 0})
-    ->Args({2, 1})
-    ->Args({2, 2})
+    ->Args({1, 0, 20})
+    ->Args({1, 2, 20})
+    ->Args({2, 0, 20})
+    ->Args({2, 1, 20})
+    ->Args({2, 2, 20})
+    ->Args({1, 2, 5})
+    ->Args({2, 2, 5})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MinTime(2.0);
