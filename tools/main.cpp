@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   int exit_code = 0;
   netvmo::tools::add_simulate(app, exit_code);
   netvmo::tools::add_render(app, exit_code);
+  netvmo::tools::add_detect(app, exit_code);
   netvmo::tools::add_run(app, exit_code);
   if (argc == 1) {
     std::fputs(app.help().c_str(), stdout);

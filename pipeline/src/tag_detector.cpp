@@ -56,6 +56,8 @@ void validate(const DetectorSettings& s) {
   if (s.nthreads < 1) bad("nthreads must be >= 1");
   if (!(s.decode_sharpening >= 0.0)) bad("decode_sharpening must be >= 0");
   if (s.bits_corrected < 0 || s.bits_corrected > 3) bad("bits_corrected must be in 0..3");
+  if (s.min_white_black_diff < 0 || s.min_white_black_diff > 255)
+    bad("min_white_black_diff must be in 0..255");
   if (s.target_id < 0) bad("target id must be >= 0");
   if (!(s.min_decision_margin >= 0.0)) bad("min_decision_margin must be >= 0");
   if (s.max_hamming < 0) bad("max_hamming must be >= 0");
@@ -123,7 +125,7 @@ bool refine_edge_lines(const cv::Mat& g, std::array<cv::Point2d, 4>& c, int bord
     if (n.dot(0.5 * (a + b) - centroid) < 0) n = -n;  // outward: black inside, white outside
     const double skip = w + 1.5;
     std::vector<cv::Point2d> pts;
-    for (double t = skip; t <= len - skip; t += 0.5) {
+    for (double t = skip; t <= len - skip; t += 1.0) {
       const cv::Point2d p = a + t * d;
       double s = 0.0;
       if (edge_offset(g, p, n, w, s)) pts.push_back(p + s * n);
@@ -268,6 +270,7 @@ struct TagDetector::Impl {
     td->nthreads = s.nthreads;
     td->refine_edges = s.refine_edges;
     td->decode_sharpening = s.decode_sharpening;
+    td->qtp.min_white_black_diff = s.min_white_black_diff;
     td->debug = false;
   }
   void cleanup() {

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <unistd.h>
 #include <fstream>
 #include <memory>
 #include <opencv2/calib3d.hpp>
@@ -194,10 +195,42 @@ double corner_rms(const std::array<cv::Point2d, 4>& a, const std::array<cv::Poin
   return std::sqrt(s / 4.0);
 }
 
+SynthDatasetSpec simple_dataset_spec(int cameras, int frames, bool video) {
+  SynthDatasetSpec spec;
+  for (int i = 0; i < cameras; ++i) {
+    SynthCamera c;
+    c.id = i + 1;
+    c.calib = test_calibration();
+    c.g_wi.translation() = obs::Vec3(0.3 * i, 0.0, 0.0);
+    spec.cameras.push_back(c);
+  }
+  for (int f = 0; f < frames; ++f)
+    spec.g_wo.push_back(facing_pose(2.0, 0.1 + 0.05 * f, -0.05, {0.2, -0.15 + 0.05 * f, 0.3 * f}));
+  spec.video = video;
+  return spec;
+}
+
+namespace {
+// Directories made by fresh_dir() in this process, removed at exit.
+struct TempDirs {
+  std::vector<fs::path> dirs;
+  ~TempDirs() {
+    for (const auto& d : dirs) {
+      std::error_code ec;
+      fs::remove_all(d, ec);
+    }
+  }
+};
+TempDirs g_temp_dirs;
+}  // namespace
+
 fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("netvmo_test_" + name);
+  // per process, so concurrent test runs (ctest -j, other worktrees) never collide
+  const fs::path d = fs::temp_directory_path() /
+                     ("netvmo_test_" + std::to_string(::getpid()) + "_" + name);
   fs::remove_all(d);
   fs::create_directories(d);
+  g_temp_dirs.dirs.push_back(d);
   return d;
 }
 

@@ -79,6 +79,10 @@ struct SynthDatasetSpec {
   SynthOptions options;
 };
 
+/// `cameras` cameras 0.3 m apart along world x (identity orientation, ids 1..n, the test
+/// calibration) and a target 2 m in front moving sideways and turning over `frames` frames.
+SynthDatasetSpec simple_dataset_spec(int cameras, int frames, bool video = false);
+
 /// Writes network.yaml (edges: a path 1-2-...), calib/cam_<id>.yaml, frames, truth.csv and
 /// target.csv into `dir` (created). Returns the true corners [camera][frame] (tag in front).
 std::vector<std::vector<std::array<cv::Point2d, 4>>> write_synth_dataset(

@@ -218,6 +218,24 @@ TEST(Detector, HammingAndMarginThresholds) {
   EXPECT_EQ(dm.status, TargetStatus::low_margin);
 }
 
+// The default min_white_black_diff (20) keeps low-contrast tags: black 110 / white 150 on a
+// background of 130 with noise sigma 2, at 1.5 m and at 2.5 m.
+TEST(Detector, LowContrastTagStillDetected) {
+  const auto calib = testing::test_calibration();
+  TagDetector det;
+  SynthOptions opt;
+  opt.black = 110;
+  opt.white = 150;
+  opt.background = 130;
+  opt.noise_sigma = 2.0;
+  for (double z : {1.5, 2.5}) {
+    const obs::SE3 g = facing_pose(z, 0.1, 0.05, {0.2, 0.2, 0.5});
+    const auto d = det.detect(render_tags(calib, {{0, kSize, g, {}}}, opt), &calib);
+    ASSERT_EQ(d.status, TargetStatus::detected) << "z " << z;
+    EXPECT_LT(testing::corner_rms(d.target()->corners, project_corners(calib, g, kSize)), 0.3);
+  }
+}
+
 TEST(Detector, InvalidSettingsRejected) {
   DetectorSettings s;
   s.family = "tag99h1";

@@ -42,6 +42,11 @@ struct DetectorSettings {
   bool refine_edges = true;         ///< libapriltag's edge refinement of the quads
   double decode_sharpening = 0.25;  ///< sharpening of the decoded bit samples
   int bits_corrected = 2;           ///< error bits the decoder may correct (libapriltag default)
+  /// libapriltag qtp.min_white_black_diff: local contrast (gray levels) below which a region is
+  /// not thresholded. libapriltag's default is 5; 20 skips the quad fitting of sensor-noise
+  /// clusters (about 5x faster on 640x480 frames with noise sigma 2, see pipeline/BENCHMARKS.md)
+  /// and still finds tags whose black/white contrast is 40 gray levels or more (tested).
+  int min_white_black_diff = 20;
   // Acceptance of the target tag
   int target_id = 0;                 ///< the target's tag id
   double min_decision_margin = 20.0; ///< reject target detections with a lower decision margin

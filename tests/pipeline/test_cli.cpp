@@ -1,0 +1,109 @@
+// `netvmo detect` end to end on synthesized dataset folders (binary run via std::system).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include "netvmo/pipeline/truth_io.hpp"
+#include "synth.hpp"
+
+namespace netvmo {
+namespace {
+using namespace pipeline;
+namespace fs = std::filesystem;
+
+struct RunResult {
+  int code;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+RunResult run_detect(const fs::path& dataset, const fs::path& out, const std::string& extra = "") {
+  const fs::path o = out.parent_path() / (out.filename().string() + ".stdout");
+  const fs::path e = out.parent_path() / (out.filename().string() + ".stderr");
+  const std::string cmd = std::string(NETVMO_BINARY_DIR) + "/netvmo detect " + dataset.string() +
+                          " --out " + out.string() + " --quiet " + extra + " > " + o.string() +
+                          " 2> " + e.string();
+  const int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(o), slurp(e)};
+}
+
+int count_lines(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+TEST(Cli, DetectWritesCsvAndSummary) {
+  const auto dir = testing::fresh_dir("cli_ok");
+  const auto truth = testing::write_synth_dataset(dir / "ds", testing::simple_dataset_spec(2, 3));
+  const auto r = run_detect(dir / "ds", dir / "out");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_NE(r.out.find("camera"), std::string::npos);
+  EXPECT_NE(r.out.find("mean_margin"), std::string::npos);
+  const auto rows = read_detections_csv(dir / "out" / "detections.csv");
+  ASSERT_EQ(rows.size(), 6u);  // frames x cameras
+  for (const auto& row : rows) {
+    ASSERT_TRUE(row.detected);
+    EXPECT_EQ(row.tag_id, 0);
+    EXPECT_GT(row.margin, 20.0);
+    const size_t ci = static_cast<size_t>(row.camera - 1), f = static_cast<size_t>(row.frame);
+    EXPECT_LT(testing::corner_rms(*row.corners, truth[ci][f]), 0.1);
+  }
+  const std::string header = "frame,camera,tag_id,detected,margin,u0,v0,u1,v1,u2,v2,u3,v3\n";
+  EXPECT_EQ(slurp(dir / "out" / "detections.csv").substr(0, header.size()), header);
+}
+
+TEST(Cli, CorruptImageOneErrorLineOtherCamerasKept) {
+  const auto dir = testing::fresh_dir("cli_corrupt");
+  testing::write_synth_dataset(dir / "ds", testing::simple_dataset_spec(2, 2));
+  const fs::path bad = dir / "ds" / "cam_2" / "000001.png";
+  { std::ofstream(bad, std::ios::binary) << "garbage, not a png"; }
+  const auto r = run_detect(dir / "ds", dir / "out");
+  EXPECT_NE(r.code, 0);
+  EXPECT_EQ(count_lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find(bad.string()), std::string::npos) << r.err;
+  const auto rows = read_detections_csv(dir / "out" / "detections.csv");
+  ASSERT_EQ(rows.size(), 4u);
+  for (const auto& row : rows)
+    EXPECT_EQ(row.detected, !(row.camera == 2 && row.frame == 1)) << row.camera << " " << row.frame;
+  // --keep-going: same rows, a warning, exit 0
+  const auto k = run_detect(dir / "ds", dir / "out2", "--keep-going");
+  EXPECT_EQ(k.code, 0) << k.err;
+  EXPECT_NE(k.err.find("warning"), std::string::npos);
+  EXPECT_EQ(slurp(dir / "out" / "detections.csv"), slurp(dir / "out2" / "detections.csv"));
+}
+
+TEST(Cli, DatasetErrorsOneLineNothingWritten) {
+  const auto dir = testing::fresh_dir("cli_err");
+  testing::write_synth_dataset(dir / "ds", testing::simple_dataset_spec(2, 1));
+  fs::remove(dir / "ds" / "calib" / "cam_2.yaml");
+  auto r = run_detect(dir / "ds", dir / "out");
+  EXPECT_NE(r.code, 0);
+  EXPECT_EQ(count_lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("cam_2.yaml"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out" / "detections.csv"));
+
+  testing::write_synth_dataset(dir / "ds2", testing::simple_dataset_spec(2, 1));
+  std::string net = slurp(dir / "ds2" / "network.yaml");
+  net.replace(net.find("[[1, 2]]"), 8, "[[1, 5]]");
+  std::ofstream(dir / "ds2" / "network.yaml") << net;
+  r = run_detect(dir / "ds2", dir / "out2");
+  EXPECT_NE(r.code, 0);
+  EXPECT_EQ(count_lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("network.yaml"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("unknown camera id 5"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out2" / "detections.csv"));
+}
+
+}  // namespace
+}  // namespace netvmo

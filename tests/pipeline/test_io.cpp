@@ -1,0 +1,218 @@
+// Calibration, network.yaml and CSV readers: valid files load, bad ones give an InputError
+// naming the file (and the key or line).
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <visp3/core/vpCameraParameters.h>
+#include <visp3/core/vpXmlParserCamera.h>
+
+#include "netvmo/pipeline/calibration.hpp"
+#include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/network_config.hpp"
+#include "netvmo/pipeline/truth_io.hpp"
+#include "synth.hpp"
+
+namespace netvmo {
+namespace {
+using namespace pipeline;
+namespace fs = std::filesystem;
+
+/// Runs f, expects an InputError whose message contains every needle.
+template <class F>
+void expect_input_error(F f, std::initializer_list<std::string> needles) {
+  try {
+    f();
+    ADD_FAILURE() << "no InputError thrown";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    for (const auto& n : needles) EXPECT_NE(msg.find(n), std::string::npos) << msg << " lacks " << n;
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << "one line: " << msg;
+  }
+}
+
+void write(const fs::path& p, const std::string& s) { std::ofstream(p) << s; }
+
+TEST(Calibration, OpenCvYamlRoundTrip) {
+  const auto dir = testing::fresh_dir("calib_yaml");
+  const Calibration c = testing::test_calibration(true);
+  save_calibration_opencv(dir / "cam_1.yaml", c);
+  const Calibration r = load_calibration_opencv(dir / "cam_1.yaml");
+  EXPECT_EQ(r.width, 640);
+  EXPECT_EQ(r.height, 480);
+  EXPECT_LT(cv::norm(cv::Mat(r.K), cv::Mat(c.K)), 1e-12);
+  EXPECT_LT(cv::norm(r.dist - c.dist), 1e-12);
+  EXPECT_EQ(r.source, (dir / "cam_1.yaml").string());
+}
+
+TEST(Calibration, OpenCvFileErrorsNameFileAndNode) {
+  const auto dir = testing::fresh_dir("calib_err");
+  expect_input_error([&] { load_calibration_opencv(dir / "nope.yaml"); }, {"nope.yaml", "not found"});
+  write(dir / "a.yaml", "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n"
+                         "camera_matrix: !!opencv-matrix\n  rows: 3\n  cols: 3\n  dt: d\n"
+                         "  data: [600, 0, 320, 0, 600, 240, 0, 0, 1]\n");
+  expect_input_error([&] { load_calibration_opencv(dir / "a.yaml"); },
+                     {"a.yaml", "distortion_coefficients"});
+  write(dir / "b.yaml", "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n"
+                         "camera_matrix: !!opencv-matrix\n  rows: 2\n  cols: 2\n  dt: d\n"
+                         "  data: [600, 0, 0, 600]\n"
+                         "distortion_coefficients: !!opencv-matrix\n  rows: 1\n  cols: 5\n"
+                         "  dt: d\n  data: [0, 0, 0, 0, 0]\n");
+  expect_input_error([&] { load_calibration_opencv(dir / "b.yaml"); }, {"b.yaml", "camera_matrix"});
+  write(dir / "c.yaml", "this is : not : yaml [");
+  expect_input_error([&] { load_calibration_opencv(dir / "c.yaml"); }, {"c.yaml"});
+}
+
+TEST(Calibration, VispXml) {
+  const auto dir = testing::fresh_dir("calib_xml");
+  {
+    vpCameraParameters cam;
+    cam.initPersProjWithDistortion(600.5, 601.5, 322.25, 241.75, -0.08, 0.081);
+    vpXmlParserCamera p;
+    ASSERT_EQ(p.save(cam, (dir / "cam_2.xml").string(), "cam_2", 640, 480),
+              vpXmlParserCamera::SEQUENCE_OK);
+    vpCameraParameters nodist;
+    nodist.initPersProjWithoutDistortion(600.5, 601.5, 322.25, 241.75);
+    vpXmlParserCamera p2;
+    ASSERT_EQ(p2.save(nodist, (dir / "cam_3.xml").string(), "cam_3", 800, 600),
+              vpXmlParserCamera::SEQUENCE_OK);
+  }
+  const Calibration c = load_calibration_visp_xml(dir / "cam_2.xml", "cam_2");
+  EXPECT_EQ(c.width, 640);
+  EXPECT_EQ(c.height, 480);
+  EXPECT_DOUBLE_EQ(c.K(0, 0), 600.5);
+  EXPECT_DOUBLE_EQ(c.K(1, 1), 601.5);
+  EXPECT_DOUBLE_EQ(c.K(0, 2), 322.25);
+  EXPECT_DOUBLE_EQ(c.K(1, 2), 241.75);
+  EXPECT_DOUBLE_EQ(c.dist[0], -0.08);  // ViSP kud = OpenCV k1
+  EXPECT_EQ(c.dist[1], 0.0);
+  const Calibration d = load_calibration_visp_xml(dir / "cam_3.xml", "cam_3");
+  EXPECT_EQ(d.width, 800);
+  EXPECT_FALSE(d.has_distortion());
+  expect_input_error([&] { load_calibration_visp_xml(dir / "cam_2.xml", "cam_9"); },
+                     {"cam_2.xml", "cam_9"});
+}
+
+// ViSP's radial model u = u0 + px x (1 + kud r^2) equals OpenCV's with k1 = kud.
+TEST(Calibration, NormalizeInvertsDistortion) {
+  const Calibration c = testing::test_calibration(true);
+  const std::vector<cv::Point2d> xy = {{0.4, -0.3}, {-0.5, 0.38}, {0.01, 0.02}};
+  const auto px = denormalize_points(xy, c);
+  const auto back = normalize_points(px, c);
+  for (size_t i = 0; i < xy.size(); ++i) EXPECT_LT(cv::norm(back[i] - xy[i]), 1e-9);
+}
+
+const char* kNetwork =
+    "fps: 30\n"
+    "frames: 10\n"
+    "target: {family: tag36h11, id: 3, size: 0.2}\n"
+    "cameras:\n"
+    "  - {id: 1, p_wi: [0, 0, 0], r_wi: [0, 0, 0]}\n"
+    "  - {id: 4, p_wi: [1, 2, 3], r_wi: [0, 0.5, 0]}\n"
+    "edges: [[1, 4]]\n";
+
+TEST(NetworkConfig, ReadsValidFile) {
+  const auto dir = testing::fresh_dir("net_ok");
+  write(dir / "network.yaml", kNetwork);
+  const NetworkConfig n = load_network_config(dir / "network.yaml");
+  EXPECT_EQ(n.fps, 30);
+  ASSERT_TRUE(n.frames.has_value());
+  EXPECT_EQ(*n.frames, 10);
+  EXPECT_EQ(n.target.id, 3);
+  EXPECT_EQ(n.target.size, 0.2);
+  ASSERT_EQ(n.cameras.size(), 2u);
+  EXPECT_EQ(n.cameras[1].id, 4);
+  EXPECT_LT((n.cameras[1].g_wi.translation() - obs::Vec3(1, 2, 3)).norm(), 1e-12);
+  EXPECT_LT((obs::rotvec(n.cameras[1].g_wi) - obs::Vec3(0, 0.5, 0)).norm(), 1e-12);
+  EXPECT_EQ(n.edges, (std::vector<std::pair<int, int>>{{1, 4}}));
+  EXPECT_EQ(n.index_of(4), 1);
+  EXPECT_EQ(n.index_of(2), -1);
+}
+
+TEST(NetworkConfig, ErrorsNameFileAndKey) {
+  const auto dir = testing::fresh_dir("net_err");
+  const fs::path f = dir / "network.yaml";
+  auto with = [&](const std::string& from, const std::string& to) {
+    std::string s = kNetwork;
+    s.replace(s.find(from), from.size(), to);
+    write(f, s);
+  };
+  with("[[1, 4]]", "[[1, 7]]");
+  expect_input_error([&] { load_network_config(f); }, {"network.yaml", "edges[0]", "unknown camera id 7"});
+  with("id: 4,", "id: 1,");
+  expect_input_error([&] { load_network_config(f); }, {"network.yaml", "duplicate camera id 1"});
+  with("fps: 30", "fsp: 30");
+  expect_input_error([&] { load_network_config(f); }, {"network.yaml", "fps"});
+  with("frames: 10", "frame: 10");
+  expect_input_error([&] { load_network_config(f); }, {"network.yaml", "frame", "unknown key"});
+  with("tag36h11", "tag99h9");
+  expect_input_error([&] { load_network_config(f); }, {"network.yaml", "target.family"});
+  with("size: 0.2", "size: -1");
+  expect_input_error([&] { load_network_config(f); }, {"network.yaml", "target.size"});
+  with("[[1, 4]]", "[[4, 4]]");
+  expect_input_error([&] { load_network_config(f); }, {"network.yaml", "self-loop"});
+  with("r_wi: [0, 0.5, 0]", "r_wi: [0, 0.5]");
+  expect_input_error([&] { load_network_config(f); }, {"network.yaml", "cameras[1].r_wi"});
+  with("id: 4,", "id: 0,");
+  expect_input_error([&] { load_network_config(f); }, {"network.yaml", "positive"});
+}
+
+TEST(TruthIo, ReadsSynthesizedTruthAndTarget) {
+  const auto dir = testing::fresh_dir("truth");
+  auto spec = testing::simple_dataset_spec(2, 2);
+  spec.g_wo[1] = testing::facing_pose(-1.0);  // behind the cameras: empty corners
+  const auto corners = testing::write_synth_dataset(dir, spec);
+  const auto rows = read_truth_csv(dir / "truth.csv");
+  ASSERT_EQ(rows.size(), 4u);
+  for (const auto& r : rows) {
+    const size_t ci = static_cast<size_t>(r.camera - 1);
+    if (r.frame == 0) {
+      ASSERT_TRUE(r.corners.has_value());
+      EXPECT_TRUE(r.in_fov);
+      EXPECT_LT(testing::corner_rms(*r.corners, corners[ci][0]), 1e-6);
+    } else {
+      EXPECT_FALSE(r.corners.has_value());
+      EXPECT_FALSE(r.in_fov);
+    }
+  }
+  const auto target = read_target_csv(dir / "target.csv");
+  ASSERT_EQ(target.size(), 2u);
+  EXPECT_LT((target[0].g_wo.matrix() - spec.g_wo[0].matrix()).norm(), 1e-9);
+  EXPECT_NEAR(target[1].t, 1.0 / 30.0, 1e-9);
+}
+
+TEST(TruthIo, BadFilesNameFileAndLine) {
+  const auto dir = testing::fresh_dir("truth_bad");
+  write(dir / "truth.csv", "frame,t,cam\n");
+  expect_input_error([&] { read_truth_csv(dir / "truth.csv"); }, {"truth.csv", "header"});
+  write(dir / "target.csv", std::string(kTargetHeader) + "\n0,0,1,2,3,0,0,0\n1,0.1,x,2,3,0,0,0\n");
+  expect_input_error([&] { read_target_csv(dir / "target.csv"); }, {"target.csv:3", "px"});
+  expect_input_error([&] { read_target_csv(dir / "missing.csv"); }, {"missing.csv"});
+}
+
+TEST(DetectionsIo, FormatAndReadBack) {
+  const auto dir = testing::fresh_dir("det_io");
+  DetectionRow a;
+  a.frame = 3;
+  a.camera = 2;
+  a.tag_id = 0;
+  a.detected = true;
+  a.margin = 87.123;
+  a.corners = std::array<cv::Point2d, 4>{{{1.5, 2.25}, {3, 4}, {5, 6}, {7.12345, 8}}};
+  DetectionRow b;
+  b.frame = 3;
+  b.camera = 5;
+  b.tag_id = 0;
+  EXPECT_EQ(format_detection_row(b), "3,5,0,0,,,,,,,,,");
+  write(dir / "d.csv", std::string(kDetectionsHeader) + "\n" + format_detection_row(a) + "\n" +
+                           format_detection_row(b) + "\n");
+  const auto rows = read_detections_csv(dir / "d.csv");
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_TRUE(rows[0].detected);
+  EXPECT_NEAR(rows[0].margin, 87.12, 1e-9);
+  EXPECT_NEAR((*rows[0].corners)[3].x, 7.1235, 1e-9);
+  EXPECT_FALSE(rows[1].detected);
+  EXPECT_FALSE(rows[1].corners.has_value());
+}
+
+}  // namespace
+}  // namespace netvmo

@@ -1,0 +1,204 @@
+// Dataset folders: image folders and video files give the same detections; the frame-count
+// rule (missing frames, shorter cameras, `frames:`) with warnings; errors name the file.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <visp3/core/vpCameraParameters.h>
+#include <visp3/core/vpXmlParserCamera.h>
+
+#include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/frame_source.hpp"
+#include "netvmo/pipeline/front_end.hpp"
+#include "synth.hpp"
+
+namespace netvmo {
+namespace {
+using namespace pipeline;
+namespace fs = std::filesystem;
+
+template <class F>
+void expect_input_error(F f, std::initializer_list<std::string> needles) {
+  try {
+    f();
+    ADD_FAILURE() << "no InputError thrown";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    for (const auto& n : needles) EXPECT_NE(msg.find(n), std::string::npos) << msg << " lacks " << n;
+  }
+}
+
+bool any_warning_contains(const Dataset& ds, const std::string& a, const std::string& b) {
+  for (const auto& w : ds.warnings)
+    if (w.find(a) != std::string::npos && w.find(b) != std::string::npos) return true;
+  return false;
+}
+
+/// Runs the front end on every frame of every camera: [camera][frame].
+std::vector<std::vector<TagObservation>> run_all(Dataset& ds) {
+  FrontEnd fe(DetectorSettings{});
+  std::vector<std::vector<TagObservation>> out(ds.cameras.size());
+  for (int f = 0; f < ds.frame_count; ++f)
+    for (size_t c = 0; c < ds.cameras.size(); ++c)
+      out[c].push_back(fe.observe(ds.read(c, f), ds.cameras[c].calib));
+  return out;
+}
+
+TEST(Sources, ImageFolderAndMjpgVideoAgree) {
+  const auto spec_img = testing::simple_dataset_spec(2, 4, false);
+  const auto spec_vid = testing::simple_dataset_spec(2, 4, true);
+  const auto d_img = testing::fresh_dir("src_img"), d_vid = testing::fresh_dir("src_vid");
+  const auto truth = testing::write_synth_dataset(d_img, spec_img);
+  testing::write_synth_dataset(d_vid, spec_vid);
+  Dataset a = open_dataset(d_img), b = open_dataset(d_vid);
+  EXPECT_TRUE(a.warnings.empty());
+  EXPECT_TRUE(b.warnings.empty());
+  ASSERT_EQ(a.frame_count, 4);
+  ASSERT_EQ(b.frame_count, 4);
+  EXPECT_TRUE(fs::is_regular_file(b.cameras[0].source->path()));
+  const auto oa = run_all(a), ob = run_all(b);
+  for (size_t c = 0; c < 2; ++c)
+    for (size_t f = 0; f < 4; ++f) {
+      ASSERT_TRUE(oa[c][f].detected);
+      ASSERT_TRUE(ob[c][f].detected) << "video camera " << c << " frame " << f;
+      EXPECT_LT(testing::corner_rms(oa[c][f].corners_px, truth[c][f]), 0.1);
+      for (size_t k = 0; k < 4; ++k)
+        EXPECT_LT(cv::norm(oa[c][f].corners_px[k] - ob[c][f].corners_px[k]), 0.5)
+            << "camera " << c << " frame " << f << " corner " << k;
+    }
+  // random access backwards in a video re-reads the right frame
+  const cv::Mat f3 = b.read(0, 3), f1 = b.read(0, 1), f1_again = b.read(0, 1);
+  EXPECT_EQ(cv::norm(f1, f1_again, cv::NORM_INF), 0.0);
+  EXPECT_GT(cv::norm(f1, f3, cv::NORM_INF), 0.0);
+}
+
+TEST(Sources, MissingFrameIsBlindNotShifted) {
+  const auto dir = testing::fresh_dir("src_missing");
+  const auto truth = testing::write_synth_dataset(dir, testing::simple_dataset_spec(2, 4));
+  fs::remove(dir / "cam_1" / "000001.png");
+  Dataset ds = open_dataset(dir);
+  EXPECT_EQ(ds.frame_count, 4);
+  EXPECT_TRUE(any_warning_contains(ds, "cam_1", "missing frame")) << ds.warnings.size();
+  EXPECT_TRUE(ds.read(0, 1).empty());
+  EXPECT_FALSE(ds.read(1, 1).empty());
+  // frames after the gap are still the right frames
+  const auto o = run_all(ds);
+  EXPECT_FALSE(o[0][1].detected);
+  for (size_t f : {0u, 2u, 3u}) {
+    ASSERT_TRUE(o[0][f].detected);
+    EXPECT_LT(testing::corner_rms(o[0][f].corners_px, truth[0][f]), 0.1) << "frame " << f;
+  }
+}
+
+TEST(Sources, ShorterCameraBlindAfterItsLastFrame) {
+  const auto dir = testing::fresh_dir("src_short");
+  testing::write_synth_dataset(dir, testing::simple_dataset_spec(2, 3));
+  fs::remove(dir / "cam_2" / "000002.png");
+  Dataset ds = open_dataset(dir);
+  EXPECT_EQ(ds.frame_count, 3);
+  EXPECT_TRUE(any_warning_contains(ds, "camera 2", "blind from frame 2"));
+  EXPECT_TRUE(ds.read(1, 2).empty());
+  EXPECT_FALSE(ds.read(0, 2).empty());
+}
+
+TEST(Sources, FramesKeyBoundsTheDataset) {
+  const auto dir = testing::fresh_dir("src_frames");
+  testing::write_synth_dataset(dir, testing::simple_dataset_spec(1, 3));
+  { std::ofstream(dir / "network.yaml", std::ios::app) << "frames: 2\n"; }
+  Dataset ds = open_dataset(dir);
+  EXPECT_EQ(ds.frame_count, 2);
+  EXPECT_TRUE(any_warning_contains(ds, "camera 1", "ignored"));
+  EXPECT_TRUE(ds.read(0, 2).empty());
+}
+
+TEST(Sources, NonNumericNamesInSortedOrder) {
+  const auto dir = testing::fresh_dir("src_names");
+  testing::write_synth_dataset(dir, testing::simple_dataset_spec(1, 3));
+  fs::rename(dir / "cam_1" / "000000.png", dir / "cam_1" / "a.png");
+  fs::rename(dir / "cam_1" / "000001.png", dir / "cam_1" / "b.png");
+  fs::rename(dir / "cam_1" / "000002.png", dir / "cam_1" / "c.png");
+  const cv::Mat c = cv::imread((dir / "cam_1" / "c.png").string(), cv::IMREAD_GRAYSCALE);
+  Dataset ds = open_dataset(dir);
+  EXPECT_EQ(ds.frame_count, 3);
+  EXPECT_EQ(cv::norm(ds.read(0, 2), c, cv::NORM_INF), 0.0);
+  EXPECT_EQ(ds.cameras[0].source->frame_name(2), (dir / "cam_1" / "c.png").string());
+}
+
+TEST(Sources, CorruptImageNamesFileOthersUnaffected) {
+  const auto dir = testing::fresh_dir("src_corrupt");
+  testing::write_synth_dataset(dir, testing::simple_dataset_spec(2, 2));
+  const fs::path bad = dir / "cam_2" / "000001.png";
+  { std::ofstream(bad, std::ios::binary) << "\x89PNG garbage garbage garbage"; }
+  Dataset ds = open_dataset(dir);
+  expect_input_error([&] { ds.read(1, 1); }, {bad.string()});
+  EXPECT_FALSE(ds.read(0, 1).empty());
+  EXPECT_FALSE(ds.read(1, 0).empty());
+}
+
+TEST(Sources, DatasetErrorsNameTheFile) {
+  const auto dir = testing::fresh_dir("src_errors");
+  testing::write_synth_dataset(dir, testing::simple_dataset_spec(2, 1));
+  // missing calibration
+  fs::rename(dir / "calib" / "cam_2.yaml", dir / "cam_2.yaml.bak");
+  expect_input_error([&] { open_dataset(dir); }, {(dir / "calib" / "cam_2.yaml").string(), "camera 2"});
+  fs::rename(dir / "cam_2.yaml.bak", dir / "calib" / "cam_2.yaml");
+  // no frames for a declared camera
+  fs::rename(dir / "cam_2", dir / "frames_2");
+  expect_input_error([&] { open_dataset(dir); }, {"cam_2", "camera 2"});
+  // both a folder and a video
+  fs::rename(dir / "frames_2", dir / "cam_2");
+  { std::ofstream(dir / "cam_2.avi") << "x"; }
+  expect_input_error([&] { open_dataset(dir); }, {"cam_2.avi", "both"});
+  fs::remove(dir / "cam_2.avi");
+  // unreadable video
+  fs::rename(dir / "cam_2", dir / "frames_2");
+  { std::ofstream(dir / "cam_2.avi") << "not a video at all"; }
+  expect_input_error([&] { open_dataset(dir); }, {"cam_2.avi"});
+  fs::remove(dir / "cam_2.avi");
+  fs::rename(dir / "frames_2", dir / "cam_2");
+  // image size differs from the calibration
+  cv::imwrite((dir / "cam_1" / "000000.png").string(), cv::Mat(100, 120, CV_8UC1, cv::Scalar(0)));
+  Dataset ds = open_dataset(dir);
+  expect_input_error([&] { ds.read(0, 0); }, {"000000.png", "120x100", "cam_1.yaml"});
+  // two files with the same frame number
+  cv::imwrite((dir / "cam_1" / "0.png").string(), cv::Mat(100, 120, CV_8UC1, cv::Scalar(0)));
+  expect_input_error([&] { open_dataset(dir); }, {"same frame number"});
+  fs::remove(dir / "cam_1" / "0.png");
+  // an undeclared camera folder is a warning, not an error
+  fs::create_directories(dir / "cam_9");
+  EXPECT_TRUE(any_warning_contains(open_dataset(dir), "cam_9", "not in network.yaml"));
+  // missing dataset / network.yaml
+  expect_input_error([&] { open_dataset(dir / "nope"); }, {"nope"});
+  fs::remove(dir / "network.yaml");
+  expect_input_error([&] { open_dataset(dir); }, {"network.yaml"});
+}
+
+TEST(Sources, XmlCalibrationsInDataset) {
+  const auto dir = testing::fresh_dir("src_xml");
+  testing::write_synth_dataset(dir, testing::simple_dataset_spec(1, 1));
+  const Calibration c = load_calibration_opencv(dir / "calib" / "cam_1.yaml");
+  fs::remove(dir / "calib" / "cam_1.yaml");
+  // An OpenCV FileStorage .xml is recognised as such (ViSP XML is tested in test_io).
+  cv::FileStorage fsw((dir / "calib" / "cam_1.xml").string(), cv::FileStorage::WRITE);
+  fsw << "image_width" << c.width << "image_height" << c.height << "camera_matrix" << cv::Mat(c.K)
+      << "distortion_coefficients" << cv::Mat(cv::Matx<double, 1, 5>(c.dist.val));
+  fsw.release();
+  Dataset ds = open_dataset(dir);
+  EXPECT_EQ(ds.cameras[0].calib.K(0, 0), c.K(0, 0));
+  EXPECT_EQ(ds.cameras[0].calib.dist[0], c.dist[0]);
+  // ViSP XML written by vpXmlParserCamera, camera name cam_1
+  fs::remove(dir / "calib" / "cam_1.xml");
+  vpCameraParameters cam;
+  cam.initPersProjWithoutDistortion(c.K(0, 0), c.K(1, 1), c.K(0, 2), c.K(1, 2));
+  vpXmlParserCamera parser;
+  ASSERT_EQ(parser.save(cam, (dir / "calib" / "cam_1.xml").string(), "cam_1", 640, 480),
+            vpXmlParserCamera::SEQUENCE_OK);
+  Dataset dv = open_dataset(dir);
+  EXPECT_EQ(dv.cameras[0].calib.K(1, 2), c.K(1, 2));
+  EXPECT_EQ(dv.cameras[0].calib.width, 640);
+  FrontEnd fe;
+  EXPECT_TRUE(fe.observe(dv.read(0, 0), dv.cameras[0].calib).detected);
+}
+
+}  // namespace
+}  // namespace netvmo

@@ -1,0 +1,155 @@
+// Tag front end speed: ms per 640x480 frame for libapriltag detection + OpenCV corner
+// refinement (+ undistortion into normalized coordinates) with nthreads = 2, at quad_decimate
+// 1 and 2. The frame: a 0.2 m tag36h11 at ~2 m, slightly tilted, on a mid-gray background with
+// some clutter and Gaussian noise (sigma 2), drawn by warping the tag bitmap with the
+// homography of its projected corners (exact geometry is tested elsewhere; this is for timing).
+#include <apriltag/apriltag.h>
+#include <apriltag/tag36h11.h>
+#include <benchmark/benchmark.h>
+
+#include <cstdlib>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "netvmo/pipeline/front_end.hpp"
+
+namespace {
+using namespace netvmo::pipeline;
+
+Calibration bench_calibration() {
+  Calibration c;
+  c.width = 640;
+  c.height = 480;
+  c.K = cv::Matx33d(610.0, 0, 321.7, 0, 605.0, 238.4, 0, 0, 1);
+  c.dist = {-0.12, 0.05, 4e-4, -3e-4, 0.0};
+  return c;
+}
+
+cv::Mat bench_frame(const Calibration& calib) {
+  apriltag_family_t* fam = tag36h11_create();
+  image_u8_t* im = apriltag_to_image(fam, 0);
+  const int total = fam->total_width, border = (total - fam->width_at_border) / 2;
+  // bitmap + 1 extra white cell, 16 px per cell
+  const int cells = total + 2, px = 16;
+  cv::Mat tag(cells * px, cells * px, CV_8UC1, cv::Scalar(230));
+  for (int r = 0; r < total; ++r)
+    for (int c = 0; c < total; ++c)
+      tag(cv::Rect((c + 1) * px, (r + 1) * px, px, px)).setTo(im->buf[r * im->stride + c] > 127 ? 230 : 20);
+  std::free(im->buf);
+  std::free(im);
+  const int wb = fam->width_at_border;
+  tag36h11_destroy(fam);
+  // object corners (tag frame, y up) and their bitmap pixels (row 0 = top = +y)
+  const double s = 0.2, h = s / 2;
+  std::vector<cv::Point3d> obj = {{-h, -h, 0}, {h, -h, 0}, {h, h, 0}, {-h, h, 0}};
+  const double a = (border + 1) * px, b = (border + 1 + wb) * px;
+  std::vector<cv::Point2f> src = {{float(a), float(b)}, {float(b), float(b)}, {float(b), float(a)},
+                                  {float(a), float(a)}};
+  std::vector<cv::Point2d> img;
+  // facing the camera (rotation pi about x) with a small tilt, 2 m away
+  cv::Matx33d R1, R2;
+  cv::Rodrigues(cv::Vec3d(CV_PI, 0, 0), R1);
+  cv::Rodrigues(cv::Vec3d(0.2, -0.3, 0.4), R2);
+  cv::Vec3d rvec;
+  cv::Rodrigues(R1 * R2, rvec);
+  cv::projectPoints(obj, rvec, cv::Vec3d(0.15, -0.1, 2.0), cv::Mat(calib.K), cv::noArray(), img);
+  std::vector<cv::Point2f> dst(img.begin(), img.end());
+  cv::Mat frame(calib.height, calib.width, CV_8UC1, cv::Scalar(128));
+  // clutter: a few dark and bright rectangles
+  cv::RNG rng(42);
+  for (int i = 0; i < 12; ++i)
+    cv::rectangle(frame, cv::Rect(rng.uniform(0, 600), rng.uniform(0, 440), rng.uniform(10, 80),
+                                  rng.uniform(10, 80)),
+                  cv::Scalar(rng.uniform(0, 255)), cv::FILLED);
+  // the quiet-zone square maps through the same homography
+  const cv::Mat H = cv::getPerspectiveTransform(src, dst);
+  cv::Mat warped, mask;
+  cv::warpPerspective(tag, warped, H, frame.size(), cv::INTER_AREA);
+  cv::warpPerspective(cv::Mat(tag.size(), CV_8UC1, cv::Scalar(255)), mask, H, frame.size(),
+                      cv::INTER_NEAREST);
+  warped.copyTo(frame, mask);
+  cv::Mat noise(frame.size(), CV_16SC1);
+  rng.fill(noise, cv::RNG::NORMAL, 0, 2);
+  cv::Mat f16;
+  frame.convertTo(f16, CV_16SC1);
+  f16 += noise;
+  f16.convertTo(frame, CV_8UC1);
+  return frame;
+}
+
+void BM_FrontEnd(benchmark::State& state) {
+  const Calibration calib = bench_calibration();
+  const cv::Mat frame = bench_frame(calib);
+  DetectorSettings s;
+  s.quad_decimate = static_cast<double>(state.range(0));
+  s.nthreads = 2;
+  s.refinement = static_cast<Refinement>(state.range(1));
+  s.min_white_black_diff = static_cast<int>(state.range(2));
+  FrontEnd fe(s);
+  int detected = 0, n = 0;
+  for (auto _ : state) {
+    const TagObservation o = fe.observe(frame, calib);
+    benchmark::DoNotOptimize(o.f_normalized.data());
+    detected += o.detected;
+    ++n;
+  }
+  if (detected != n) state.SkipWithError("target not detected in the benchmark frame");
+  state.SetLabel(std::string("decimate ") + std::to_string(state.range(0)) + ", refine " +
+                 to_string(s.refinement) + ", min_white_black_diff " +
+                 std::to_string(state.range(2)));
+}
+
+// libapriltag alone (no refinement, no undistortion), nthreads from the argument.
+void BM_AprilTagOnly(benchmark::State& state) {
+  const Calibration calib = bench_calibration();
+  const cv::Mat frame = bench_frame(calib);
+  DetectorSettings s;
+  s.quad_decimate = static_cast<double>(state.range(0));
+  s.nthreads = static_cast<int>(state.range(1));
+  s.refinement = Refinement::none;
+  TagDetector det(s);
+  for (auto _ : state) benchmark::DoNotOptimize(det.detect(frame).all.size());
+  state.SetLabel(std::string("decimate ") + std::to_string(state.range(0)) + ", nthreads " +
+                 std::to_string(state.range(1)));
+}
+
+// The OpenCV refinement step alone on the detected corners.
+void BM_RefineOnly(benchmark::State& state) {
+  const Calibration calib = bench_calibration();
+  const cv::Mat frame = bench_frame(calib);
+  DetectorSettings s;
+  s.refinement = Refinement::none;
+  TagDetector det(s);
+  const auto d = det.detect(frame);
+  if (!d.target()) {
+    state.SkipWithError("target not detected");
+    return;
+  }
+  const auto mode = static_cast<Refinement>(state.range(0));
+  for (auto _ : state) {
+    auto c = d.target()->corners;
+    refine_corners(frame, c, mode, det.border_cells(), &calib);
+    benchmark::DoNotOptimize(c.data());
+  }
+  state.SetLabel(std::string("refine ") + to_string(mode));
+}
+
+}  // namespace
+
+BENCHMARK(BM_AprilTagOnly)->Args({2, 1})->Args({2, 2})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RefineOnly)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
+
+// args: quad_decimate, refinement (0 none, 1 subpix, 2 edges), min_white_black_diff
+BENCHMARK(BM_FrontEnd)
+    ->Args({1, 0, 20})
+    ->Args({1, 2, 20})
+    ->Args({2, 0, 20})
+    ->Args({2, 1, 20})
+    ->Args({2, 2, 20})
+    ->Args({1, 2, 5})
+    ->Args({2, 2, 5})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(2.0);
+
+BENCHMARK_MAIN();

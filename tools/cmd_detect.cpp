@@ -1,0 +1,164 @@
+// netvmo detect DATASET --out DIR: runs the tag front end on every camera and frame of a dataset
+// folder and writes DIR/detections.csv (one row per frame and camera, pixels).
+//
+// Unreadable frames (corrupt image, undecodable video frame, wrong image size): the camera is
+// treated as blind for that frame (detected = 0) and the other cameras' results are kept;
+// detections.csv is always complete. Without --keep-going the command then ends with one error
+// line naming the first unreadable file and exit code 1; with --keep-going each is a warning and
+// the exit code is 0. Dataset-level problems (network.yaml, a missing calibration, no frames for
+// a camera, an unknown camera id) stop before anything is written.
+#include <cstdio>
+#include <map>
+#include <set>
+
+#include "commands.hpp"
+#include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/frame_source.hpp"
+#include "netvmo/pipeline/front_end.hpp"
+#include "netvmo/pipeline/io.hpp"
+#include "netvmo/pipeline/progress.hpp"
+#include "netvmo/pipeline/truth_io.hpp"
+
+namespace netvmo::tools {
+namespace fs = std::filesystem;
+using namespace netvmo::pipeline;
+
+namespace {
+
+struct DetectOptions {
+  std::string dataset, out;
+  DetectorSettings det;
+  std::string refinement = to_string(DetectorSettings{}.refinement);
+  bool keep_going = false;
+  bool quiet = false;
+};
+
+struct CameraStats {
+  int frames = 0, images = 0, detected = 0, unreadable = 0;
+  int low_margin = 0, high_hamming = 0, duplicate = 0;
+  double margin_sum = 0;
+  std::set<int> other_ids;
+};
+
+int run_detect(DetectOptions o) {
+  o.det.refinement = parse_refinement(o.refinement);
+  Dataset ds = open_dataset(o.dataset);
+  for (const auto& w : ds.warnings) std::fprintf(stderr, "netvmo detect: warning: %s\n", w.c_str());
+  o.det.family = ds.network.target.family;
+  o.det.target_id = ds.network.target.id;
+  FrontEnd fe(o.det);
+
+  const fs::path out_dir(o.out);
+  io::ensure_directory(out_dir);
+  io::AtomicFile csv(out_dir / "detections.csv");
+  csv << kDetectionsHeader << "\n";
+
+  std::vector<CameraStats> stats(ds.cameras.size());
+  std::vector<std::string> unreadable;
+  Progress progress("detect", ds.frame_count, !o.quiet);
+  for (int f = 0; f < ds.frame_count; ++f) {
+    for (size_t c = 0; c < ds.cameras.size(); ++c) {
+      CameraStats& st = stats[c];
+      ++st.frames;
+      cv::Mat img;
+      try {
+        img = ds.read(c, f);
+      } catch (const InputError& e) {
+        ++st.unreadable;
+        unreadable.push_back(e.what());
+        if (o.keep_going) std::fprintf(stderr, "netvmo detect: warning: %s (camera blind there)\n", e.what());
+      }
+      if (!img.empty()) ++st.images;
+      FrameDetections all;
+      const TagObservation obs = fe.observe(img, ds.cameras[c].calib, &all);
+      for (const auto& d : all.all)
+        if (d.id != o.det.target_id) st.other_ids.insert(d.id);
+      switch (obs.status) {
+        case TargetStatus::low_margin: ++st.low_margin; break;
+        case TargetStatus::high_hamming: ++st.high_hamming; break;
+        case TargetStatus::duplicate_id: ++st.duplicate; break;
+        default: break;
+      }
+      DetectionRow row;
+      row.frame = f;
+      row.camera = ds.cameras[c].id;
+      row.tag_id = o.det.target_id;
+      row.detected = obs.detected;
+      if (obs.detected) {
+        ++st.detected;
+        st.margin_sum += obs.margin;
+        row.margin = obs.margin;
+        row.corners = obs.corners_px;
+      }
+      csv << format_detection_row(row) << "\n";
+    }
+    progress.update(f + 1);
+  }
+  progress.finish();
+  csv.commit();
+
+  std::printf("netvmo detect: %s -> %s (%d frames, target %s id %d)\n", o.dataset.c_str(),
+              (out_dir / "detections.csv").string().c_str(), ds.frame_count,
+              ds.network.target.family.c_str(), ds.network.target.id);
+  std::printf("%-8s %-28s %7s %7s %9s %6s %11s %9s %10s %10s\n", "camera", "source", "frames",
+              "images", "detected", "rate", "mean_margin", "rejected", "other_ids", "unreadable");
+  for (size_t c = 0; c < ds.cameras.size(); ++c) {
+    const CameraStats& st = stats[c];
+    const std::string src = ds.cameras[c].source->path().filename().string();
+    const double rate = st.frames ? 100.0 * st.detected / st.frames : 0.0;
+    const double mm = st.detected ? st.margin_sum / st.detected : 0.0;
+    std::printf("%-8d %-28s %7d %7d %9d %5.1f%% %11.1f %9d %10zu %10d\n", ds.cameras[c].id,
+                src.c_str(), st.frames, st.images, st.detected, rate, mm,
+                st.low_margin + st.high_hamming + st.duplicate, st.other_ids.size(),
+                st.unreadable);
+  }
+  if (!unreadable.empty() && !o.keep_going)
+    throw InputError(unreadable.front() + " (" + std::to_string(unreadable.size()) +
+                     " unreadable frame(s) in total, treated as blind in detections.csv; "
+                     "fix the files or pass --keep-going)");
+  return 0;
+}
+
+}  // namespace
+
+void add_detect(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<DetectOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "detect",
+      "Run the AprilTag front end on a dataset folder (rendered or recorded) and write\n"
+      "OUT/detections.csv: frame,camera,tag_id,detected,margin,u0,v0,...,u3,v3 (OpenCV pixels,\n"
+      "corners in libapriltag order; empty when not detected). The tag family and target id\n"
+      "come from network.yaml.");
+  cmd->add_option("dataset", o->dataset, "Dataset folder (network.yaml, calib/, cam_<id>/ or cam_<id>.<ext>)")
+      ->required();
+  cmd->add_option("--out,-o", o->out, "Output folder (created)")->required();
+  cmd->add_option("--decimate", o->det.quad_decimate, "libapriltag quad_decimate (>= 1)")
+      ->capture_default_str();
+  cmd->add_option("--sigma", o->det.quad_sigma, "libapriltag quad_sigma (Gaussian blur)")
+      ->capture_default_str();
+  cmd->add_option("--threads", o->det.nthreads, "libapriltag nthreads")->capture_default_str();
+  cmd->add_option("--refine-edges", o->det.refine_edges, "libapriltag refine_edges (true/false)")
+      ->capture_default_str();
+  cmd->add_option("--sharpening", o->det.decode_sharpening, "libapriltag decode_sharpening")
+      ->capture_default_str();
+  cmd->add_option("--min-contrast", o->det.min_white_black_diff,
+                  "libapriltag qtp.min_white_black_diff (gray levels; libapriltag's own default is 5)")
+      ->capture_default_str();
+  cmd->add_option("--min-margin", o->det.min_decision_margin,
+                  "Minimum decision margin to accept the target")
+      ->capture_default_str();
+  cmd->add_option("--max-hamming", o->det.max_hamming,
+                  "Maximum corrected bits to accept the target")
+      ->capture_default_str();
+  cmd->add_option("--refine", o->refinement,
+                  "Corner refinement of the target: none, subpix (cv::cornerSubPix) or edges "
+                  "(lines fitted to the border edges)")
+      ->check(CLI::IsMember({"none", "subpix", "edges"}))
+      ->capture_default_str();
+  cmd->add_flag("--keep-going", o->keep_going,
+                "Unreadable frames are warnings (camera blind there) instead of an error exit");
+  cmd->add_flag("--quiet,-q", o->quiet, "No progress line");
+  cmd->callback([o, &exit_code] { exit_code = guarded("detect", [o] { return run_detect(*o); }); });
+}
+
+}  // namespace netvmo::tools
