@@ -86,6 +86,19 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
     write_calibration(out / "calib" / ("cam_" + std::to_string(c.id) + ".yaml"), c.intrinsics);
   }
   io::write_file_atomic(out / "network.yaml", network_yaml(scene, frames));
+  {
+    // The true (rendering) camera poses, for evaluation: g_io,true = g_wi,true^-1 g_wo.
+    io::AtomicFile cams(out / "truth_cameras.csv");
+    cams << "camera,px,py,pz,rx,ry,rz\n";
+    for (const auto& c : scene.cameras) {
+      const render::Vec3 p = c.g_wi_true.translation(), rv = render::rotation_to_vector(c.g_wi_true.linear());
+      cams << c.id;
+      for (int i = 0; i < 3; ++i) cams << "," << fmt("%.9g", p[i]);
+      for (int i = 0; i < 3; ++i) cams << "," << fmt("%.9g", rv[i]);
+      cams << "\n";
+    }
+    cams.commit();
+  }
 
   DatasetSummary summary;
   summary.frames = frames;

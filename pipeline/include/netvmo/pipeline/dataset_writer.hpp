@@ -6,6 +6,7 @@
 //                              cameras [{id, p_wi, r_wi}] (believed poses), edges
 //   truth.csv                  frame,t,camera,in_fov,visible_fraction,u0,v0,...,u3,v3
 //   target.csv                 frame,t,px,py,pz,rx,ry,rz (true target pose in the world)
+//   truth_cameras.csv          camera,px,py,pz,rx,ry,rz (true camera poses in the world)
 // Every file is written to a temporary sibling and renamed into place.
 #pragma once
 

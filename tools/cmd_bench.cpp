@@ -1,0 +1,77 @@
+// netvmo bench: network frames per second of the whole pipeline, on recorded data (decode +
+// detection + observer) and on live rendering (render + detection + observer).
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <unistd.h>
+
+#include "commands.hpp"
+#include "netvmo/pipeline/dataset_writer.hpp"
+#include "netvmo/pipeline/image_run.hpp"
+#include "netvmo/pipeline/render_provider.hpp"
+#include "netvmo/pipeline/render_scenario.hpp"
+#include "netvmo/render/renderer.hpp"
+#include "scenario_path.hpp"
+
+namespace netvmo::tools {
+namespace fs = std::filesystem;
+
+namespace {
+void report(const char* what, const pipeline::ImageRunResult& r, size_t cameras) {
+  const double frames = static_cast<double>(r.history.size());
+  std::printf("%-34s %6.1f network frames/s  (%zu cameras; per network frame: %.1f ms front end%s, %.2f ms observer)\n",
+              what, frames / r.seconds, cameras, 1000.0 * r.seconds_front_end / frames,
+              std::string(what).find("live") != std::string::npos ? " incl. rendering" : " incl. decoding",
+              1000.0 * r.seconds_observer / frames);
+}
+}  // namespace
+
+void add_bench(CLI::App& app, int& exit_code) {
+  struct Options {
+    std::string scenario = "datasets/paper5_render.yaml";
+    int frames = 60;
+    int live_spp = 1;
+  };
+  auto o = std::make_shared<Options>();
+  auto* cmd = app.add_subcommand(
+      "bench", "Network frames per second of the whole pipeline, recorded and live");
+  cmd->add_option("--scenario", o->scenario, "Render scenario")->capture_default_str();
+  cmd->add_option("--frames", o->frames, "Frames per measurement")->capture_default_str()->check(CLI::PositiveNumber);
+  cmd->add_option("--live-spp", o->live_spp, "Samples per pixel for live rendering")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd->callback([o, &exit_code] {
+    exit_code = guarded("bench", [&] {
+      const fs::path scenario = find_scenario(o->scenario);
+      const auto scene = pipeline::load_render_scenario(scenario);
+      pipeline::ImageRunOptions run;
+      run.progress = false;
+      run.max_frames = o->frames;
+      // Recorded: render a dataset first (not timed), then decode + detect + observe.
+      const fs::path tmp = fs::temp_directory_path() / ("netvmo_bench_" + std::to_string(::getpid()));
+      {
+        render::Renderer renderer(scene);
+        pipeline::DatasetOptions d;
+        d.frames = o->frames;
+        d.progress = false;
+        std::printf("rendering %d frames of %s for the recorded measurement...\n", o->frames,
+                    scenario.string().c_str());
+        pipeline::write_dataset(renderer, tmp, d);
+      }
+      auto recorded = pipeline::open_dataset_provider(tmp);
+      const auto r1 = pipeline::run_images(*recorded, run);
+      report("recorded (PNG decode+detect+observe)", r1, scene.cameras.size());
+      fs::remove_all(tmp);
+      auto live_scene = scene;
+      live_scene.imaging.spp = o->live_spp;
+      auto live = pipeline::make_render_provider(live_scene, o->frames);
+      const auto r2 = pipeline::run_images(*live, run);
+      char label[64];
+      std::snprintf(label, sizeof label, "live (render %d spp+detect+observe)", o->live_spp);
+      report(label, r2, scene.cameras.size());
+      return 0;
+    });
+  });
+}
+
+}  // namespace netvmo::tools

@@ -1,0 +1,57 @@
+// netvmo demo: the default scenario end to end: render -> detect -> networked observer ->
+// results, overlays and plots.
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include "commands.hpp"
+#include "netvmo/pipeline/dataset_writer.hpp"
+#include "netvmo/pipeline/render_scenario.hpp"
+#include "netvmo/render/renderer.hpp"
+#include "run_options.hpp"
+#include "scenario_path.hpp"
+
+namespace netvmo::tools {
+namespace fs = std::filesystem;
+
+void add_demo(CLI::App& app, int& exit_code) {
+  struct Options {
+    std::string out = "results/demo";
+    std::string scenario = "datasets/paper5_render.yaml";
+    int frames = 0;
+    RunCliOptions run;
+  };
+  auto o = std::make_shared<Options>();
+  auto* cmd = app.add_subcommand(
+      "demo", "Render the default scenario, run the networked observer on it, evaluate and plot");
+  cmd->footer(
+      "Writes OUT/dataset/ (the rendered images, calibration, network.yaml and ground truth) and\n"
+      "the results of `netvmo run` on it in OUT/ (estimates.csv, energies.csv, errors.csv,\n"
+      "summary.json, energies.png, errors.png, overlays/).");
+  cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
+  cmd->add_option("--scenario", o->scenario, "Render scenario")->capture_default_str();
+  cmd->add_option("--frames", o->frames, "Frames to render (0 = the scenario's)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  add_run_options(*cmd, o->run);
+  cmd->callback([o, &exit_code] {
+    exit_code = guarded("demo", [&] {
+      const fs::path out = o->out, dataset = out / "dataset";
+      const fs::path scenario = find_scenario(o->scenario);
+      std::printf("rendering %s into %s\n", scenario.string().c_str(), dataset.string().c_str());
+      render::Renderer renderer(pipeline::load_render_scenario(scenario));
+      pipeline::DatasetOptions dopt;
+      dopt.frames = o->frames;
+      pipeline::write_dataset(renderer, dataset, dopt);
+      std::printf("running the networked observer on %s\n", dataset.string().c_str());
+      auto provider = pipeline::open_dataset_provider(dataset);
+      const auto summary = run_and_report(*provider, o->run, out);
+      print_run_summary(summary, out);
+      std::printf("open %s/overlays/mosaic.png, %s/energies.png and %s/errors.png\n",
+                  out.string().c_str(), out.string().c_str(), out.string().c_str());
+      return 0;
+    });
+  });
+}
+
+}  // namespace netvmo::tools
