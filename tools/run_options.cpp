@@ -40,6 +40,9 @@ void add_run_options(CLI::App& cmd, RunCliOptions& o) {
   cmd.add_option("--decimate", o.decimate, "libapriltag quad_decimate")
       ->capture_default_str()
       ->check(CLI::Range(1.0, 8.0));
+  cmd.add_flag("!--no-track", o.track,
+               "Always search the whole image (default: search a window around the last "
+               "detection first, the whole image when that fails and every 30 frames)");
   cmd.add_option("--refine", o.refine, "Corner refinement: none, subpix or edges")
       ->check(CLI::IsMember({"none", "subpix", "edges"}))
       ->capture_default_str();
@@ -57,6 +60,7 @@ pipeline::ImageRunOptions to_image_run_options(const RunCliOptions& o) {
   if (o.max_frames > 0) r.max_frames = o.max_frames;
   r.detector.quad_decimate = o.decimate;
   r.detector.refinement = pipeline::parse_refinement(o.refine);
+  r.tracking.enabled = o.track;
   return r;
 }
 

@@ -23,6 +23,7 @@ struct RunCliOptions {
   int max_frames = 0;
   double decimate = 2.0;
   std::string refine = "edges";
+  bool track = true;
 };
 
 void add_run_options(CLI::App& cmd, RunCliOptions& o);

@@ -1,5 +1,7 @@
 #include "netvmo/pipeline/front_end.hpp"
 
+#include <algorithm>
+
 namespace netvmo::pipeline {
 
 Eigen::Matrix<double, 8, 1> normalized_features(const std::array<cv::Point2d, 4>& corners_px,
@@ -14,11 +16,41 @@ Eigen::Matrix<double, 8, 1> normalized_features(const std::array<cv::Point2d, 4>
   return f;
 }
 
+namespace {
+cv::Rect tracking_window(const std::array<cv::Point2d, 4>& c, const TrackingSettings& t) {
+  double x0 = c[0].x, x1 = c[0].x, y0 = c[0].y, y1 = c[0].y;
+  for (const auto& p : c) {
+    x0 = std::min(x0, p.x), x1 = std::max(x1, p.x);
+    y0 = std::min(y0, p.y), y1 = std::max(y1, p.y);
+  }
+  const double grow = t.window_margin * std::max(x1 - x0, y1 - y0) + t.window_pad;
+  return cv::Rect(cv::Point(cvFloor(x0 - grow), cvFloor(y0 - grow)),
+                  cv::Point(cvCeil(x1 + grow) + 1, cvCeil(y1 + grow) + 1));
+}
+}  // namespace
+
 TagObservation FrontEnd::observe(const cv::Mat& gray, const Calibration& calib,
-                                 FrameDetections* all) {
+                                 FrameDetections* all, TrackState* track) {
   TagObservation obs;
   FrameDetections dets;
-  if (!gray.empty()) dets = detector_.detect(gray, &calib);
+  if (!gray.empty()) {
+    const bool windowed = track && tracking_.enabled && track->last &&
+                          track->frames_since_full + 1 < tracking_.full_frame_every;
+    if (windowed) {
+      dets = detector_.detect(gray, tracking_window(*track->last, tracking_), &calib);
+      ++track->frames_since_full;
+    }
+    if (!windowed || dets.status != TargetStatus::detected) {
+      dets = detector_.detect(gray, &calib);
+      if (track) track->frames_since_full = 0;
+    }
+  }
+  if (track) {
+    if (const TagDetection* t = dets.target())
+      track->last = t->corners;
+    else
+      track->last.reset();
+  }
   obs.status = dets.status;
   if (const TagDetection* t = dets.target()) {
     obs.detected = true;

@@ -52,7 +52,8 @@ ImageRunResult run_images(FrameProvider& provider, const ImageRunOptions& option
   // remaining cores.
   ds.nthreads = std::max(1, ds.nthreads / workers);
   std::vector<FrontEnd> front_ends;
-  for (int w = 0; w < workers; ++w) front_ends.emplace_back(ds);
+  for (int w = 0; w < workers; ++w) front_ends.emplace_back(ds, options.tracking);
+  std::vector<TrackState> tracks(n);  // camera i is always handled by worker i % workers
   const auto model = obs::FeatureModel::square(net.target.size);
 
   std::vector<std::optional<obs::SE3>> true_wi(n);
@@ -97,7 +98,8 @@ ImageRunResult run_images(FrameProvider& provider, const ImageRunOptions& option
           errors[i] = std::current_exception();
           continue;
         }
-        cams[i].obs = front_ends[static_cast<size_t>(w)].observe(images[i], provider.calibration(i));
+        cams[i].obs = front_ends[static_cast<size_t>(w)].observe(images[i], provider.calibration(i),
+                                                                  nullptr, &tracks[i]);
         if (cams[i].obs.detected) {
           const auto pose = pnp_pose(cams[i].obs.f_normalized, model);
           if (pose) cams[i].g_io_pnp = pose->g_io;

@@ -292,6 +292,11 @@ const DetectorSettings& TagDetector::settings() const { return impl_->s; }
 int TagDetector::border_cells() const { return impl_->family->width_at_border; }
 
 FrameDetections TagDetector::detect(const cv::Mat& image, const Calibration* calib) {
+  return detect(image, cv::Rect(0, 0, image.cols, image.rows), calib);
+}
+
+FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region,
+                                    const Calibration* calib) {
   const cv::Mat* g = &image;
   if (image.type() == CV_8UC3) {
     cv::cvtColor(image, impl_->gray, cv::COLOR_BGR2GRAY);
@@ -301,8 +306,22 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const Calibration* cal
   }
   FrameDetections out;
   if (g->empty()) return out;
-  image_u8_t im{g->cols, g->rows, static_cast<int32_t>(g->step[0]),
-                const_cast<uint8_t*>(g->ptr<uint8_t>())};
+  // Align the region to the decimation grid so a windowed search samples the same pixels as a
+  // full-frame one (identical quads, identical corners).
+  // libapriltag thresholds in 4x4 tiles of the decimated image: align to 4 x decimate.
+  const int step = 4 * std::max(1, static_cast<int>(std::ceil(impl_->s.quad_decimate)));
+  cv::Rect aligned = region;
+  aligned.x -= ((aligned.x % step) + step) % step;
+  aligned.y -= ((aligned.y % step) + step) % step;
+  aligned.width += region.x - aligned.x;
+  aligned.height += region.y - aligned.y;
+  const cv::Rect roi = aligned & cv::Rect(0, 0, g->cols, g->rows);
+  if (roi.empty()) return out;
+  // libapriltag searches the region only (a view into the image, no copy); corners are mapped
+  // back to the whole image and refined there.
+  const cv::Mat sub = (*g)(roi);
+  image_u8_t im{sub.cols, sub.rows, static_cast<int32_t>(sub.step[0]),
+                const_cast<uint8_t*>(sub.ptr<uint8_t>())};
   zarray_t* dets = apriltag_detector_detect(impl_->td, &im);
   if (!dets) throw std::runtime_error("libapriltag: detection failed");
   for (int i = 0; i < zarray_size(dets); ++i) {
@@ -314,8 +333,10 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const Calibration* cal
     d.margin = det->decision_margin;
     for (int k = 0; k < 4; ++k)
       d.corners[static_cast<size_t>(k)] =
-          cv::Point2d(det->p[k][0] - kApriltagPixelOffset, det->p[k][1] - kApriltagPixelOffset);
-    d.center = cv::Point2d(det->c[0] - kApriltagPixelOffset, det->c[1] - kApriltagPixelOffset);
+          cv::Point2d(det->p[k][0] - kApriltagPixelOffset + roi.x,
+                      det->p[k][1] - kApriltagPixelOffset + roi.y);
+    d.center = cv::Point2d(det->c[0] - kApriltagPixelOffset + roi.x,
+                           det->c[1] - kApriltagPixelOffset + roi.y);
     out.all.push_back(d);
   }
   apriltag_detections_destroy(dets);

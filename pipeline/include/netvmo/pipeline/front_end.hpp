@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <optional>
 #include <opencv2/core.hpp>
 
 #include "netvmo/pipeline/calibration.hpp"
@@ -27,21 +28,43 @@ struct TagObservation {
 Eigen::Matrix<double, 8, 1> normalized_features(const std::array<cv::Point2d, 4>& corners_px,
                                                 const Calibration& calib);
 
+/// Tracking: while a camera keeps detecting the target, the next frame is searched first in a
+/// window around the last corners; only when that fails (or every `full_frame_every` frames)
+/// is the whole image searched. delta still comes from a real decode in this frame. Caveat:
+/// while tracking, a second tag with the target's id outside the window is not seen, so the
+/// duplicate-id rejection is checked on full-frame searches only.
+struct TrackingSettings {
+  bool enabled = true;
+  double window_margin = 0.75;  ///< window = corner bounding box grown by this x its size ...
+  int window_pad = 24;          ///< ... plus this many pixels on every side
+  int full_frame_every = 30;    ///< a full-frame search at least this often (frames)
+};
+
+/// One camera's tracking state (keep one per camera, pass it on every frame).
+struct TrackState {
+  std::optional<std::array<cv::Point2d, 4>> last;  ///< corners of the last detection
+  int frames_since_full = 0;
+};
+
 /// Detector (reused across frames and cameras) + refinement + cv::undistortPoints.
 class FrontEnd {
  public:
-  explicit FrontEnd(DetectorSettings settings = {}) : detector_(std::move(settings)) {}
+  explicit FrontEnd(DetectorSettings settings = {}, TrackingSettings tracking = {})
+      : detector_(std::move(settings)), tracking_(tracking) {}
 
   /// Runs on one camera's frame. An empty image (camera blind at that frame) gives
-  /// detected = false. If `all` is given it receives every decoded tag of the frame.
+  /// detected = false. If `all` is given it receives every decoded tag of the frame (of the
+  /// searched window when tracking). With `track`, the search is windowed as described above.
   TagObservation observe(const cv::Mat& gray, const Calibration& calib,
-                         FrameDetections* all = nullptr);
+                         FrameDetections* all = nullptr, TrackState* track = nullptr);
+  const TrackingSettings& tracking() const { return tracking_; }
 
   TagDetector& detector() { return detector_; }
   const DetectorSettings& settings() const { return detector_.settings(); }
 
  private:
   TagDetector detector_;
+  TrackingSettings tracking_;
 };
 
 }  // namespace netvmo::pipeline

@@ -17,6 +17,7 @@ namespace netvmo::pipeline {
 struct ImageRunOptions {
   run::RunnerSettings runner;  ///< gains, error model, initialisation, rounds (tag size: dataset)
   DetectorSettings detector;   ///< detector settings (family and target id: from the dataset)
+  TrackingSettings tracking;   ///< windowed search around the last detection
   bool keep_going = false;     ///< an unreadable image blinds its camera for that frame (warning)
                                ///< instead of stopping the run
   int workers = 2;             ///< threads detecting cameras in parallel (one detector each)

@@ -96,6 +96,10 @@ class TagDetector {
   /// refines the accepted target's corners. `calib` (optional) lets the edge-line refinement
   /// fit straight lines in undistorted coordinates.
   FrameDetections detect(const cv::Mat& image, const Calibration* calib = nullptr);
+  /// The same, searching only `region` of the image (tags must lie wholly inside it); corners
+  /// are reported and refined in whole-image pixels.
+  FrameDetections detect(const cv::Mat& image, const cv::Rect& region,
+                         const Calibration* calib = nullptr);
 
   const DetectorSettings& settings() const;
   /// Cells across the black border square (8 for tag36h11): corners are at this square.
