@@ -40,10 +40,8 @@ std::uint32_t hash32(std::uint32_t x) {
 }
 
 double lattice(long i, long j, long k, std::uint32_t seed) {
-  std::uint32_t h = hash32(seed ^ 0x9e3779b9U);
-  h = hash32(h ^ std::uint32_t(i));
-  h = hash32(h ^ std::uint32_t(j));
-  h = hash32(h ^ std::uint32_t(k));
+  const std::uint32_t h = hash32(std::uint32_t(i) * 0x8da6b343U ^ std::uint32_t(j) * 0xd8163841U ^
+                                 std::uint32_t(k) * 0xcb1ab31fU ^ seed * 0x9e3779b9U);
   return (h >> 8) * (2.0 / 16777216.0) - 1.0;  // [-1, 1)
 }
 
