@@ -462,6 +462,8 @@ cv::Mat Renderer::render(int ci, int frame) {
     ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
     RTCIntersectContext sctx;
     rtcInitIntersectContext(&sctx);
+    // Shadow packets stay INCOHERENT: with RTC_INTERSECT_CONTEXT_FLAG_COHERENT, rtcOccluded16 of
+    // Debian's Embree 3.13.5 never returned on this machine (AVX-512), whatever the tfar values.
     alignas(64) RayHitK rh;
     alignas(64) RayK sr;
     alignas(64) int valid[K];

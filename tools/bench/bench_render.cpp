@@ -14,9 +14,15 @@ namespace {
 
 using netvmo::render::Renderer;
 
-std::unique_ptr<Renderer> make_renderer(int spp) {
+std::unique_ptr<Renderer> make_renderer(int spp, bool shadows = true, bool textures = true) {
   auto scene = netvmo::pipeline::load_render_scenario(NETVMO_SOURCE_DIR "/datasets/paper5_render.yaml");
   scene.imaging.spp = spp;
+  for (auto& l : scene.lights) l.shadows = shadows;
+  if (!textures) {
+    for (auto& b : scene.occluders)
+      for (auto& sh : b.shapes) sh.material.pattern = netvmo::render::Material::Pattern::Solid;
+    for (auto& sh : scene.target.shapes) sh.material.pattern = netvmo::render::Material::Pattern::Solid;
+  }
   return std::make_unique<Renderer>(scene);
 }
 
@@ -35,6 +41,21 @@ void BM_RenderFrame(benchmark::State& state) {
   state.counters["threads"] = std::thread::hardware_concurrency();
 }
 BENCHMARK(BM_RenderFrame)->ArgsProduct({{1, 4}, {0, 4}})->ArgNames({"spp", "cam"})->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Cost breakdown: the same frame without shadow rays, and without shadows or procedural
+// textures (solid albedo; the tag texture stays).
+void BM_RenderFrameNoShadows(benchmark::State& state) {
+  const int spp = int(state.range(0));
+  auto r = make_renderer(spp, false, state.range(1) != 0);
+  r->render(0, 0);
+  for (auto _ : state) {
+    cv::Mat img = r->render(0, 0);
+    benchmark::DoNotOptimize(img.data);
+  }
+  state.counters["primary_rays/s"] =
+      benchmark::Counter(double(640 * 480) * spp * double(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_RenderFrameNoShadows)->ArgsProduct({{1, 4}, {1, 0}})->ArgNames({"spp", "textures"})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Bare rtcIntersect1 loop, no shading, over `threads` threads.
 void BM_BareIntersect1(benchmark::State& state) {
