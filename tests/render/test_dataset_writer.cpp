@@ -135,6 +135,12 @@ TEST(DatasetWriter, WritesDocumentedLayout) {
     EXPECT_NEAR(v[1], 2.0 / 15, 1e-6);
     EXPECT_NEAR(v[2], 0.3 * 2 / 15, 1e-6);
   }
+  // Rewriting with fewer frames removes the old run's extra images.
+  opt.frames = 2;
+  netvmo::pipeline::write_dataset(r, out, opt);
+  EXPECT_TRUE(fs::exists(out / "cam_7" / "000001.png"));
+  EXPECT_FALSE(fs::exists(out / "cam_7" / "000002.png"));
+  EXPECT_EQ(lines(out / "truth.csv").size(), 1u + 2 * 2);
   // No temporary files left behind.
   for (const auto& e : fs::recursive_directory_iterator(out))
     EXPECT_EQ(e.path().string().find(".partial"), std::string::npos) << e.path();
