@@ -136,6 +136,16 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
   truth.commit();
   target.commit();
   progress.finish();
+  // A dataset rewritten with fewer frames must not keep the old run's extra images.
+  for (const auto& c : scene.cameras)
+    for (const auto& e : fs::directory_iterator(out / ("cam_" + std::to_string(c.id)))) {
+      const std::string name = e.path().filename().string();
+      if (name.size() == 10 && name.compare(6, 4, ".png") == 0 &&
+          name.find_first_not_of("0123456789") == 6 && std::stoi(name.substr(0, 6)) >= frames) {
+        std::error_code ec;
+        fs::remove(e.path(), ec);
+      }
+    }
   return summary;
 }
 

@@ -16,15 +16,16 @@ namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-// Packet width of the primary and shadow ray queries (Embree ray packets).
-constexpr int K = 8;
-using RayHitK = RTCRayHit8;
-using RayK = RTCRay8;
+// Packet width of the primary and shadow ray queries (Embree ray packets). 16 is native on
+// AVX-512 and emulated with two 8-wide traversals on AVX2 (measured: render/BENCHMARKS.md).
+constexpr int K = 16;
+using RayHitK = RTCRayHit16;
+using RayK = RTCRay16;
 inline void intersectK(const int* valid, RTCScene s, RTCIntersectContext* c, RayHitK* r) {
-  rtcIntersect8(valid, s, c, r);
+  rtcIntersect16(valid, s, c, r);
 }
 inline void occludedK(const int* valid, RTCScene s, RTCIntersectContext* c, RayK* r) {
-  rtcOccluded8(valid, s, c, r);
+  rtcOccluded16(valid, s, c, r);
 }
 
 std::uint64_t splitmix64(std::uint64_t& s) {
@@ -443,9 +444,17 @@ cv::Mat Renderer::render(int ci, int frame) {
     if (I.instance_of_top_id[t] >= 0)
       inst_R[t] = I.instances[size_t(I.instance_of_top_id[t])].g_wb.linear().cast<float>();
 
+  // Per (instance, geometry): world -> shape frame (texture coordinates) for this frame.
+  std::vector<std::vector<Eigen::Affine3f>> to_local(ninst);
+  for (size_t t = 0; t < ninst; ++t)
+    if (I.instance_of_top_id[t] >= 0) {
+      const Instance& in = I.instances[size_t(I.instance_of_top_id[t])];
+      for (const auto& g : in.geoms) to_local[t].push_back(Eigen::Affine3f((g.to_local * in.g_bw).cast<float>().matrix()));
+    }
   const float ambient = float(im.ambient), background = float(im.background);
   const double scale = 255.0 * im.exposure / spp;
 
+  const int b = std::max(1, int(std::lround(std::sqrt(double(K) / spp))));
   std::atomic<int> next{0};
   auto worker = [&]() {
     RTCIntersectContext ctx;
@@ -453,6 +462,8 @@ cv::Mat Renderer::render(int ci, int frame) {
     ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
     RTCIntersectContext sctx;
     rtcInitIntersectContext(&sctx);
+    // Shadow packets stay INCOHERENT: with RTC_INTERSECT_CONTEXT_FLAG_COHERENT, rtcOccluded16 of
+    // Debian's Embree 3.13.5 never returned on this machine (AVX-512), whatever the tfar values.
     alignas(64) RayHitK rh;
     alignas(64) RayK sr;
     alignas(64) int valid[K];
@@ -464,7 +475,10 @@ cv::Mat Renderer::render(int ci, int frame) {
     for (int tile = next++; tile < ntiles; tile = next++) {
       const int tx0 = (tile % tiles_x) * T, ty0 = (tile / tiles_x) * T;
       const int tw = std::min(T, W - tx0), th = std::min(T, H - ty0);
-      const int nsamples = tw * th * spp;
+      // Packets cover b x b pixel blocks with all their samples (b*b*spp ~ K), so each packet's
+      // rays form a narrow, square frustum (coherent primary and shadow rays).
+      const int bxn = (tw + b - 1) / b, byn = (th + b - 1) / b, per_block = b * b * spp;
+      const int nsamples = bxn * byn * per_block;
       std::fill(acc.begin(), acc.end(), 0.0f);
       for (int base = 0; base < nsamples; base += K) {
         // Primary rays: one packet of K samples (consecutive samples of neighbouring pixels).
@@ -488,8 +502,11 @@ cv::Mat Renderer::render(int ci, int frame) {
           rh.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
           rh.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
           if (idx >= nsamples) continue;
-          const int p = idx / spp, s = idx % spp;
-          const int col = tx0 + p % tw, row = ty0 + p / tw;
+          const int blk = idx / per_block, w = idx % per_block, pib = w / spp, s = w % spp;
+          const int cin = (blk % bxn) * b + pib % b, rin = (blk / bxn) * b + pib / b;
+          if (cin >= tw || rin >= th) continue;  // block overhangs a partial tile
+          const int p = rin * tw + cin;
+          const int col = tx0 + cin, row = ty0 + rin;
           lane_pix[j] = p;
           float xn, yn;
           if (table) {
@@ -517,18 +534,17 @@ cv::Mat Renderer::render(int ci, int frame) {
             continue;
           }
           const unsigned top_id = rh.hit.instID[0][j];
-          const Instance& in = I.instances[size_t(I.instance_of_top_id[top_id])];
-          const GeomInfo& gi = in.geoms[rh.hit.geomID[j]];
+          const GeomInfo& gi = I.instances[size_t(I.instance_of_top_id[top_id])].geoms[rh.hit.geomID[j]];
           const Eigen::Vector3f D(rh.ray.dir_x[j], rh.ray.dir_y[j], rh.ray.dir_z[j]);
           const Eigen::Vector3f P = O + rh.ray.tfar[j] * D;
           Eigen::Vector3f n =
               inst_R[top_id] * Eigen::Vector3f(rh.hit.Ng_x[j], rh.hit.Ng_y[j], rh.hit.Ng_z[j]);
           if (n.dot(D) > 0) n = -n;
           n.normalize();
-          const Vec3 pl = gi.to_local * (in.g_bw * P.cast<double>());
+          const Eigen::Affine3f& wl = to_local[top_id][rh.hit.geomID[j]];
+          const Eigen::Vector3f pl = wl * P;
           lane_alb[j] = float(gi.tag ? gi.tag->albedo(pl.x(), pl.y())
-                                     : gi.material.eval(pl, gi.to_local.linear() * (in.g_bw.linear() *
-                                                                                   n.cast<double>())));
+                                     : gi.material.eval(pl.cast<double>(), (wl.linear() * n).cast<double>()));
           lane_p[j] = P;
           lane_n[j] = n;
           lane_rad[j] = lane_alb[j] * ambient;

@@ -29,38 +29,31 @@ Family family_by_name(const std::string& name) {
                               "' (use tag36h11, tag25h9, tag16h5 or tagStandard41h12)");
 }
 
-// 32-bit integer hash (lowbias32) for procedural textures.
-std::uint32_t hash32(std::uint32_t x) {
-  x ^= x >> 16;
-  x *= 0x7feb352dU;
-  x ^= x >> 15;
-  x *= 0x846ca68bU;
-  x ^= x >> 16;
-  return x;
+// Lattice value in [-1, 1): a short integer hash of the cell and the seed.
+inline float lattice(std::int32_t i, std::int32_t j, std::int32_t k, std::uint32_t seed) {
+  std::uint32_t h = std::uint32_t(i) * 0x8da6b343U ^ std::uint32_t(j) * 0xd8163841U ^
+                    std::uint32_t(k) * 0xcb1ab31fU ^ seed;
+  h ^= h >> 15;
+  h *= 0x2c1b3c6dU;
+  h ^= h >> 12;
+  h *= 0x297a2d39U;
+  h ^= h >> 15;
+  return float(h >> 8) * (2.0f / 16777216.0f) - 1.0f;
 }
 
-double lattice(long i, long j, long k, std::uint32_t seed) {
-  std::uint32_t h = hash32(seed ^ 0x9e3779b9U);
-  h = hash32(h ^ std::uint32_t(i));
-  h = hash32(h ^ std::uint32_t(j));
-  h = hash32(h ^ std::uint32_t(k));
-  return (h >> 8) * (2.0 / 16777216.0) - 1.0;  // [-1, 1)
-}
+inline float smooth(float t) { return t * t * (3 - 2 * t); }
 
-double smooth(double t) { return t * t * (3 - 2 * t); }
-
-// Trilinear value noise in [-1, 1].
-double value_noise(const Vec3& p, std::uint32_t seed) {
-  const double fx = std::floor(p.x()), fy = std::floor(p.y()), fz = std::floor(p.z());
-  const long i = long(fx), j = long(fy), k = long(fz);
-  const double tx = smooth(p.x() - fx), ty = smooth(p.y() - fy), tz = smooth(p.z() - fz);
-  double acc = 0;
-  for (int c = 0; c < 8; ++c) {
-    const int a = c & 1, b = (c >> 1) & 1, d = (c >> 2) & 1;
-    const double w = (a ? tx : 1 - tx) * (b ? ty : 1 - ty) * (d ? tz : 1 - tz);
-    acc += w * lattice(i + a, j + b, k + d, seed);
-  }
-  return acc;
+// Trilinear value noise in [-1, 1] (single precision: this is the renderer's hot texture path).
+float value_noise(float x, float y, float z, std::uint32_t seed) {
+  const float fx = std::floor(x), fy = std::floor(y), fz = std::floor(z);
+  const auto i = std::int32_t(fx), j = std::int32_t(fy), k = std::int32_t(fz);
+  const float tx = smooth(x - fx), ty = smooth(y - fy), tz = smooth(z - fz);
+  auto lerp = [](float a, float b, float t) { return a + t * (b - a); };
+  const float x00 = lerp(lattice(i, j, k, seed), lattice(i + 1, j, k, seed), tx);
+  const float x10 = lerp(lattice(i, j + 1, k, seed), lattice(i + 1, j + 1, k, seed), tx);
+  const float x01 = lerp(lattice(i, j, k + 1, seed), lattice(i + 1, j, k + 1, seed), tx);
+  const float x11 = lerp(lattice(i, j + 1, k + 1, seed), lattice(i + 1, j + 1, k + 1, seed), tx);
+  return lerp(lerp(x00, x10, ty), lerp(x01, x11, ty), tz);
 }
 
 }  // namespace
@@ -105,9 +98,11 @@ double Material::eval(const Vec3& p, const Vec3& n) const {
       return (s & 1) ? albedo2 : albedo;
     }
     case Pattern::Noise: {
-      const Vec3 q = p / scale;
-      const double n = 0.6 * value_noise(q, seed) + 0.3 * value_noise(2.03 * q, seed + 1) +
-                       0.1 * value_noise(4.01 * q, seed + 2);
+      // Two octaves of value noise, feature size `scale` and about scale / 2.
+      const float q = float(1.0 / scale);
+      const float x = float(p.x()) * q, y = float(p.y()) * q, z = float(p.z()) * q;
+      const double n = 0.7f * value_noise(x, y, z, seed * 0x9e3779b9U) +
+                       0.3f * value_noise(2.03f * x + 17.1f, 2.03f * y, 2.03f * z, seed * 0x9e3779b9U + 1);
       return std::clamp(albedo + albedo2 * n, 0.0, 1.0);
     }
   }

@@ -1,1 +1,130 @@
+// The render scenario loader: the shipped scenarios load; strict reading names the file and the
+// key path for an unknown key, a non-number and a missing value.
 #include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/render_scenario.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* kMinimal = R"(fps: 30
+frames: 3
+imaging: {spp: 1, seed: 5}
+lights:
+  - {type: directional, direction: [0, 1, -1], intensity: 0.7}
+target:
+  tag: {family: tag36h11, id: 2, size: 0.15}
+  shapes:
+    - {type: box, size: [0.2, 0.2, 0.2], pose: {p: [0, 0, -0.101]}}
+  motion: {type: twist, pose: {p: [0, 0, 1], r: [1.5707963, 0, 0]}, v: [0.1, 0, 0]}
+cameras:
+  - id: 4
+    intrinsics: {width: 80, height: 60, fx: 70, fy: 70}
+    pose: {eye: [0, -1.5, 1.0], look_at: [0, 0, 1.0]}
+    believed_offset: {dp: [0.01, 0, 0], dr: [0, 0, 0.02]}
+  - id: 9
+    intrinsics: {width: 80, height: 60, fx: 70, fy: 70, cx: 40, cy: 30, distortion: [-0.05, 0, 0, 0, 0]}
+    pose: {eye: [0.8, -1.4, 1.2], look_at: [0, 0, 1.0], up: [0, 0, 1]}
+    believed: {p: [0.8, -1.4, 1.2], r: [0, 0, 0]}
+edges: [[4, 9]]
+occluders:
+  - name: floor
+    shapes:
+      - {type: plane, size: [6, 6], material: {pattern: checker, albedo: 0.6, albedo2: 0.3, scale: 0.5}}
+)";
+
+fs::path write_scenario(const std::string& name, const std::string& text) {
+  const fs::path dir = fs::path(NETVMO_BINARY_DIR) / "test_tmp" / "scenario_yaml";
+  fs::create_directories(dir);
+  const fs::path f = dir / name;
+  std::ofstream(f) << text;
+  return f;
+}
+
+std::string replaced(std::string s, const std::string& from, const std::string& to) {
+  const auto pos = s.find(from);
+  EXPECT_NE(pos, std::string::npos) << from;
+  if (pos != std::string::npos) s.replace(pos, from.size(), to);
+  return s;
+}
+
+// Loads and returns the InputError message ("" if it loaded).
+std::string load_error(const fs::path& f) {
+  try {
+    netvmo::pipeline::load_render_scenario(f);
+  } catch (const netvmo::InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(RenderScenario, MinimalLoads) {
+  const auto s = netvmo::pipeline::load_render_scenario(write_scenario("ok.yaml", kMinimal));
+  ASSERT_EQ(s.cameras.size(), 2u);
+  EXPECT_EQ(s.cameras[0].id, 4);
+  EXPECT_EQ(s.cameras[1].id, 9);
+  EXPECT_DOUBLE_EQ(s.cameras[0].intrinsics.cx, 39.5);  // default: image centre
+  EXPECT_DOUBLE_EQ(s.cameras[1].intrinsics.dist[0], -0.05);
+  EXPECT_NEAR((s.cameras[0].g_wi_believed.translation() - s.cameras[0].g_wi_true.translation()).x(), 0.01, 1e-12);
+  EXPECT_EQ(s.target.tag.id, 2);
+  EXPECT_EQ(s.frames, 3);
+  EXPECT_EQ(s.imaging.spp, 1);
+  EXPECT_EQ(s.imaging.seed, 5u);
+  ASSERT_EQ(s.edges.size(), 1u);
+  EXPECT_EQ(s.target.motion.kind, netvmo::render::Trajectory::Kind::Twist);
+}
+
+TEST(RenderScenario, ShippedScenariosLoad) {
+  for (const char* name : {"paper5_render.yaml", "moving_target.yaml"}) {
+    const auto s = netvmo::pipeline::load_render_scenario(fs::path(NETVMO_SOURCE_DIR) / "datasets" / name);
+    EXPECT_EQ(s.cameras.size(), 5u) << name;
+    EXPECT_EQ(s.edges.size(), 6u) << name;
+  }
+}
+
+TEST(RenderScenario, UnknownKeyNamesFileAndPath) {
+  const auto f = write_scenario("unknown.yaml", replaced(kMinimal, "fx: 70, fy: 70}", "fx: 70, fy: 70, fz: 1}"));
+  const std::string msg = load_error(f);
+  EXPECT_NE(msg.find(f.string()), std::string::npos) << msg;
+  EXPECT_NE(msg.find("cameras[0].intrinsics.fz"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("unknown key"), std::string::npos) << msg;
+}
+
+TEST(RenderScenario, UnknownTopLevelKey) {
+  const auto f = write_scenario("unknown_top.yaml", std::string(kMinimal) + "lightz: []\n");
+  const std::string msg = load_error(f);
+  EXPECT_NE(msg.find("lightz: unknown key"), std::string::npos) << msg;
+}
+
+TEST(RenderScenario, NonNumberNamesFileAndPath) {
+  const auto f = write_scenario("nan.yaml", replaced(kMinimal, "size: 0.15", "size: big"));
+  const std::string msg = load_error(f);
+  EXPECT_NE(msg.find(f.string()), std::string::npos) << msg;
+  EXPECT_NE(msg.find("target.tag.size"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("expected a number"), std::string::npos) << msg;
+}
+
+TEST(RenderScenario, MissingValueNamesPath) {
+  const auto f = write_scenario("missing.yaml", replaced(kMinimal, "fps: 30\n", ""));
+  const std::string msg = load_error(f);
+  EXPECT_NE(msg.find("fps: missing value"), std::string::npos) << msg;
+}
+
+TEST(RenderScenario, BadValuesAreRejected) {
+  EXPECT_NE(load_error(write_scenario("edge.yaml", replaced(kMinimal, "[[4, 9]]", "[[4, 5]]"))).find("edges[0]"),
+            std::string::npos);
+  EXPECT_NE(load_error(write_scenario("fam.yaml", replaced(kMinimal, "tag36h11", "tag99h1"))).find("unknown tag family"),
+            std::string::npos);
+  EXPECT_NE(load_error(write_scenario("id.yaml", replaced(kMinimal, "id: 9", "id: 4"))).find("duplicate camera id"),
+            std::string::npos);
+  EXPECT_NE(load_error(write_scenario("shape.yaml", replaced(kMinimal, "type: box", "type: sphere"))).find("target.shapes[0].type"),
+            std::string::npos);
+  EXPECT_NE(load_error(fs::path(NETVMO_BINARY_DIR) / "no_such_file.yaml").find("file not found"), std::string::npos);
+}
+
+}  // namespace
