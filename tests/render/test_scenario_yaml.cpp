@@ -115,6 +115,19 @@ TEST(RenderScenario, MissingValueNamesPath) {
   EXPECT_NE(msg.find("fps: missing value"), std::string::npos) << msg;
 }
 
+TEST(RenderScenario, ObjShapeIsReadRelativeToTheScenario) {
+  const auto dir = write_scenario("mesh.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n").parent_path();
+  const std::string with_obj = replaced(kMinimal, "{type: plane, size: [6, 6],", "{type: obj, file: mesh.obj, scale: 2.0,");
+  const auto s = netvmo::pipeline::load_render_scenario(write_scenario("obj.yaml", with_obj));
+  ASSERT_EQ(s.occluders.size(), 1u);
+  const auto& m = s.occluders[0].shapes[0].mesh;
+  EXPECT_EQ(m.triangles.size(), 2u);
+  EXPECT_FLOAT_EQ(m.vertices[2].x(), 2.0f);
+  const std::string msg = load_error(write_scenario("obj_missing.yaml", replaced(with_obj, "mesh.obj", "nope.obj")));
+  EXPECT_NE(msg.find("occluders[0].shapes[0].file: cannot read OBJ file"), std::string::npos) << msg;
+  (void)dir;
+}
+
 TEST(RenderScenario, BadValuesAreRejected) {
   EXPECT_NE(load_error(write_scenario("edge.yaml", replaced(kMinimal, "[[4, 9]]", "[[4, 5]]"))).find("edges[0]"),
             std::string::npos);
