@@ -667,9 +667,11 @@ FrameTruth Renderer::truth(int ci, int frame) {
     t.in_fov = t.in_fov && inside;
   }
 
-  // Visible fraction: grid over the black square, each sample front-facing, in view and with
-  // an unobstructed line of sight from the camera centre.
+  // Visible fraction: grid over the printed tag (the black square and its white quiet zone,
+  // which the detector needs too), each sample front-facing, in view and with an unobstructed
+  // line of sight from the camera centre.
   const int n = scene_.imaging.visibility_grid;
+  const double hp = 0.5 * impl_->tags.front()->printed_side();
   const Vec3 cam_w = cam.g_wi_true.translation();
   const Vec3 normal_w = t.g_wo.linear().col(2);
   int seen = 0;
@@ -677,7 +679,7 @@ FrameTruth Renderer::truth(int ci, int frame) {
   rtcInitIntersectContext(&ctx);
   for (int a = 0; a < n; ++a)
     for (int b = 0; b < n; ++b) {
-      const Vec3 po(-h + (2 * h) * (a + 0.5) / n, -h + (2 * h) * (b + 0.5) / n, 0);
+      const Vec3 po(-hp + (2 * hp) * (a + 0.5) / n, -hp + (2 * hp) * (b + 0.5) / n, 0);
       const Vec3 pw = t.g_wo * po;
       const Vec3 to_cam = cam_w - pw;
       if (normal_w.dot(to_cam) <= 0) continue;

@@ -36,7 +36,8 @@ struct FrameTruth {
   /// All four corners in front of the camera and inside the image (and inside the region where
   /// the distortion model is invertible).
   bool in_fov = false;
-  /// Fraction of a grid of sample points over the tag's black square that is front-facing,
+  /// Fraction of a grid of sample points over the printed tag (black square and white quiet
+  /// zone, both needed for detection) that is front-facing,
   /// inside the field of view and not occluded along the line of sight (0..1).
   double visible_fraction = 0;
 };
