@@ -17,7 +17,7 @@ namespace {
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
 // Packet width of the primary and shadow ray queries (Embree ray packets). 16 is native on
-// AVX-512 and emulated with two 8-wide traversals on AVX2 (measured: render/BENCHMARKS.md).
+// AVX-512 and emulated with two 8-wide traversals on AVX2 (README, renderer benchmark).
 constexpr int K = 16;
 using RayHitK = RTCRayHit16;
 using RayK = RTCRay16;

@@ -15,9 +15,12 @@
 #include "netvmo/pipeline/render_scenario.hpp"
 #include "netvmo/pipeline/run_report.hpp"
 #include "netvmo/render/renderer.hpp"
+#include "test_util.hpp"
 
 namespace fs = std::filesystem;
 using namespace netvmo;
+
+using test::slurp;
 
 namespace {
 const fs::path kSource = NETVMO_SOURCE_DIR;
@@ -33,37 +36,12 @@ pipeline::ImageRunOptions quiet_options() {
   return o;
 }
 
-fs::path temp_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("netvmo_e2e_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
-struct Cmd {
-  int code;
-  std::string err;
-};
-Cmd netvmo_cli(const std::string& args, const fs::path& dir) {
-  const fs::path err = dir / "stderr.txt";
-  const std::string cmd = (kBinary / "netvmo").string() + " " + args + " > " +
-                          (dir / "stdout.txt").string() + " 2> " + err.string();
-  const int status = std::system(cmd.c_str());
-  return {WEXITSTATUS(status), slurp(err)};
-}
 
 // A small rendered dataset shared by the recorded-data and bad-input tests.
 class SmallDataset : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new fs::path(temp_dir("small"));
+    dir_ = new fs::path(test::scratch_dir("small"));
     auto scene = scenario("paper5_render.yaml");
     scene.imaging.spp = 1;
     render::Renderer r(scene);
@@ -224,12 +202,12 @@ TEST_F(SmallDataset, BadInputGivesOneClearLineAndKeepGoingBlindsTheCamera) {
   fs::copy(*dir_ / "rendered", bad, fs::copy_options::recursive);
   std::ofstream(bad / "cam_2" / "000005.png", std::ios::trunc) << "not a png";
   const std::string out = (*dir_ / "out_bad").string();
-  auto c = netvmo_cli("run " + bad.string() + " --out " + out + " --no-overlays --no-plots", *dir_);
+  auto c = test::run_netvmo("run " + bad.string() + " --out " + out + " --no-overlays --no-plots", *dir_);
   EXPECT_NE(c.code, 0);
   EXPECT_NE(c.err.find("cam_2/000005.png"), std::string::npos) << c.err;
   EXPECT_FALSE(fs::exists(fs::path(out) / "summary.json"));
 
-  c = netvmo_cli("run " + bad.string() + " --out " + out + " --no-overlays --no-plots --keep-going", *dir_);
+  c = test::run_netvmo("run " + bad.string() + " --out " + out + " --no-overlays --no-plots --keep-going", *dir_);
   EXPECT_EQ(c.code, 0) << c.err;
   EXPECT_NE(c.err.find("cam_2/000005.png"), std::string::npos) << "warned: " << c.err;
   // Camera 2 is blind at frame 5 only; the others keep detecting.
@@ -257,14 +235,14 @@ TEST_F(SmallDataset, BadInputGivesOneClearLineAndKeepGoingBlindsTheCamera) {
   const auto edges_at = net.find("edges:");
   ASSERT_NE(edges_at, std::string::npos);
   std::ofstream(unknown / "network.yaml") << net.substr(0, edges_at) << "edges: [[1, 2], [1, 3], [1, 5], [2, 3], [3, 4], [4, 9]]\n";
-  c = netvmo_cli("run " + unknown.string() + " --out " + out + "_u", *dir_);
+  c = test::run_netvmo("run " + unknown.string() + " --out " + out + "_u", *dir_);
   EXPECT_NE(c.code, 0);
   EXPECT_NE(c.err.find("network.yaml"), std::string::npos) << c.err;
   EXPECT_NE(c.err.find("9"), std::string::npos) << c.err;
   EXPECT_EQ(std::count(c.err.begin(), c.err.end(), '\n'), 1) << c.err;
 
   std::ofstream(unknown / "network.yaml") << net.substr(0, edges_at) << "edges: [[1, 2], [1, 3], [2, 3], [4, 5]]\n";
-  c = netvmo_cli("run " + unknown.string() + " --out " + out + "_d", *dir_);
+  c = test::run_netvmo("run " + unknown.string() + " --out " + out + "_d", *dir_);
   EXPECT_NE(c.code, 0);
   EXPECT_NE(c.err.find("components {1,2,3} {4,5}"), std::string::npos) << c.err;
   EXPECT_EQ(std::count(c.err.begin(), c.err.end(), '\n'), 1) << c.err;

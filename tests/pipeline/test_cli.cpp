@@ -8,32 +8,19 @@
 
 #include "netvmo/pipeline/truth_io.hpp"
 #include "synth.hpp"
+#include "test_util.hpp"
 
 namespace netvmo {
 namespace {
 using namespace pipeline;
 namespace fs = std::filesystem;
 
-struct RunResult {
-  int code;
-  std::string out, err;
-};
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using test::slurp;
 
-RunResult run_detect(const fs::path& dataset, const fs::path& out, const std::string& extra = "") {
-  const fs::path o = out.parent_path() / (out.filename().string() + ".stdout");
-  const fs::path e = out.parent_path() / (out.filename().string() + ".stderr");
-  const std::string cmd = std::string(NETVMO_BINARY_DIR) + "/netvmo detect " + dataset.string() +
-                          " --out " + out.string() + " --quiet " + extra + " > " + o.string() +
-                          " 2> " + e.string();
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(o), slurp(e)};
+test::CliResult run_detect(const fs::path& dataset, const fs::path& out, const std::string& extra = "") {
+  return test::run_netvmo("detect " + dataset.string() + " --out " + out.string() + " --quiet " + extra,
+                          out.parent_path());
 }
 
 int count_lines(const std::string& s) {

@@ -11,24 +11,14 @@
 #include "netvmo/pipeline/network_config.hpp"
 #include "netvmo/pipeline/truth_io.hpp"
 #include "synth.hpp"
+#include "test_util.hpp"
 
 namespace netvmo {
 namespace {
 using namespace pipeline;
 namespace fs = std::filesystem;
 
-/// Runs f, expects an InputError whose message contains every needle.
-template <class F>
-void expect_input_error(F f, std::initializer_list<std::string> needles) {
-  try {
-    f();
-    ADD_FAILURE() << "no InputError thrown";
-  } catch (const InputError& e) {
-    const std::string msg = e.what();
-    for (const auto& n : needles) EXPECT_NE(msg.find(n), std::string::npos) << msg << " lacks " << n;
-    EXPECT_EQ(msg.find('\n'), std::string::npos) << "one line: " << msg;
-  }
-}
+using test::expect_input_error;
 
 void write(const fs::path& p, const std::string& s) { std::ofstream(p) << s; }
 

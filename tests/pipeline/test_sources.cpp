@@ -11,22 +11,14 @@
 #include "netvmo/pipeline/frame_source.hpp"
 #include "netvmo/pipeline/front_end.hpp"
 #include "synth.hpp"
+#include "test_util.hpp"
 
 namespace netvmo {
 namespace {
 using namespace pipeline;
 namespace fs = std::filesystem;
 
-template <class F>
-void expect_input_error(F f, std::initializer_list<std::string> needles) {
-  try {
-    f();
-    ADD_FAILURE() << "no InputError thrown";
-  } catch (const InputError& e) {
-    const std::string msg = e.what();
-    for (const auto& n : needles) EXPECT_NE(msg.find(n), std::string::npos) << msg << " lacks " << n;
-  }
-}
+using test::expect_input_error;
 
 bool any_warning_contains(const Dataset& ds, const std::string& a, const std::string& b) {
   for (const auto& w : ds.warnings)

@@ -11,9 +11,12 @@
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/simulation.hpp"
+#include "test_util.hpp"
 
 namespace fs = std::filesystem;
 using namespace netvmo;
+
+using test::slurp;
 
 namespace {
 const fs::path kSource = NETVMO_SOURCE_DIR;
@@ -30,31 +33,6 @@ double orientation_error(const obs::SE3& a, const obs::SE3& b) {
   return obs::log_so3(a.linear().transpose() * b.linear()).norm();
 }
 
-fs::path temp_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("netvmo_test_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
-struct Cmd {
-  int code;
-  std::string err;
-};
-Cmd netvmo_cli(const std::string& args, const fs::path& dir) {
-  const fs::path err = dir / "stderr.txt";
-  const std::string cmd = (kBinary / "netvmo").string() + " " + args + " > " +
-                          (dir / "stdout.txt").string() + " 2> " + err.string();
-  const int status = std::system(cmd.c_str());
-  return {WEXITSTATUS(status), slurp(err)};
-}
 }  // namespace
 
 TEST(Simulation, AverageMatchesThePaper) {
@@ -142,8 +120,8 @@ TEST(Simulation, FacingAwayInitialEstimateTrapsTheFeatureObserver) {
 }
 
 TEST(Simulation, JacobianModelOutputsFiles) {
-  const fs::path dir = temp_dir("sim_cli");
-  const auto c = netvmo_cli("simulate " + (kSource / "datasets/paper5_jacobian.yaml").string() +
+  const fs::path dir = test::scratch_dir("sim_cli");
+  const auto c = test::run_netvmo("simulate " + (kSource / "datasets/paper5_jacobian.yaml").string() +
                                 " --ks 50 --duration 5 --out " + (dir / "out").string(),
                             dir);
   ASSERT_EQ(c.code, 0) << c.err;
@@ -163,20 +141,20 @@ TEST(Simulation, JacobianModelOutputsFiles) {
 namespace {
 // Writes a copy of paper5.yaml with one line replaced, runs simulate on it, and returns the
 // exit code and stderr.
-Cmd run_modified(const std::string& from, const std::string& to, const fs::path& dir) {
+test::CliResult run_modified(const std::string& from, const std::string& to, const fs::path& dir) {
   std::string s = slurp(kSource / "datasets/paper5.yaml");
   const auto pos = s.find(from);
   EXPECT_NE(pos, std::string::npos) << from;
   s.replace(pos, from.size(), to);
   std::ofstream(dir / "bad.yaml") << s;
-  return netvmo_cli("simulate " + (dir / "bad.yaml").string() + " --no-plots --out " +
+  return test::run_netvmo("simulate " + (dir / "bad.yaml").string() + " --no-plots --out " +
                         (dir / "out").string(),
                     dir);
 }
 }  // namespace
 
 TEST(SimulationErrors, BadScenariosNameTheFileAndKey) {
-  const fs::path dir = temp_dir("sim_errors");
+  const fs::path dir = test::scratch_dir("sim_errors");
   struct Case {
     std::string from, to, expect;
   } cases[] = {
@@ -199,13 +177,13 @@ TEST(SimulationErrors, BadScenariosNameTheFileAndKey) {
 }
 
 TEST(SimulationErrors, FailedRunLeavesEarlierResultsIntact) {
-  const fs::path dir = temp_dir("sim_keep");
+  const fs::path dir = test::scratch_dir("sim_keep");
   const std::string out = (dir / "out").string();
-  ASSERT_EQ(netvmo_cli("simulate " + (kSource / "datasets/paper5.yaml").string() +
+  ASSERT_EQ(test::run_netvmo("simulate " + (kSource / "datasets/paper5.yaml").string() +
                            " --duration 1 --no-plots --out " + out, dir).code, 0);
   const std::string before = slurp(dir / "out" / "summary.json");
   std::ofstream(dir / "broken.yaml") << "fps: [\n";
-  const auto r = netvmo_cli("simulate " + (dir / "broken.yaml").string() + " --out " + out, dir);
+  const auto r = test::run_netvmo("simulate " + (dir / "broken.yaml").string() + " --out " + out, dir);
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.err.find("broken.yaml: invalid YAML"), std::string::npos) << r.err;
   EXPECT_EQ(slurp(dir / "out" / "summary.json"), before);

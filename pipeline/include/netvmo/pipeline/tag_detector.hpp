@@ -44,7 +44,7 @@ struct DetectorSettings {
   int bits_corrected = 2;           ///< error bits the decoder may correct (libapriltag default)
   /// libapriltag qtp.min_white_black_diff: local contrast (gray levels) below which a region is
   /// not thresholded. libapriltag's default is 5; 20 skips the quad fitting of sensor-noise
-  /// clusters (about 5x faster on 640x480 frames with noise sigma 2, see pipeline/BENCHMARKS.md)
+  /// clusters (about 5x faster on 640x480 frames with noise sigma 2, see the README's front-end benchmark)
   /// and still finds tags whose black/white contrast is 40 gray levels or more (tested).
   int min_white_black_diff = 20;
   // Acceptance of the target tag

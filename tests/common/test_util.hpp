@@ -1,0 +1,63 @@
+// Helpers shared by the test suites: scratch folders, reading files, running the netvmo binary,
+// and checking user-facing errors.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <sstream>
+#include <string>
+
+#include "netvmo/pipeline/error.hpp"
+
+namespace netvmo::test {
+
+/// An empty scratch folder under the system's temporary directory, unique per process.
+inline std::filesystem::path scratch_dir(const std::string& name) {
+  const auto d = std::filesystem::temp_directory_path() /
+                 ("netvmo_test_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(d);
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+inline std::string slurp(const std::filesystem::path& p) {
+  std::ifstream f(p);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+struct CliResult {
+  int code = -1;
+  std::string out, err;
+};
+
+/// Runs `netvmo ARGS` from the build folder, capturing stdout and stderr in files under `scratch`.
+inline CliResult run_netvmo(const std::string& args, const std::filesystem::path& scratch) {
+  const auto out = scratch / "stdout.txt", err = scratch / "stderr.txt";
+  const std::string cmd = std::string(NETVMO_BINARY_DIR) + "/netvmo " + args + " > " +
+                          out.string() + " 2> " + err.string();
+  const int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+/// Runs f and expects an InputError: one line containing every needle.
+template <class F>
+void expect_input_error(F f, std::initializer_list<std::string> needles) {
+  try {
+    f();
+    ADD_FAILURE() << "no InputError thrown";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    for (const auto& n : needles) EXPECT_NE(msg.find(n), std::string::npos) << msg << " lacks " << n;
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << "one line: " << msg;
+  }
+}
+
+}  // namespace netvmo::test
