@@ -1,5 +1,6 @@
 // netvmo bench: network frames per second of the whole pipeline, on recorded data (decode +
 // detection + observer) and on live rendering (render + detection + observer).
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -19,7 +20,7 @@ namespace fs = std::filesystem;
 namespace {
 void report(const char* what, const pipeline::ImageRunResult& r, size_t cameras) {
   const double frames = static_cast<double>(r.history.size());
-  std::printf("%-34s %6.1f network frames/s  (%zu cameras; per network frame: %.1f ms front end%s, %.2f ms observer)\n",
+  std::printf("%-36s %6.1f network frames/s  (%zu cameras; per network frame: %.1f ms front end%s, %.2f ms observer)\n",
               what, frames / r.seconds, cameras, 1000.0 * r.seconds_front_end / frames,
               std::string(what).find("live") != std::string::npos ? " incl. rendering" : " incl. decoding",
               1000.0 * r.seconds_observer / frames);
@@ -29,13 +30,18 @@ void report(const char* what, const pipeline::ImageRunResult& r, size_t cameras)
 void add_bench(CLI::App& app, int& exit_code) {
   struct Options {
     std::string scenario = "datasets/paper5_render.yaml";
+    std::string moving = "datasets/moving_target.yaml";
     int frames = 60;
     int live_spp = 1;
   };
   auto o = std::make_shared<Options>();
   auto* cmd = app.add_subcommand(
       "bench", "Network frames per second of the whole pipeline, recorded and live");
-  cmd->add_option("--scenario", o->scenario, "Render scenario")->capture_default_str();
+  cmd->add_option("--scenario", o->scenario, "Render scenario (static: live frames reuse the radiance)")
+      ->capture_default_str();
+  cmd->add_option("--moving-scenario", o->moving,
+                  "Scenario with moving bodies, rendered live in full every frame")
+      ->capture_default_str();
   cmd->add_option("--frames", o->frames, "Frames per measurement")->capture_default_str()->check(CLI::PositiveNumber);
   cmd->add_option("--live-spp", o->live_spp, "Samples per pixel for live rendering")
       ->capture_default_str()
@@ -66,9 +72,15 @@ void add_bench(CLI::App& app, int& exit_code) {
       live_scene.imaging.spp = o->live_spp;
       auto live = pipeline::make_render_provider(live_scene, o->frames);
       const auto r2 = pipeline::run_images(*live, run);
-      char label[64];
-      std::snprintf(label, sizeof label, "live (render %d spp+detect+observe)", o->live_spp);
+      char label[96];
+      std::snprintf(label, sizeof label, "live, static scene (%d spp)", o->live_spp);
       report(label, r2, scene.cameras.size());
+      auto moving_scene = pipeline::load_render_scenario(find_scenario(o->moving));
+      moving_scene.imaging.spp = o->live_spp;
+      auto live_moving = pipeline::make_render_provider(moving_scene, std::min(o->frames, moving_scene.frames));
+      const auto r3 = pipeline::run_images(*live_moving, run);
+      std::snprintf(label, sizeof label, "live, moving scene (%d spp)", o->live_spp);
+      report(label, r3, moving_scene.cameras.size());
       return 0;
     });
   });

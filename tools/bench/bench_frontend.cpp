@@ -12,6 +12,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "netvmo/pipeline/front_end.hpp"
+#include "netvmo/pipeline/render_scenario.hpp"
+#include "netvmo/render/renderer.hpp"
 
 namespace {
 using namespace netvmo::pipeline;
@@ -134,8 +136,43 @@ void BM_RefineOnly(benchmark::State& state) {
   state.SetLabel(std::string("refine ") + to_string(mode));
 }
 
+// The front end on frames rendered from datasets/paper5_render.yaml (its default 2x2 samples and
+// sensor noise): camera 1 (tag at ~2 m) and camera 5 (no tag; pillar and textures only), full
+// frame or tracking (window around the last detection). args: camera index, tracking.
+void BM_FrontEndRendered(benchmark::State& state) {
+  const int cam = static_cast<int>(state.range(0));
+  const bool tracking = state.range(1) != 0;
+  auto scene = netvmo::pipeline::load_render_scenario(std::string(NETVMO_SOURCE_DIR) +
+                                                      "/datasets/paper5_render.yaml");
+  netvmo::render::Renderer r(scene);
+  const cv::Mat frame = r.render(cam, 0);
+  const auto& k = scene.cameras[static_cast<size_t>(cam)].intrinsics;
+  Calibration calib;
+  calib.width = k.width;
+  calib.height = k.height;
+  calib.K = cv::Matx33d(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1);
+  for (int j = 0; j < 5; ++j) calib.dist[j] = k.dist[static_cast<size_t>(j)];
+  TrackingSettings ts;
+  ts.enabled = tracking;
+  ts.full_frame_every = 1 << 30;
+  FrontEnd fe(DetectorSettings{}, ts);
+  TrackState track;
+  fe.observe(frame, calib, nullptr, &track);  // primes the window
+  bool detected = false;
+  for (auto _ : state) detected = fe.observe(frame, calib, nullptr, &track).detected;
+  state.SetLabel(std::string("rendered camera ") + std::to_string(cam + 1) +
+                 (detected ? " (tag)" : " (no tag)") + (tracking ? ", tracking window" : ", full frame"));
+}
+
 }  // namespace
 
+BENCHMARK(BM_FrontEndRendered)
+    ->Args({0, 0})
+    ->Args({0, 1})
+    ->Args({4, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(2.0);
 BENCHMARK(BM_AprilTagOnly)->Args({2, 1})->Args({2, 2})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RefineOnly)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
 

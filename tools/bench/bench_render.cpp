@@ -17,6 +17,7 @@ using netvmo::render::Renderer;
 std::unique_ptr<Renderer> make_renderer(int spp, bool shadows = true, bool textures = true) {
   auto scene = netvmo::pipeline::load_render_scenario(NETVMO_SOURCE_DIR "/datasets/paper5_render.yaml");
   scene.imaging.spp = spp;
+  scene.imaging.reuse_static = false;  // measure tracing, not the static-scene reuse
   for (auto& l : scene.lights) l.shadows = shadows;
   if (!textures) {
     for (auto& b : scene.occluders)

@@ -81,7 +81,10 @@ struct Imaging {
   std::uint64_t seed = 1;    ///< noise seed; each tile draws from (seed, camera id, frame, tile)
   int threads = 0;           ///< render threads; 0 = std::thread::hardware_concurrency()
   int tile = 16;             ///< tile side [px]
-  int visibility_grid = 16;  ///< samples per side over the tag's black square for visible_fraction
+  int visibility_grid = 16;  ///< samples per side over the printed tag for visible_fraction
+  /// When no body has moved since a camera's previous image, reuse its noise-free radiance and
+  /// draw new sensor noise only (the image is byte-identical to tracing again).
+  bool reuse_static = true;
 };
 
 struct SceneDescription {
