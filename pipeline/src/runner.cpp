@@ -76,6 +76,16 @@ NetworkRunner::NetworkRunner(const obs::Graph& graph, std::vector<SE3> g_wi,
   indep_.set_active(indep_init_);
 }
 
+void NetworkRunner::set_camera_motion(const std::vector<SE3>& g_wi, const std::vector<obs::Vec6>& V_wi) {
+  if (g_wi.size() != g_wi_.size() || V_wi.size() != g_wi_.size())
+    throw std::invalid_argument("camera motion: one pose and one velocity per camera");
+  g_wi_ = g_wi;
+  for (auto* o : {&net_, &indep_}) {
+    o->set_camera_poses(g_wi_);
+    o->set_camera_velocities(V_wi);
+  }
+}
+
 double NetworkRunner::step_factor(double dt) const {
   const double h = dt / net_.substeps(dt);
   return h * (settings_.k_e + 2.0 * settings_.k_s * graph_.max_degree());

@@ -95,6 +95,9 @@ class NetworkRunner {
   const std::vector<SE3>& camera_poses() const { return g_wi_; }
   /// h (k_e + 2 k_s d_max) for a frame of dt: < 2 stable, <= 1 non-oscillating.
   double step_factor(double dt) const;
+  /// Moving cameras: believed poses g_wi and body velocities V_wi = [v; w] for the coming frame
+  /// (the -hat(V_wi) g_bar term of (eq:EsRRBM) and g_ij = g_wi^-1 g_wj). Call before process().
+  void set_camera_motion(const std::vector<SE3>& g_wi, const std::vector<obs::Vec6>& V_wi);
   /// Replaces the in-process exchange of the networked observer.
   void set_transport(obs::Transport* t) { net_.set_transport(t); }
 
