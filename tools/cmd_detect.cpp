@@ -123,12 +123,11 @@ int run_detect(DetectOptions o) {
 
 void add_detect(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<DetectOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "detect",
-      "Run the AprilTag front end on a dataset folder (rendered or recorded) and write\n"
-      "OUT/detections.csv: frame,camera,tag_id,detected,margin,u0,v0,...,u3,v3 (OpenCV pixels,\n"
-      "corners in libapriltag order; empty when not detected). The tag family and target id\n"
-      "come from network.yaml.");
+  CLI::App* cmd = app.add_subcommand("detect", "Run the AprilTag front end on a dataset folder");
+  cmd->footer(
+      "Writes OUT/detections.csv: frame,camera,tag_id,detected,margin,u0,v0,...,u3,v3 (OpenCV\n"
+      "pixels, corners in libapriltag order; empty when not detected) and prints a per-camera\n"
+      "summary. The tag family and target id come from network.yaml.");
   cmd->add_option("dataset", o->dataset, "Dataset folder (network.yaml, calib/, cam_<id>/ or cam_<id>.<ext>)")
       ->required();
   cmd->add_option("--out,-o", o->out, "Output folder (created)")->required();

@@ -20,9 +20,10 @@ void add_render(CLI::App& app, int& exit_code) {
     bool quiet = false;
   };
   auto o = std::make_shared<Options>();
-  CLI::App* cmd = app.add_subcommand(
-      "render", "Render a scenario (cameras, tagged target, occluders, lights) into a dataset folder:\n"
-                "images, calibration, network.yaml, truth.csv and target.csv (see datasets/README.md).");
+  CLI::App* cmd = app.add_subcommand("render", "Render a scenario into a dataset folder (Embree)");
+  cmd->footer(
+      "Writes DATASET/cam_<id>/<frame>.png, calib/cam_<id>.yaml, network.yaml, truth.csv,\n"
+      "target.csv and truth_cameras.csv (layout: datasets/README.md).");
   cmd->add_option("SCENARIO", o->scenario, "render scenario YAML, e.g. datasets/paper5_render.yaml")->required();
   cmd->add_option("--out", o->out, "dataset folder to write (created if needed)")->required();
   cmd->add_option("--frames", o->frames, "number of frames (0 = the scenario's frames)")
