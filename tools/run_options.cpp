@@ -32,15 +32,15 @@ void add_run_options(CLI::App& cmd, RunCliOptions& o) {
   cmd.add_flag("--keep-going", o.keep_going,
                "Treat a camera whose image cannot be read as blind for that frame instead of "
                "stopping");
-  cmd.add_flag("!--no-overlays", o.overlays, "Do not write overlays/");
-  cmd.add_flag("!--no-plots", o.plots, "Do not draw energies.png and errors.png");
+  cmd.add_flag("--no-overlays", o.no_overlays, "Do not write overlays/");
+  cmd.add_flag("--no-plots", o.no_plots, "Do not draw energies.png and errors.png");
   cmd.add_option("--max-frames", o.max_frames, "Stop after this many frames (0 = all)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   cmd.add_option("--decimate", o.decimate, "libapriltag quad_decimate")
       ->capture_default_str()
       ->check(CLI::Range(1.0, 8.0));
-  cmd.add_flag("!--no-track", o.track,
+  cmd.add_flag("--no-track", o.no_track,
                "Always search the whole image (default: search a window around the last "
                "detection first, the whole image when that fails and every 30 frames)");
   cmd.add_option("--refine", o.refine, "Corner refinement: none, subpix or edges")
@@ -60,7 +60,7 @@ pipeline::ImageRunOptions to_image_run_options(const RunCliOptions& o) {
   if (o.max_frames > 0) r.max_frames = o.max_frames;
   r.detector.quad_decimate = o.decimate;
   r.detector.refinement = pipeline::parse_refinement(o.refine);
-  r.tracking.enabled = o.track;
+  r.tracking.enabled = !o.no_track;
   return r;
 }
 
@@ -69,7 +69,7 @@ json run_and_report(pipeline::FrameProvider& provider, const RunCliOptions& o, c
   for (const auto& w : provider.warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
   std::unique_ptr<pipeline::OverlayWriter> overlays;
   pipeline::FrameHook hook;
-  if (o.overlays) {
+  if (!o.no_overlays) {
     overlays = std::make_unique<pipeline::OverlayWriter>(dir, provider);
     hook = [&](int k, const std::vector<cv::Mat>& images,
                const std::vector<pipeline::CameraFrame>& cams, const run::FrameRecord& r) {
@@ -81,7 +81,7 @@ json run_and_report(pipeline::FrameProvider& provider, const RunCliOptions& o, c
   for (size_t k = provider.warnings().size(); k < result.warnings.size(); ++k)
     std::fprintf(stderr, "warning: %s\n", result.warnings[k].c_str());
   const json s = pipeline::write_run_outputs(dir, provider, options, result);
-  if (o.plots) {
+  if (!o.no_plots) {
     std::vector<int> ids;
     for (const auto& c : provider.network().cameras) ids.push_back(c.id);
     plot_run(dir, ids);

@@ -18,12 +18,12 @@ struct RunCliOptions {
   std::string init = "pnp";
   int rounds = 0;
   bool keep_going = false;
-  bool overlays = true;
-  bool plots = true;
+  bool no_overlays = false;
+  bool no_plots = false;
   int max_frames = 0;
   double decimate = 2.0;
   std::string refine = "edges";
-  bool track = true;
+  bool no_track = false;
 };
 
 void add_run_options(CLI::App& cmd, RunCliOptions& o);
