@@ -300,7 +300,7 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const Calibration* cal
     throw std::invalid_argument("TagDetector::detect: expected an 8-bit gray or BGR image");
   }
   FrameDetections out;
-  if (g->empty()) return out;
+  if (g->cols < 16 || g->rows < 16) return out;  // nothing decodable; libapriltag needs a few tiles
   image_u8_t im{g->cols, g->rows, static_cast<int32_t>(g->step[0]),
                 const_cast<uint8_t*>(g->ptr<uint8_t>())};
   zarray_t* dets = apriltag_detector_detect(impl_->td, &im);

@@ -264,6 +264,19 @@ TEST(Detector, LowContrastTagStillDetected) {
   }
 }
 
+TEST(Detector, DegenerateImagesGiveNoDetection) {
+  TagDetector det;
+  EXPECT_EQ(det.detect(cv::Mat()).status, TargetStatus::not_found);
+  EXPECT_EQ(det.detect(cv::Mat(1, 1, CV_8UC1, cv::Scalar(0))).status, TargetStatus::not_found);
+  EXPECT_EQ(det.detect(cv::Mat(480, 640, CV_8UC1, cv::Scalar(128))).all.size(), 0u);
+  EXPECT_THROW(det.detect(cv::Mat(10, 10, CV_32FC1)), std::invalid_argument);
+  // BGR input is converted
+  const auto calib = testing::test_calibration();
+  cv::Mat bgr;
+  cv::cvtColor(render_tags(calib, {{0, kSize, facing_pose(1.5), {}}}), bgr, cv::COLOR_GRAY2BGR);
+  EXPECT_EQ(det.detect(bgr).status, TargetStatus::detected);
+}
+
 TEST(Detector, InvalidSettingsRejected) {
   DetectorSettings s;
   s.family = "tag99h1";
