@@ -260,6 +260,7 @@ TEST(Detector, LowContrastTagStillDetected) {
     const obs::SE3 g = facing_pose(z, 0.1, 0.05, {0.2, 0.2, 0.5});
     const auto d = det.detect(render_tags(calib, {{0, kSize, g, {}}}, opt), &calib);
     ASSERT_EQ(d.status, TargetStatus::detected) << "z " << z;
+    std::printf("low contrast z %.1f: margin %.1f\n", z, d.target()->margin);
     EXPECT_LT(testing::corner_rms(d.target()->corners, project_corners(calib, g, kSize)), 0.3);
   }
 }
