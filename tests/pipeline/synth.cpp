@@ -282,9 +282,12 @@ std::vector<std::vector<std::array<cv::Point2d, 4>>> write_synth_dataset(
     pipeline::save_calibration_opencv(dir / "calib" / (name + ".yaml"), cam.calib);
     cv::VideoWriter vw;
     if (spec.video) {
-      vw.open((dir / (name + ".avi")).string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'),
+      const std::string& cc = spec.video_fourcc;
+      if (cc.size() != 4) throw std::invalid_argument("synth: fourcc must have 4 characters");
+      vw.open((dir / (name + spec.video_ext)).string(),
+              cv::VideoWriter::fourcc(cc[0], cc[1], cc[2], cc[3]),
               spec.fps, cv::Size(cam.calib.width, cam.calib.height), false);
-      if (!vw.isOpened()) throw std::runtime_error("synth: cannot open MJPG VideoWriter");
+      if (!vw.isOpened()) throw std::runtime_error("synth: cannot open VideoWriter " + cc);
     } else {
       fs::create_directories(dir / name);
     }
