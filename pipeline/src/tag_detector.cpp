@@ -316,7 +316,8 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
   aligned.width += region.x - aligned.x;
   aligned.height += region.y - aligned.y;
   const cv::Rect roi = aligned & cv::Rect(0, 0, g->cols, g->rows);
-  if (roi.empty()) return out;
+  // Nothing decodable in a tiny region; libapriltag needs a few tiles.
+  if (roi.width < 16 || roi.height < 16) return out;
   // libapriltag searches the region only (a view into the image, no copy); corners are mapped
   // back to the whole image and refined there.
   const cv::Mat sub = (*g)(roi);

@@ -55,14 +55,23 @@ Bitmap tag_bitmap(const std::string& family, int id) {
   return b;
 }
 
-/// Undistorted normalized ray (x, y) of every sub-sample, cached per calibration.
+/// Undistorted normalized ray (x, y) of every sub-sample, cached for the last few
+/// calibrations (undistorting ~5 M sub-samples takes about a second).
 const std::vector<cv::Point2d>& subsample_rays(const Calibration& c, int ss) {
-  static Calibration last;
-  static int last_ss = -1;
-  static std::vector<cv::Point2d> rays;
-  if (last_ss == ss && last.width == c.width && last.height == c.height &&
-      cv::norm(cv::Mat(last.K), cv::Mat(c.K)) == 0 && cv::norm(last.dist - c.dist) == 0)
-    return rays;
+  struct Entry {
+    Calibration calib;
+    int ss;
+    std::vector<cv::Point2d> rays;
+  };
+  static std::vector<std::unique_ptr<Entry>> cache;
+  for (const auto& e : cache)
+    if (e->ss == ss && e->calib.width == c.width && e->calib.height == c.height &&
+        cv::norm(cv::Mat(e->calib.K), cv::Mat(c.K)) == 0 && cv::norm(e->calib.dist - c.dist) == 0)
+      return e->rays;
+  if (cache.size() >= 4) cache.erase(cache.begin());
+  auto entry = std::make_unique<Entry>();
+  entry->calib = c;
+  entry->ss = ss;
   std::vector<cv::Point2d> px;
   px.reserve(static_cast<size_t>(c.width) * c.height * ss * ss);
   for (int r = 0; r < c.height; ++r)
@@ -70,6 +79,7 @@ const std::vector<cv::Point2d>& subsample_rays(const Calibration& c, int ss) {
       for (int col = 0; col < c.width; ++col)
         for (int sc = 0; sc < ss; ++sc)
           px.emplace_back(col - 0.5 + (sc + 0.5) / ss, r - 0.5 + (sr + 0.5) / ss);
+  auto& rays = entry->rays;
   if (c.has_distortion()) {
     rays = pipeline::normalize_points(px, c);
   } else {
@@ -80,9 +90,8 @@ const std::vector<cv::Point2d>& subsample_rays(const Calibration& c, int ss) {
       rays[i] = cv::Point2d(q[0] / q[2], q[1] / q[2]);
     }
   }
-  last = c;
-  last_ss = ss;
-  return rays;
+  cache.push_back(std::move(entry));
+  return cache.back()->rays;
 }
 
 }  // namespace
@@ -273,9 +282,12 @@ std::vector<std::vector<std::array<cv::Point2d, 4>>> write_synth_dataset(
     pipeline::save_calibration_opencv(dir / "calib" / (name + ".yaml"), cam.calib);
     cv::VideoWriter vw;
     if (spec.video) {
-      vw.open((dir / (name + ".avi")).string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'),
+      const std::string& cc = spec.video_fourcc;
+      if (cc.size() != 4) throw std::invalid_argument("synth: fourcc must have 4 characters");
+      vw.open((dir / (name + spec.video_ext)).string(),
+              cv::VideoWriter::fourcc(cc[0], cc[1], cc[2], cc[3]),
               spec.fps, cv::Size(cam.calib.width, cam.calib.height), false);
-      if (!vw.isOpened()) throw std::runtime_error("synth: cannot open MJPG VideoWriter");
+      if (!vw.isOpened()) throw std::runtime_error("synth: cannot open VideoWriter " + cc);
     } else {
       fs::create_directories(dir / name);
     }

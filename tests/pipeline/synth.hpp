@@ -75,7 +75,9 @@ struct SynthDatasetSpec {
   int target_id = 0;
   double tag_size = 0.2;
   double fps = 30.0;
-  bool video = false;           ///< write cam_<id>.avi (MJPG) instead of cam_<id>/%06d.png
+  bool video = false;           ///< write cam_<id><video_ext> instead of cam_<id>/%06d.png
+  std::string video_ext = ".avi";
+  std::string video_fourcc = "MJPG";  ///< e.g. MJPG (.avi), FFV1 (.avi, lossless), mp4v (.mp4)
   SynthOptions options;
 };
 

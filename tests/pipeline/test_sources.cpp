@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <tuple>
 #include <opencv2/imgcodecs.hpp>
 #include <visp3/core/vpCameraParameters.h>
 #include <visp3/core/vpXmlParserCamera.h>
@@ -62,6 +63,33 @@ TEST(Sources, ImageFolderAndMjpgVideoAgree) {
   const cv::Mat f3 = b.read(0, 3), f1 = b.read(0, 1), f1_again = b.read(0, 1);
   EXPECT_EQ(cv::norm(f1, f1_again, cv::NORM_INF), 0.0);
   EXPECT_GT(cv::norm(f1, f3, cv::NORM_INF), 0.0);
+}
+
+// Other containers/codecs: lossless FFV1 in .avi gives identical detections; mp4v in .mp4
+// (lossy) within 0.5 px.
+TEST(Sources, Ffv1AviAndMp4VideosAgree) {
+  const auto d_img = testing::fresh_dir("src_img2");
+  testing::write_synth_dataset(d_img, testing::simple_dataset_spec(1, 3, false));
+  Dataset a = open_dataset(d_img);
+  const auto oa = run_all(a);
+  for (const auto& [ext, fourcc, tol] : {std::tuple<std::string, std::string, double>{".avi", "FFV1", 1e-9},
+                                         {".mp4", "mp4v", 0.5}}) {
+    auto spec = testing::simple_dataset_spec(1, 3, true);
+    spec.video_ext = ext;
+    spec.video_fourcc = fourcc;
+    const auto dir = testing::fresh_dir("src_" + fourcc);
+    testing::write_synth_dataset(dir, spec);
+    Dataset b = open_dataset(dir);
+    EXPECT_EQ(b.cameras[0].source->path().extension(), ext);
+    ASSERT_EQ(b.frame_count, 3) << fourcc;
+    const auto ob = run_all(b);
+    for (size_t f = 0; f < 3; ++f) {
+      ASSERT_TRUE(ob[0][f].detected) << fourcc << " frame " << f;
+      for (size_t k = 0; k < 4; ++k)
+        EXPECT_LE(cv::norm(oa[0][f].corners_px[k] - ob[0][f].corners_px[k]), tol)
+            << fourcc << " frame " << f << " corner " << k;
+    }
+  }
 }
 
 TEST(Sources, MissingFrameIsBlindNotShifted) {
