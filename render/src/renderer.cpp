@@ -417,10 +417,14 @@ std::shared_lock<std::shared_mutex> lock_frame(std::shared_mutex& m, const int& 
 }
 }  // namespace
 
-cv::Mat Renderer::render(int ci, int frame) {
+std::shared_lock<std::shared_mutex> Renderer::acquire(int ci, int frame) {
   if (ci < 0 || ci >= camera_count()) throw std::invalid_argument("camera index out of range");
   if (frame < 0) throw std::invalid_argument("frame must be >= 0");
-  auto lk = lock_frame(impl_->mutex, impl_->current_frame, frame, [this](int f) { set_frame(f); });
+  return lock_frame(impl_->mutex, impl_->current_frame, frame, [this](int f) { set_frame(f); });
+}
+
+cv::Mat Renderer::render(int ci, int frame) {
+  auto lk = acquire(ci, frame);
   const Impl& I = *impl_;
   const CameraSpec& cam = scene_.cameras[size_t(ci)];
   const Intrinsics& Kc = cam.intrinsics;
@@ -663,9 +667,7 @@ cv::Mat Renderer::render(int ci, int frame) {
 }
 
 FrameTruth Renderer::truth(int ci, int frame) {
-  if (ci < 0 || ci >= camera_count()) throw std::invalid_argument("camera index out of range");
-  if (frame < 0) throw std::invalid_argument("frame must be >= 0");
-  auto lk = lock_frame(impl_->mutex, impl_->current_frame, frame, [this](int f) { set_frame(f); });
+  auto lk = acquire(ci, frame);
   const Impl& I = *impl_;
   const CameraSpec& cam = scene_.cameras[size_t(ci)];
   const Intrinsics& Kc = cam.intrinsics;
@@ -741,8 +743,7 @@ FrameTruth Renderer::truth(int ci, int frame) {
 }
 
 std::uint64_t Renderer::intersect_bare(int ci, int frame, int threads) {
-  if (ci < 0 || ci >= camera_count()) throw std::invalid_argument("camera index out of range");
-  auto lk = lock_frame(impl_->mutex, impl_->current_frame, frame, [this](int f) { set_frame(f); });
+  auto lk = acquire(ci, frame);
   const Impl& I = *impl_;
   const CameraSpec& cam = scene_.cameras[size_t(ci)];
   const Intrinsics& Kc = cam.intrinsics;

@@ -24,7 +24,6 @@ using test::slurp;
 
 namespace {
 const fs::path kSource = NETVMO_SOURCE_DIR;
-const fs::path kBinary = NETVMO_BINARY_DIR;
 
 render::SceneDescription scenario(const char* name) {
   return pipeline::load_render_scenario(kSource / "datasets" / name);

@@ -20,7 +20,6 @@ using test::slurp;
 
 namespace {
 const fs::path kSource = NETVMO_SOURCE_DIR;
-const fs::path kBinary = NETVMO_BINARY_DIR;
 
 sim::SimResult run(const fs::path& scenario, double k_s, sim::ErrorModel e) {
   auto s = sim::load_scenario(kSource / "datasets" / scenario);

@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <shared_mutex>
 
 #include <opencv2/core.hpp>
 
@@ -74,6 +75,10 @@ class Renderer {
   struct Impl;
 
  private:
+  /// Validates a camera index and frame, and holds the frame (switching to it when no other
+  /// call is using the current one) for the lifetime of the returned lock.
+  std::shared_lock<std::shared_mutex> acquire(int camera_index, int frame);
+
   SceneDescription scene_;
   std::unique_ptr<Impl> impl_;
 };
