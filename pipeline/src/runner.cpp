@@ -116,7 +116,7 @@ void NetworkRunner::initialise(const std::vector<CameraInput>& in) {
   const int n = graph_.size();
   std::vector<SE3> net = net_.estimates(), ind = indep_.estimates();
   const auto features = obs::FeatureModel::square(settings_.tag_size);
-  bool changed = false;
+  bool net_changed = false, ind_changed = false;
   // 1. Cameras that see the target start from (or are rescued by) their own PnP pose.
   for (int i = 0; i < n; ++i) {
     const auto si = static_cast<size_t>(i);
@@ -127,13 +127,14 @@ void NetworkRunner::initialise(const std::vector<CameraInput>& in) {
     if (!net_init_[si] || net_unusable) {
       net[si] = *c.g_io_pnp;
       net_init_[si] = true;
-      changed = true;
+      net_changed = true;
     }
     const bool ind_unusable = settings_.error == ErrorModel::Jacobian && indep_init_[si] &&
                               min_depth(ind[si], features) < settings_.min_feature_depth;
     if (!indep_init_[si] || ind_unusable) {
       ind[si] = *c.g_io_pnp;
       indep_init_[si] = true;
+      ind_changed = true;
     }
   }
   // 2. Blind cameras start from the average of their initialised neighbours' estimates,
@@ -150,13 +151,17 @@ void NetworkRunner::initialise(const std::vector<CameraInput>& in) {
       if (nb.empty()) continue;
       net[si] = g_wi_[si].inverse() * obs::average_pose(nb);
       net_init_[si] = true;
-      progress = changed = true;
+      progress = net_changed = true;
     }
   }
-  net_.reset(net);
-  indep_.reset(ind);
-  net_.set_active(net_init_);
-  indep_.set_active(indep_init_);
+  if (net_changed) {
+    net_.reset(net);
+    net_.set_active(net_init_);
+  }
+  if (ind_changed) {
+    indep_.reset(ind);
+    indep_.set_active(indep_init_);
+  }
 }
 
 const FrameRecord& NetworkRunner::process(int frame, double t, double dt,
