@@ -159,3 +159,28 @@ TEST(FrontEndOnRenderedImages, DetectionAgreesWithGeometricVisibility) {
   EXPECT_GT(must, 50);
   EXPECT_GT(must_not, 50);
 }
+
+TEST(FrontEndOnRenderedImages, TrackingWindowFindsTheTagWithFullFrameCorners) {
+  // While a camera keeps the tag, the window around the last corners finds it (no full-frame
+  // fallback), with the corners a full-frame search gives (to 1e-4 px: libapriltag fits in
+  // shifted coordinates); losing the tag resets the state.
+  auto scene = pipeline::load_render_scenario(kSource / "datasets/paper5_render.yaml");
+  render::Renderer r(scene);
+  pipeline::DetectorSettings ds;
+  ds.target_id = scene.target.tag.id;
+  pipeline::FrontEnd tracked(ds), full(ds, pipeline::TrackingSettings{false});
+  const auto calib = calibration(scene.cameras[0].intrinsics);
+  pipeline::TrackState track;
+  for (int k = 0; k < 4; ++k) {
+    const cv::Mat img = r.render(0, k);
+    const auto a = tracked.observe(img, calib, nullptr, &track);
+    const auto b = full.observe(img, calib);
+    ASSERT_TRUE(a.detected && b.detected) << "frame " << k;
+    EXPECT_EQ(track.frames_since_full, k) << "frame " << k << ": the window search failed";
+    for (size_t c = 0; c < 4; ++c) EXPECT_LT(cv::norm(a.corners_px[c] - b.corners_px[c]), 1e-4);
+  }
+  const auto blind = tracked.observe(r.render(3, 0), calib, nullptr, &track);  // camera 4: no tag
+  EXPECT_FALSE(blind.detected);
+  EXPECT_FALSE(track.last.has_value());
+  EXPECT_EQ(track.frames_since_full, 0);
+}
