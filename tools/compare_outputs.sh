@@ -1,0 +1,88 @@
+#!/usr/bin/env bash
+# Proves that a change leaves netvmo's outputs unchanged: builds a reference commit and the
+# working tree, runs both on the same inputs and compares every output file byte for byte.
+#
+#   bash tools/compare_outputs.sh [REF] [--frames N]
+#
+# REF defaults to the commit recorded in tools/compare_outputs.ref (the last commit before the
+# restructuring). Compared:
+#   simulate datasets/paper5.yaml and datasets/paper5_jacobian.yaml:
+#       energies.csv, estimates.csv, orientation_x.csv, summary.json
+#   render datasets/paper5_render.yaml: every image, calibration, network.yaml and truth file
+#   run on that rendered dataset (each build on its own rendering):
+#       estimates.csv, energies.csv, errors.csv, summary.json without its "timing" block
+# Exit status 0 when everything is identical; otherwise the differing files are listed.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+top=$(pwd)
+
+ref=""
+frames=60
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --frames) frames="$2"; shift 2 ;;
+    -h|--help) sed -n 2,15p "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) ref="$1"; shift ;;
+  esac
+done
+[ -n "$ref" ] || ref=$(tr -d ' \n' < tools/compare_outputs.ref)
+git rev-parse --verify -q "$ref^{commit}" >/dev/null || {
+  echo "compare_outputs: '$ref' is not a commit of this repository (a shallow clone lacks it)" >&2
+  exit 2
+}
+
+work=$(mktemp -d "${TMPDIR:-/tmp}/netvmo-compare.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+echo "compare_outputs: reference $(git rev-parse --short "$ref"), working tree $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo '+changes'), $frames frames"
+
+mkdir -p "$work/ref-src"
+git archive "$ref" | tar -x -C "$work/ref-src"
+build() {  # build SRC_DIR BUILD_DIR
+  cmake -S "$1" -B "$2" -DNETVMO_BUILD_TESTS=OFF -DNETVMO_BUILD_BENCHMARKS=OFF >/dev/null
+  cmake --build "$2" -j2 --target netvmo >/dev/null
+}
+echo "compare_outputs: building the reference"
+build "$work/ref-src" "$work/ref-build"
+echo "compare_outputs: building the working tree"
+build "$top" "$top/build-compare"
+
+produce() {  # produce NETVMO NAME: outputs in $work/NAME, produced under one common path
+  local bin=$1 out=$work/current
+  mkdir -p "$out"
+  for s in paper5 paper5_jacobian; do
+    "$bin" simulate "$top/datasets/$s.yaml" --out "$out/sim_$s" --no-plots >/dev/null
+  done
+  "$bin" render "$top/datasets/paper5_render.yaml" --out "$out/dataset" --frames "$frames" --quiet >/dev/null
+  "$bin" run "$out/dataset" --out "$out/run" --no-overlays --no-plots >/dev/null 2>&1
+  # Wall-clock timings differ from run to run; everything else must not.
+  awk '/^  "timing": \{/ {skip = 1} !skip {print} skip && /^  \},?$/ {skip = 0}' \
+    "$out/run/summary.json" > "$out/run/summary.notiming.json"
+  rm "$out/run/summary.json"
+  mv "$out" "$work/$2"
+}
+echo "compare_outputs: running the reference"
+produce "$work/ref-build/netvmo" ref
+echo "compare_outputs: running the working tree"
+produce "$top/build-compare/netvmo" new
+
+status=0
+count=0
+while IFS= read -r f; do
+  rel=${f#"$work/ref/"}
+  count=$((count + 1))
+  if ! cmp -s "$f" "$work/new/$rel"; then
+    echo "DIFFERENT: $rel"
+    status=1
+  fi
+done < <(find "$work/ref" -type f | sort)
+extra=$(cd "$work/new" && find . -type f | sort | sed 's|^\./||' | while read -r r; do [ -e "$work/ref/$r" ] || echo "$r"; done)
+if [ -n "$extra" ]; then
+  echo "only in the working tree: $extra"
+  status=1
+fi
+if [ $status = 0 ]; then
+  echo "compare_outputs: all $count files identical"
+else
+  echo "compare_outputs: outputs differ"
+fi
+exit $status
