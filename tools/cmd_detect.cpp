@@ -83,8 +83,8 @@ int run_detect(DetectOptions o) {
       row.frame = f;
       row.camera = ds.cameras[c].id;
       row.tag_id = o.det.target_id;
-      row.detected = obs.detected;
-      if (obs.detected) {
+      row.detected = obs.delta;
+      if (obs.delta) {
         ++st.detected;
         st.margin_sum += obs.margin;
         row.margin = obs.margin;

@@ -4,6 +4,7 @@
 #include <optional>
 #include <sstream>
 
+#include "choices.hpp"
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/simulation.hpp"
@@ -46,7 +47,7 @@ void make_plots(const sim::SimScenario& s, const sim::SimResult& r, const fs::pa
     ur.series.push_back({c, "k_s = " + short_number(compare->first), 3, 1, dashed});
   }
   plot::panels_figure({up, ur}, dir / "energies.png",
-                      "Estimation error energies (" + std::string(sim::to_string(s.error)) +
+                      "Estimation error energies (" + s.error_model +
                           " error, k_e = " + short_number(s.k_e) + ")");
   plot::Panel ori{"first element of ξ̄ sin θ̄ (world frame)", "(ξ̄ sin θ̄)_x", false, {},
                   std::make_pair(std::string("average g*"), obs::e_R(r.g_star.linear()).x())};
@@ -72,10 +73,7 @@ void add_simulate(CLI::App& app, int& exit_code) {
   cmd->add_option("--ke", o->k_e, "Visual feedback gain k_e")->default_str("from scenario");
   cmd->add_option("--ks", o->k_s, "Mutual feedback gain k_s")->default_str("from scenario");
   cmd->add_option("--duration", o->duration, "Simulated time [s]")->default_str("from scenario");
-  cmd->add_option("--error", o->error,
-                  "Visual error model: exact = E_R(g_bar^-1 g_io), jacobian = J^+(g_bar) f_e")
-      ->check(CLI::IsMember({"exact", "jacobian"}))
-      ->default_str("from scenario");
+  add_error_model_option(*cmd, o->error, ErrorModelUse::simulation)->default_str("from scenario");
   cmd->add_option("--compare-ks", o->compare_ks,
                   "Also run with this k_s (into OUT/compare_ks) and draw it dashed in energies.png");
   cmd->add_flag("--no-plots", o->no_plots, "Skip the PNG plots");
@@ -85,7 +83,11 @@ void add_simulate(CLI::App& app, int& exit_code) {
       if (o->k_e) s.k_e = *o->k_e;
       if (o->k_s) s.k_s = *o->k_s;
       if (o->duration) s.duration = *o->duration;
-      if (!o->error.empty()) s.error = o->error == "exact" ? sim::ErrorModel::Exact : sim::ErrorModel::Jacobian;
+      if (!o->error.empty()) {
+        const std::string problem = sim::simulation_error_model_problem(o->error);
+        if (!problem.empty()) throw InputError("--error: " + problem);
+        s.error_model = o->error;
+      }
       if (!(s.k_e > 0) || !(s.k_s >= 0) || !(s.duration > 0))
         throw InputError("--ke must be > 0, --ks >= 0 and --duration > 0");
       const fs::path dir = o->out;
@@ -99,7 +101,7 @@ void add_simulate(CLI::App& app, int& exit_code) {
         compare = std::make_pair(s2.k_s, dir / "compare_ks");
       }
       std::printf("scenario %s: %zu cameras, error %s, k_e = %g, k_s = %g, %d sub-steps/frame\n",
-                  s.name.c_str(), s.cameras.size(), sim::to_string(s.error), s.k_e, s.k_s,
+                  s.name.c_str(), s.cameras.size(), s.error_model.c_str(), s.k_e, s.k_s,
                   r.substeps);
       std::printf("  g*: p* = %s  xi theta* = %s\n", fmt3(r.g_star.translation()).c_str(),
                   fmt3(obs::rotvec(r.g_star)).c_str());

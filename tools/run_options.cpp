@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include "choices.hpp"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/overlay.hpp"
 #include "netvmo/pipeline/run_report.hpp"
@@ -15,11 +16,7 @@ void add_run_options(CLI::App& cmd, RunCliOptions& o) {
   cmd.add_option("--ke", o.k_e, "Visual feedback gain k_e")->capture_default_str();
   cmd.add_option("--ks", o.k_s, "Mutual feedback gain k_s (0: independent observers)")
       ->capture_default_str();
-  cmd.add_option("--error", o.error,
-                 "Visual error: pnp = E_R(g_bar^-1 g_io,PnP), jacobian = J^+(g_bar) f_e from the "
-                 "corners, exact = ground truth (rendered data)")
-      ->check(CLI::IsMember({"pnp", "jacobian", "exact"}))
-      ->capture_default_str();
+  add_error_model_option(cmd, o.error, ErrorModelUse::images)->capture_default_str();
   cmd.add_option("--init", o.init,
                  "Initial estimates: pnp = first PnP pose, blind cameras from their neighbours; "
                  "paper = ([0,0,1], tag facing the camera)")
@@ -53,7 +50,7 @@ pipeline::ImageRunOptions to_image_run_options(const RunCliOptions& o) {
   pipeline::ImageRunOptions r;
   r.runner.k_e = o.k_e;
   r.runner.k_s = o.k_s;
-  r.runner.error = run::parse_error_model(o.error);
+  r.runner.error_model = o.error;
   r.runner.init = run::parse_init_mode(o.init);
   r.runner.rounds = o.rounds;
   r.keep_going = o.keep_going;

@@ -53,7 +53,7 @@ TagObservation FrontEnd::observe(const cv::Mat& gray, const Calibration& calib,
   }
   obs.status = dets.status;
   if (const TagDetection* t = dets.target()) {
-    obs.detected = true;
+    obs.delta = true;
     obs.tag_id = t->id;
     obs.hamming = t->hamming;
     obs.margin = t->margin;

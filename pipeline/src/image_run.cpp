@@ -100,7 +100,7 @@ ImageRunResult run_images(FrameProvider& provider, const ImageRunOptions& option
         }
         cams[i].obs = front_ends[static_cast<size_t>(w)].observe(images[i], provider.calibration(i),
                                                                   nullptr, &tracks[i]);
-        if (cams[i].obs.detected) {
+        if (cams[i].obs.delta) {
           const auto pose = pnp_pose(cams[i].obs.f_normalized, model);
           if (pose) cams[i].g_io_pnp = pose->g_io;
         }
@@ -126,8 +126,8 @@ ImageRunResult run_images(FrameProvider& provider, const ImageRunOptions& option
     const auto t_obs = Clock::now();
     std::vector<run::CameraInput> in(n);
     for (size_t i = 0; i < n; ++i) {
-      in[i].delta = cams[i].obs.detected;
-      in[i].f = cams[i].obs.f_normalized;
+      in[i].delta = cams[i].obs.delta;
+      in[i].f = cams[i].obs.f_normalized;  // (eq:visual_mea) with lambda = 1
       in[i].g_io_pnp = cams[i].g_io_pnp;
     }
     const auto target = provider.target_truth(k);

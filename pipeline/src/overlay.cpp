@@ -30,7 +30,7 @@ cv::Mat draw_overlay(const cv::Mat& gray, int camera_id, const Calibration& cali
     img = cv::Mat(calib.height, calib.width, CV_8UC3, cv::Scalar(40, 40, 40));
   else
     cv::cvtColor(gray, img, cv::COLOR_GRAY2BGR);
-  if (cam.obs.detected)
+  if (cam.obs.delta)
     polygon(img, std::vector<cv::Point2d>(cam.obs.corners_px.begin(), cam.obs.corners_px.end()), kDetected);
   if (rec.initialized) {
     const obs::SE3 g_bar = g_wi.inverse() * rec.est_w;  // the camera's own estimate g_bar_i
@@ -45,7 +45,7 @@ cv::Mat draw_overlay(const cv::Mat& gray, int camera_id, const Calibration& cali
     if (in_front) polygon(img, denormalize_points(xy, calib), kEstimate);
   }
   const std::string label = "cam " + std::to_string(camera_id) +
-                            (cam.read_failed ? "  unreadable" : cam.obs.detected ? "  detected" : "  no target");
+                            (cam.read_failed ? "  unreadable" : cam.obs.delta ? "  detected" : "  no target");
   cv::putText(img, label, {10, 24}, cv::FONT_HERSHEY_SIMPLEX, 0.7, kText, 2, cv::LINE_AA);
   cv::putText(img, "green: detection  magenta: networked estimate", {10, img.rows - 12},
               cv::FONT_HERSHEY_SIMPLEX, 0.45, kText, 1, cv::LINE_AA);

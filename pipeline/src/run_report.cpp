@@ -55,7 +55,7 @@ json run_summary(const FrameProvider& provider, const ImageRunOptions& options,
   s["fps"] = net.fps;
   s["k_e"] = options.runner.k_e;
   s["k_s"] = options.runner.k_s;
-  s["error"] = run::to_string(options.runner.error);
+  s["error"] = options.runner.error_model;
   s["init"] = run::to_string(options.runner.init);
   s["rounds_per_frame"] = result.substeps;
   s["step_factor"] = result.step_factor;  // h (k_e + 2 k_s d_max): < 2 stable

@@ -6,26 +6,10 @@
 
 namespace netvmo::run {
 
-ErrorModel parse_error_model(const std::string& s) {
-  if (s == "jacobian") return ErrorModel::Jacobian;
-  if (s == "pnp") return ErrorModel::Pnp;
-  if (s == "exact") return ErrorModel::Exact;
-  throw std::invalid_argument("unknown error model '" + s + "' (jacobian, pnp or exact)");
-}
-
 InitMode parse_init_mode(const std::string& s) {
   if (s == "pnp") return InitMode::Pnp;
   if (s == "paper") return InitMode::Paper;
   throw std::invalid_argument("unknown initialisation '" + s + "' (pnp or paper)");
-}
-
-const char* to_string(ErrorModel e) {
-  switch (e) {
-    case ErrorModel::Jacobian: return "jacobian";
-    case ErrorModel::Pnp: return "pnp";
-    case ErrorModel::Exact: return "exact";
-  }
-  return "?";
 }
 
 const char* to_string(InitMode m) { return m == InitMode::Pnp ? "pnp" : "paper"; }
@@ -42,7 +26,7 @@ obs::ObserverSettings observer_settings(const RunnerSettings& s, double k_s) {
   obs::ObserverSettings o;
   o.k_e = s.k_e;
   o.k_s = k_s;
-  o.error = s.error == ErrorModel::Jacobian ? obs::VisualError::Features : obs::VisualError::Pose;
+  o.error_model = s.error_model;
   o.features = obs::FeatureModel::square(s.tag_size);
   o.substeps = s.rounds;
   return o;
@@ -91,45 +75,26 @@ double NetworkRunner::step_factor(double dt) const {
   return h * (settings_.k_e + 2.0 * settings_.k_s * graph_.max_degree());
 }
 
-obs::VisualMeasurement NetworkRunner::measurement(const CameraInput& c) const {
-  obs::VisualMeasurement z;
-  switch (settings_.error) {
-    case ErrorModel::Jacobian:
-      z.visible = c.delta;
-      z.f = c.f;
-      break;
-    case ErrorModel::Pnp:
-      z.visible = c.delta && c.g_io_pnp.has_value();
-      if (z.visible) z.g_io = *c.g_io_pnp;
-      break;
-    case ErrorModel::Exact:
-      if (c.delta && !c.g_io_true)
-        throw std::invalid_argument("the exact error model needs ground truth (rendered data)");
-      z.visible = c.delta;
-      if (z.visible) z.g_io = *c.g_io_true;
-      break;
-  }
-  return z;
-}
-
 void NetworkRunner::initialise(const std::vector<CameraInput>& in) {
   const int n = graph_.size();
   std::vector<SE3> net = net_.estimates(), ind = indep_.estimates();
   const auto features = obs::FeatureModel::square(settings_.tag_size);
+  // An estimate of the image-feature model must keep the tag in front of the camera.
+  const bool features_model = net_.camera(0).error_model().input() == obs::MeasurementInput::features;
   bool net_changed = false, ind_changed = false;
   // 1. Cameras that see the target start from (or are rescued by) their own PnP pose.
   for (int i = 0; i < n; ++i) {
     const auto si = static_cast<size_t>(i);
     const auto& c = in[si];
     if (!c.delta || !c.g_io_pnp) continue;
-    const bool net_unusable = settings_.error == ErrorModel::Jacobian && net_init_[si] &&
+    const bool net_unusable = features_model && net_init_[si] &&
                               min_depth(net[si], features) < settings_.min_feature_depth;
     if (!net_init_[si] || net_unusable) {
       net[si] = *c.g_io_pnp;
       net_init_[si] = true;
       net_changed = true;
     }
-    const bool ind_unusable = settings_.error == ErrorModel::Jacobian && indep_init_[si] &&
+    const bool ind_unusable = features_model && indep_init_[si] &&
                               min_depth(ind[si], features) < settings_.min_feature_depth;
     if (!indep_init_[si] || ind_unusable) {
       ind[si] = *c.g_io_pnp;
@@ -171,10 +136,14 @@ const FrameRecord& NetworkRunner::process(int frame, double t, double dt,
   if (in.size() != n) throw std::invalid_argument("one input per camera is required");
   if (settings_.init == InitMode::Pnp) initialise(in);
 
-  std::vector<obs::VisualMeasurement> z(n);
-  for (size_t i = 0; i < n; ++i) z[i] = measurement(in[i]);
-  net_.step(dt, z);
-  indep_.step(dt, z);
+  const auto& model = net_.camera(0).error_model();
+  if (model.input() == obs::MeasurementInput::true_pose)
+    for (const auto& c : in)
+      if (c.delta && !c.g_io_true)
+        throw std::invalid_argument("the " + std::string(model.name()) +
+                                    " error model needs ground truth (rendered data)");
+  net_.step(dt, in);
+  indep_.step(dt, in);
 
   FrameRecord r;
   r.frame = frame;

@@ -13,7 +13,19 @@ namespace netvmo::sim {
 namespace fs = std::filesystem;
 using obs::Vec3;
 
-const char* to_string(ErrorModel e) { return e == ErrorModel::Exact ? "exact" : "jacobian"; }
+std::string simulation_error_model_problem(const std::string& name) {
+  const obs::ErrorModel* model = nullptr;
+  try {
+    model = &obs::find_error_model(name);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  if (model->input() == obs::MeasurementInput::pnp_pose)
+    return "the '" + name +
+           "' error model needs a measured pose from images; a simulation gives true poses and "
+           "projected features (use an error model that reads those)";
+  return "";
+}
 
 namespace {
 
@@ -27,7 +39,7 @@ obs::ObserverSettings observer_settings(const SimScenario& s) {
   obs::ObserverSettings o;
   o.k_e = s.k_e;
   o.k_s = s.k_s;
-  o.error = s.error == ErrorModel::Exact ? obs::VisualError::Pose : obs::VisualError::Features;
+  o.error_model = s.error_model;
   o.features = obs::FeatureModel::square(s.square_side);
   return o;
 }
@@ -50,14 +62,9 @@ SimScenario load_scenario(const fs::path& file) {
     if (!(s.k_s >= 0)) g.get("k_s").fail("must be non-negative");
     g.finish();
   }
-  const std::string err = root.get_or("error", std::string("exact"));
-  if (err == "exact") {
-    s.error = ErrorModel::Exact;
-  } else if (err == "jacobian") {
-    s.error = ErrorModel::Jacobian;
-  } else {
-    root.get("error").fail("expected 'exact' or 'jacobian', got '" + err + "'");
-  }
+  s.error_model = root.get_or("error", s.error_model);
+  const std::string problem = simulation_error_model_problem(s.error_model);
+  if (!problem.empty()) root.get("error").fail(problem);
   s.square_side = root.get_or("square_side", s.square_side);
   if (!(s.square_side > 0)) root.get("square_side").fail("must be positive");
   s.initial = read_pose(root.get("initial_estimate").map(), "p", "r");
@@ -106,7 +113,7 @@ SimScenario load_scenario(const fs::path& file) {
   int visible = 0;
   for (const auto& c : s.cameras) visible += c.g_wo.has_value();
   if (visible == 0) throw InputError(file.string() + ": cameras: no camera has a target");
-  if (s.error == ErrorModel::Jacobian) {
+  if (obs::find_error_model(s.error_model).input() == obs::MeasurementInput::features) {
     const auto features = obs::FeatureModel::square(s.square_side);
     for (const auto& c : s.cameras) {
       try {
@@ -115,7 +122,7 @@ SimScenario load_scenario(const fs::path& file) {
       } catch (const std::domain_error&) {
         throw InputError(file.string() + ": camera " + std::to_string(c.id) +
                          ": the target or the initial estimate is behind the camera, so image "
-                         "features are undefined for 'error: jacobian' (turn the cameras to "
+                         "features are undefined for 'error: " + s.error_model + "' (turn the cameras to "
                          "face it, as datasets/paper5_jacobian.yaml does)");
       }
     }
@@ -130,15 +137,16 @@ SimResult simulate(const SimScenario& s) {
   obs::NetworkedObserver observer(graph, settings);
 
   std::vector<SE3> g_wi, targets;
-  std::vector<obs::VisualMeasurement> z(static_cast<size_t>(n));
+  std::vector<obs::Measurement> z(static_cast<size_t>(n));
   for (int i = 0; i < n; ++i) {
     const auto& c = s.cameras[static_cast<size_t>(i)];
     g_wi.push_back(c.g_wi);
     if (!c.g_wo) continue;
     auto& zi = z[static_cast<size_t>(i)];
-    zi.visible = true;
-    zi.g_io = c.g_wi.inverse() * *c.g_wo;  // g_io_i = g_wi^-1 g_wo_i
-    if (s.error == ErrorModel::Jacobian) zi.f = obs::project(zi.g_io, settings.features);
+    zi.delta = true;
+    zi.g_io_true = c.g_wi.inverse() * *c.g_wo;  // g_io_i = g_wi^-1 g_wo_i
+    if (observer.camera(i).error_model().input() == obs::MeasurementInput::features)
+      zi.f = obs::project(*zi.g_io_true, settings.features);
     targets.push_back(*c.g_wo);
   }
   observer.set_camera_poses(g_wi);
@@ -205,7 +213,7 @@ void write_outputs(const SimScenario& s, const SimResult& r, const fs::path& dir
   const auto vec = [](const Vec3& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); };
   nlohmann::json j;
   j["scenario"] = s.name;
-  j["error"] = to_string(s.error);
+  j["error"] = s.error_model;
   j["k_e"] = s.k_e;
   j["k_s"] = s.k_s;
   j["fps"] = s.fps;

@@ -42,7 +42,7 @@ CornerStats corner_rms(render::SceneDescription scene, int frames) {
     for (int i = 0; i < r.camera_count(); ++i) {
       const auto obs = fe.observe(r.render(i, k), calibration(r.scene().cameras[static_cast<size_t>(i)].intrinsics));
       const auto truth = r.truth(i, k);
-      if (!obs.detected) continue;
+      if (!obs.delta) continue;
       ++s.detections;
       for (int c = 0; c < 4; ++c) {
         const auto& t = truth.corners[static_cast<size_t>(c)];
@@ -107,7 +107,7 @@ TEST(FrontEndOnRenderedImages, PnpOfATwentyCentimetreTagAtTwoMetres) {
   const auto model = obs::FeatureModel::square(scene.target.tag.size);
   for (int i = 0; i < 3; ++i) {
     const auto obs = fe.observe(r.render(i, 0), calibration(intrinsics));
-    ASSERT_TRUE(obs.detected) << "camera " << i + 1;
+    ASSERT_TRUE(obs.delta) << "camera " << i + 1;
     const auto pose = pipeline::pnp_pose(obs.f_normalized, model);
     ASSERT_TRUE(pose.has_value());
     const obs::SE3 g_io = r.truth(i, 0).g_io;
@@ -146,7 +146,7 @@ TEST(FrontEndOnRenderedImages, DetectionAgreesWithGeometricVisibility) {
       const bool hidden = t.visible_fraction == 0.0;
       if (!fully_visible && !hidden) continue;  // partly visible: either outcome is allowed
       const bool detected =
-          fe.observe(r.render(i, k), calibration(scene.cameras[static_cast<size_t>(i)].intrinsics)).detected;
+          fe.observe(r.render(i, k), calibration(scene.cameras[static_cast<size_t>(i)].intrinsics)).delta;
       if (fully_visible) {
         ++must;
         EXPECT_TRUE(detected) << "frame " << k << " camera " << i + 1;
@@ -175,12 +175,12 @@ TEST(FrontEndOnRenderedImages, TrackingWindowFindsTheTagWithFullFrameCorners) {
     const cv::Mat img = r.render(0, k);
     const auto a = tracked.observe(img, calib, nullptr, &track);
     const auto b = full.observe(img, calib);
-    ASSERT_TRUE(a.detected && b.detected) << "frame " << k;
+    ASSERT_TRUE(a.delta && b.delta) << "frame " << k;
     EXPECT_EQ(track.frames_since_full, k) << "frame " << k << ": the window search failed";
     for (size_t c = 0; c < 4; ++c) EXPECT_LT(cv::norm(a.corners_px[c] - b.corners_px[c]), 1e-4);
   }
   const auto blind = tracked.observe(r.render(3, 0), calib, nullptr, &track);  // camera 4: no tag
-  EXPECT_FALSE(blind.detected);
+  EXPECT_FALSE(blind.delta);
   EXPECT_FALSE(track.last.has_value());
   EXPECT_EQ(track.frames_since_full, 0);
 }

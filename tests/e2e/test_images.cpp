@@ -111,7 +111,7 @@ TEST(EndToEnd, MovingTargetDeltaIsDetectionAndEstimatesStayBounded) {
   int changes = 0, detected = 0;
   for (int k = 0; k < frames; ++k) {
     for (size_t i = 0; i < scene.cameras.size(); ++i) {
-      const bool d = fe.observe(again->read(i, k), again->calibration(i)).detected;
+      const bool d = fe.observe(again->read(i, k), again->calibration(i)).delta;
       EXPECT_EQ(r.history[static_cast<size_t>(k)].cameras[i].delta, d) << "frame " << k << " camera " << i + 1;
       detected += d;
       if (k > 0) changes += r.history[static_cast<size_t>(k)].cameras[i].delta != r.history[static_cast<size_t>(k) - 1].cameras[i].delta;

@@ -296,7 +296,7 @@ TEST(FrontEnd, NormalizedFeaturesMatchProjection) {
     const obs::SE3 g = facing_pose(1.3, 0.1, -0.05, {0.2, -0.3, 0.9});
     FrontEnd fe;
     const auto o = fe.observe(render_tags(calib, {{0, kSize, g, {}}}), calib);
-    ASSERT_TRUE(o.detected);
+    ASSERT_TRUE(o.delta);
     EXPECT_EQ(o.tag_id, 0);
     const Eigen::VectorXd f_true = obs::project(g, obs::FeatureModel::square(kSize));
     // 0.1 px / 600 px focal length
@@ -305,7 +305,7 @@ TEST(FrontEnd, NormalizedFeaturesMatchProjection) {
   }
   FrontEnd fe;
   const auto blind = fe.observe(cv::Mat(), testing::test_calibration());
-  EXPECT_FALSE(blind.detected);
+  EXPECT_FALSE(blind.delta);
 }
 
 }  // namespace

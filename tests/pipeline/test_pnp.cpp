@@ -39,7 +39,7 @@ TEST(Pnp, ConventionTagFacingCamera) {
   const obs::SE3 g = facing_pose(2.0);
   FrontEnd fe;
   const auto o = fe.observe(testing::render_tags(calib, {{0, 0.2, g, {}}}), calib);
-  ASSERT_TRUE(o.detected);
+  ASSERT_TRUE(o.delta);
   const auto r = pnp_pose(o.f_normalized, obs::FeatureModel::square(0.2));
   ASSERT_TRUE(r.has_value());
   const obs::Mat3 R = r->g_io.linear();
@@ -67,7 +67,7 @@ TEST(Pnp, RenderedFramesWithin5mmAndHalfDegree) {
         opt.noise_sigma = noise;
         opt.seed = seed++;
         const auto o = fe.observe(testing::render_tags(calib, {{0, 0.2, g, {}}}, opt), calib);
-        ASSERT_TRUE(o.detected);
+        ASSERT_TRUE(o.delta);
         const auto r = pnp_pose(o.f_normalized, model);
         ASSERT_TRUE(r.has_value());
         const double mm = 1000 * (r->g_io.translation() - g.translation()).norm();

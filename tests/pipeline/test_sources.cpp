@@ -52,8 +52,8 @@ TEST(Sources, ImageFolderAndMjpgVideoAgree) {
   const auto oa = run_all(a), ob = run_all(b);
   for (size_t c = 0; c < 2; ++c)
     for (size_t f = 0; f < 4; ++f) {
-      ASSERT_TRUE(oa[c][f].detected);
-      ASSERT_TRUE(ob[c][f].detected) << "video camera " << c << " frame " << f;
+      ASSERT_TRUE(oa[c][f].delta);
+      ASSERT_TRUE(ob[c][f].delta) << "video camera " << c << " frame " << f;
       EXPECT_LT(testing::corner_rms(oa[c][f].corners_px, truth[c][f]), 0.1);
       for (size_t k = 0; k < 4; ++k)
         EXPECT_LT(cv::norm(oa[c][f].corners_px[k] - ob[c][f].corners_px[k]), 0.5)
@@ -84,7 +84,7 @@ TEST(Sources, Ffv1AviAndMp4VideosAgree) {
     ASSERT_EQ(b.frame_count, 3) << fourcc;
     const auto ob = run_all(b);
     for (size_t f = 0; f < 3; ++f) {
-      ASSERT_TRUE(ob[0][f].detected) << fourcc << " frame " << f;
+      ASSERT_TRUE(ob[0][f].delta) << fourcc << " frame " << f;
       for (size_t k = 0; k < 4; ++k)
         EXPECT_LE(cv::norm(oa[0][f].corners_px[k] - ob[0][f].corners_px[k]), tol)
             << fourcc << " frame " << f << " corner " << k;
@@ -103,9 +103,9 @@ TEST(Sources, MissingFrameIsBlindNotShifted) {
   EXPECT_FALSE(ds.read(1, 1).empty());
   // frames after the gap are still the right frames
   const auto o = run_all(ds);
-  EXPECT_FALSE(o[0][1].detected);
+  EXPECT_FALSE(o[0][1].delta);
   for (size_t f : {0u, 2u, 3u}) {
-    ASSERT_TRUE(o[0][f].detected);
+    ASSERT_TRUE(o[0][f].delta);
     EXPECT_LT(testing::corner_rms(o[0][f].corners_px, truth[0][f]), 0.1) << "frame " << f;
   }
 }
@@ -217,7 +217,7 @@ TEST(Sources, XmlCalibrationsInDataset) {
   EXPECT_EQ(dv.cameras[0].calib.K(1, 2), c.K(1, 2));
   EXPECT_EQ(dv.cameras[0].calib.width, 640);
   FrontEnd fe;
-  EXPECT_TRUE(fe.observe(dv.read(0, 0), dv.cameras[0].calib).detected);
+  EXPECT_TRUE(fe.observe(dv.read(0, 0), dv.cameras[0].calib).delta);
 }
 
 }  // namespace

@@ -92,7 +92,7 @@ void BM_FrontEnd(benchmark::State& state) {
   for (auto _ : state) {
     const TagObservation o = fe.observe(frame, calib);
     benchmark::DoNotOptimize(o.f_normalized.data());
-    detected += o.detected;
+    detected += o.delta;
     ++n;
   }
   if (detected != n) state.SkipWithError("target not detected in the benchmark frame");
@@ -159,7 +159,7 @@ void BM_FrontEndRendered(benchmark::State& state) {
   TrackState track;
   fe.observe(frame, calib, nullptr, &track);  // primes the window
   bool detected = false;
-  for (auto _ : state) detected = fe.observe(frame, calib, nullptr, &track).detected;
+  for (auto _ : state) detected = fe.observe(frame, calib, nullptr, &track).delta;
   state.SetLabel(std::string("rendered camera ") + std::to_string(cam + 1) +
                  (detected ? " (tag)" : " (no tag)") + (tracking ? ", tracking window" : ", full frame"));
 }

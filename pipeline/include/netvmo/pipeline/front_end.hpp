@@ -13,7 +13,7 @@ namespace netvmo::pipeline {
 
 /// One camera's measurement of the target in one frame.
 struct TagObservation {
-  bool detected = false;          ///< delta_i(t): the target id was decoded and accepted
+  bool delta = false;             ///< delta_i(t): the target id was decoded and accepted
   TargetStatus status = TargetStatus::not_found;
   int tag_id = -1;                ///< the target id when detected, else -1
   int hamming = 0;

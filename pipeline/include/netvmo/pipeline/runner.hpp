@@ -3,37 +3,32 @@
 // Images never reach this file: it consumes one CameraInput per camera and frame.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "netvmo/observer/graph.hpp"
 #include "netvmo/observer/metrics.hpp"
-#include "netvmo/observer/observer.hpp"
+#include "netvmo/observer/networked_observer.hpp"
 
 namespace netvmo::run {
 
 using obs::SE3;
 
-/// The visual error term of (eq:input_f-).
-enum class ErrorModel {
-  Jacobian,  ///< e = J^dagger(g_bar) (f - f_bar) from the four normalized tag corners (eq:eei)
-  Pnp,       ///< e = E_R(g_bar^-1 g_io,PnP) with the camera's own ViSP pose
-  Exact      ///< e = E_R(g_bar^-1 g_io,true): ground truth (rendered data), gated by detection
-};
 enum class InitMode {
   Pnp,   ///< a camera starts from its first PnP pose, or from its neighbours' estimates
   Paper  ///< every camera starts at g_bar(0) = ([0,0,1], R_facing) (see RunnerSettings)
 };
-ErrorModel parse_error_model(const std::string& s);
 InitMode parse_init_mode(const std::string& s);
-const char* to_string(ErrorModel e);
 const char* to_string(InitMode m);
 
 struct RunnerSettings {
   double k_e = 1.0;                     ///< visual feedback gain
   double k_s = 50.0;                    ///< mutual feedback gain
-  ErrorModel error = ErrorModel::Pnp;   ///< visual error model
+  /// Visual error model of (eq:input_f-), by its registry name (observer/error_model.hpp):
+  /// pnp (the camera's own PnP pose), jacobian (the tag's corners), exact (ground truth).
+  std::string error_model = "pnp";
   InitMode init = InitMode::Pnp;        ///< initial estimates
   int rounds = 0;                       ///< exchange rounds (sub-steps) per frame; 0 = stable
   double tag_size = 0.2;                ///< side of the tag's black square [m]
@@ -46,13 +41,10 @@ struct RunnerSettings {
 /// (R = diag(1,-1,-1), the camera-frame form of the printed identity orientation).
 SE3 paper_initial_estimate();
 
-/// One camera's input for one frame.
-struct CameraInput {
-  bool delta = false;                  ///< delta_i(t): the target tag was decoded
-  Eigen::Matrix<double, 8, 1> f = Eigen::Matrix<double, 8, 1>::Zero();  ///< normalized corners
-  std::optional<SE3> g_io_pnp;         ///< the camera's PnP pose of the tag (when delta)
-  std::optional<SE3> g_io_true;        ///< true relative pose (rendered data only)
-};
+/// One camera's input for one frame: delta_i(t) (the target tag was decoded), the normalized
+/// corners f, the camera's PnP pose of the tag (when delta) and, on rendered data, the true
+/// relative pose.
+using CameraInput = obs::Measurement;
 
 /// One camera's state after a frame.
 struct CameraRecord {
@@ -99,11 +91,10 @@ class NetworkRunner {
   /// (the -hat(V_wi) g_bar term of (eq:EsRRBM) and g_ij = g_wi^-1 g_wj). Call before process().
   void set_camera_motion(const std::vector<SE3>& g_wi, const std::vector<obs::Vec6>& V_wi);
   /// Replaces the in-process exchange of the networked observer.
-  void set_transport(obs::Transport* t) { net_.set_transport(t); }
+  void set_transport(std::unique_ptr<obs::Transport> t) { net_.set_transport(std::move(t)); }
 
  private:
   void initialise(const std::vector<CameraInput>& in);
-  obs::VisualMeasurement measurement(const CameraInput& c) const;
 
   obs::Graph graph_;
   std::vector<SE3> g_wi_;

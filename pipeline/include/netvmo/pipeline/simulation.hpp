@@ -10,7 +10,7 @@
 
 #include "netvmo/observer/graph.hpp"
 #include "netvmo/observer/metrics.hpp"
-#include "netvmo/observer/observer.hpp"
+#include "netvmo/observer/networked_observer.hpp"
 
 namespace netvmo::sim {
 
@@ -22,8 +22,6 @@ struct SimCamera {
   std::optional<SE3> g_wo;      ///< fictitious target pose o_i in the world; none = never sees it
 };
 
-enum class ErrorModel { Exact, Jacobian };
-
 /// A simulation scenario (datasets/paper5.yaml documents the file format).
 struct SimScenario {
   std::string name;
@@ -31,7 +29,9 @@ struct SimScenario {
   double duration = 20.0;   ///< simulated seconds
   double k_e = 1.0;         ///< visual feedback gain
   double k_s = 50.0;        ///< mutual feedback gain
-  ErrorModel error = ErrorModel::Exact;
+  /// Visual error model (observer/error_model.hpp): exact or jacobian. A simulation gives every
+  /// camera its true relative pose and its projected features, not a PnP pose.
+  std::string error_model = "exact";
   double square_side = 0.2; ///< side of the m = 4 point square used by the jacobian model (m)
   SE3 initial = SE3::Identity();  ///< g_bar_i(0), the same in every camera's frame
   std::vector<SimCamera> cameras;
@@ -61,6 +61,8 @@ SimResult simulate(const SimScenario& s);
 /// Writes energies.csv, estimates.csv, orientation_x.csv and summary.json into dir (atomically).
 void write_outputs(const SimScenario& s, const SimResult& r, const std::filesystem::path& dir);
 
-const char* to_string(ErrorModel e);
+/// Why a simulation cannot use the named error model (unknown, or it reads a measured pose),
+/// or an empty string when it can.
+std::string simulation_error_model_problem(const std::string& name);
 
 }  // namespace netvmo::sim

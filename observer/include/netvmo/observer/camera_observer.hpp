@@ -1,0 +1,132 @@
+// One camera's networked visual motion observer: the unit of the paper's distributed
+// estimator. Camera i owns exactly
+//   - its estimate g_bar_i of g*_i = g_wi^-1 g* (in its own frame),
+//   - its believed pose g_wi and body velocity V_wi (the -hat(V_wi) g_bar_i term),
+//   - its latest measurement (delta_i, features or a pose), held until the next one,
+//   - the latest estimate each neighbour j in N_i published, g_wj g_bar_j,
+// and advances by an elapsed time h with one Lie-group Euler step of
+//   (eq:EsRRBM)   d/dt g_bar_i = -hat(V_wi) g_bar_i + g_bar_i hat(u_ei)
+//   (eq:input_f-) u_ei = delta_i k_e e_ei + k_s sum_{j in N_i} E_R(g_bar_i^-1 g_ij g_bar_j).
+// The same class runs in process (NetworkedObserver composes n of them with a Transport), in a
+// process of its own (one per camera, exchanging messages over a middleware), or on a camera's
+// own clock: only who calls publish(), receive() and step() changes.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "netvmo/observer/error_model.hpp"
+#include "netvmo/observer/jacobian.hpp"
+#include "netvmo/observer/lie.hpp"
+#include "netvmo/observer/measurement.hpp"
+
+namespace netvmo::obs {
+
+/// Gains and discretisation of the observer. Defaults are the paper's Section 5 gains.
+struct ObserverSettings {
+  double k_e = 1.0;   ///< visual feedback gain k_e > 0
+  double k_s = 50.0;  ///< mutual feedback gain k_s >= 0 (0: independent observers)
+  /// Visual error model, by its registry name (error_model.hpp): exact, jacobian or pnp.
+  std::string error_model = "exact";
+  FeatureModel features = FeatureModel::square(0.2);  ///< the target's feature points
+  double step_factor = 1.0;  ///< c in h (k_e + 2 k_s d_max) <= c; c < 2 is required
+  int substeps = 0;          ///< sub-steps (exchange rounds) per frame; 0 = from step_factor
+};
+
+/// What a camera publishes to its neighbours once per exchange round.
+struct EstimateMessage {
+  int sender = -1;            ///< the publishing camera's index in the network
+  std::uint64_t round = 0;    ///< the sender's exchange round (1, 2, ...)
+  double stamp = 0.0;         ///< the sender's time of this estimate [s]
+  bool initialized = false;   ///< false: the sender has no estimate yet (receivers ignore it)
+  SE3 g_w = SE3::Identity();  ///< g_wi g_bar_i: the sender's estimate in the world frame
+};
+
+/// Why receive() refused a message (it is then counted and otherwise ignored).
+enum class MessageVerdict {
+  accepted,
+  not_a_neighbour,  ///< the sender is not in N_i (or is the receiver itself)
+  not_finite,       ///< NaN or infinity in the pose
+  not_a_rotation,   ///< the rotation block is not orthonormal with determinant +1
+  out_of_order      ///< a round not newer than the last one accepted from that sender
+};
+const char* to_string(MessageVerdict v);
+
+/// E_R(g_bar_i^-1 g_bar_{i,j}) with both poses expressed in the world frame through the believed
+/// camera poses: g_bar_i^-1 g_ij g_bar_j = (g_wi g_bar_i)^-1 (g_wj g_bar_j) (eq:input_f-).
+Vec6 mutual_error(const SE3& g_bar_w_i, const SE3& g_bar_w_j);
+
+/// One Lie-group Euler step of (eq:EsRRBM): exp(-h hat(V_wi)) g_bar exp(h hat(u)).
+SE3 integrate(const SE3& g_bar, const Vec6& V_wi, const Vec6& u, double h);
+
+/// Smallest N with (dt/N) (k_e + 2 k_s d_max) <= step_factor.
+int stable_substeps(double dt, const ObserverSettings& s, int max_degree);
+
+class CameraObserver {
+ public:
+  /// `index`: this camera's index in the network (the sender of its messages); `neighbours`:
+  /// N_i as indices. Throws std::invalid_argument on a negative gain, a step factor outside
+  /// (0, 2), an unknown error model or a neighbour list that contains `index` or repeats.
+  CameraObserver(int index, std::vector<int> neighbours, ObserverSettings settings);
+
+  int index() const { return index_; }
+  const std::vector<int>& neighbours() const { return neighbours_; }
+  const ObserverSettings& settings() const { return settings_; }
+  const ErrorModel& error_model() const { return *model_; }
+
+  /// Sets g_bar_i (in the camera's frame). Does not change initialized().
+  void reset(const SE3& g_bar) { g_bar_ = g_bar; }
+  /// An uninitialised camera keeps its estimate, and its neighbours leave it out of their
+  /// mutual term (used while a camera has no estimate yet). Default: initialised.
+  void set_initialized(bool on) { initialized_ = on; }
+  bool initialized() const { return initialized_; }
+  /// Believed camera pose g_wi (the source of g_ij = g_wi^-1 g_wj). Default: identity.
+  void set_camera_pose(const SE3& g_wi) { g_wi_ = g_wi; }
+  const SE3& camera_pose() const { return g_wi_; }
+  /// Camera body velocity V_wi = [v; w]. Default: zero.
+  void set_camera_velocity(const Vec6& V_wi) { V_wi_ = V_wi; }
+  /// The measurement used by step() until the next call (zero-order hold).
+  void set_measurement(const Measurement& z) { z_ = z; }
+  const Measurement& measurement() const { return z_; }
+
+  /// This round's message: the estimate in the world frame, g_wi g_bar_i. Advances the round.
+  EstimateMessage publish(double stamp = 0.0);
+  /// Stores a neighbour's message as its latest estimate, after checking it (MessageVerdict).
+  MessageVerdict receive(const EstimateMessage& m);
+  /// Forgets neighbour j's estimate (e.g. silent past a staleness bound): it leaves the mutual
+  /// term until it is heard again. No effect when j is not a neighbour.
+  void forget(int j);
+  /// The latest accepted message of each neighbour, in neighbours() order (empty if none).
+  const std::vector<std::optional<EstimateMessage>>& latest() const { return latest_; }
+  /// Messages refused so far, by verdict (index = MessageVerdict value).
+  const std::vector<std::uint64_t>& refused() const { return refused_; }
+
+  /// Advances g_bar_i by h with the held measurement and the latest neighbour estimates
+  /// (nothing happens while uninitialised). Throws std::domain_error from the error model.
+  void step(double h);
+
+  const SE3& estimate() const { return g_bar_; }
+  /// g_bar_w,i = g_wi g_bar_i: the estimate in the world frame.
+  SE3 estimate_world() const { return g_wi_ * g_bar_; }
+  /// The input u_ei of the last step (diagnostics).
+  const Vec6& input() const { return u_; }
+
+ private:
+  int index_;
+  std::vector<int> neighbours_;
+  ObserverSettings settings_;
+  const ErrorModel* model_;
+  SE3 g_bar_ = SE3::Identity();
+  SE3 g_wi_ = SE3::Identity();
+  Vec6 V_wi_ = Vec6::Zero();
+  Vec6 u_ = Vec6::Zero();
+  bool initialized_ = true;
+  Measurement z_;
+  std::uint64_t round_ = 0;
+  std::vector<std::optional<EstimateMessage>> latest_;
+  std::vector<std::uint64_t> refused_;
+};
+
+}  // namespace netvmo::obs

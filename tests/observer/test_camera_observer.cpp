@@ -1,0 +1,271 @@
+// The per-camera observer as the unit of the network: n of them joined by a transport defined
+// here (a toy that delays every message by one round) reach the same averaging as the
+// in-process NetworkedObserver, its messages are checked, and the error-model registry is the
+// one table everything reads.
+#include <gtest/gtest.h>
+
+#include <deque>
+#include <limits>
+
+#include "netvmo/observer/camera_observer.hpp"
+#include "netvmo/observer/error_model.hpp"
+#include "netvmo/observer/metrics.hpp"
+#include "netvmo/observer/networked_observer.hpp"
+#include "netvmo/observer/transport.hpp"
+
+using namespace netvmo::obs;
+
+namespace {
+
+// The paper's Section 5 network: 5 cameras, cameras 1..3 see their fictitious targets.
+struct Paper5 {
+  Graph graph{5, {{0, 1}, {0, 2}, {0, 4}, {1, 2}, {2, 3}, {3, 4}}};
+  std::vector<SE3> g_wi, g_wo;
+  Paper5() {
+    const Vec3 p[5] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, 0}};
+    for (const auto& pi : p) g_wi.push_back(make_pose(pi, Vec3::Zero()));
+    g_wo = {make_pose({0.55, 1.00, -1.91}, {0.30, 0.19, 0.21}),
+            make_pose({0.30, 0.80, -1.84}, {0.21, 0.30, 0.19}),
+            make_pose({0.56, 1.05, -2.00}, {0.29, 0.20, 0.31})};
+  }
+  Measurement z(int i) const {
+    Measurement m;
+    if (i < 3) {
+      m.delta = true;
+      m.g_io_true = g_wi[size_t(i)].inverse() * g_wo[size_t(i)];
+    }
+    return m;
+  }
+};
+
+// A toy transport: every message reaches the sender's neighbours one round late.
+class OneRoundLateTransport final : public Transport {
+ public:
+  explicit OneRoundLateTransport(Graph g) : graph_(std::move(g)), mail_(size_t(graph_.size())) {}
+  void send(const EstimateMessage& m) override {
+    for (int j : graph_.neighbors(m.sender)) mail_[size_t(j)].push_back({m, rounds_});
+  }
+  void receive(int receiver, std::vector<EstimateMessage>& out) override {
+    out.clear();
+    auto& box = mail_[size_t(receiver)];
+    while (!box.empty() && box.front().second < rounds_) {
+      out.push_back(box.front().first);
+      box.pop_front();
+    }
+  }
+  void next_round() { ++rounds_; }
+
+ private:
+  Graph graph_;
+  std::vector<std::deque<std::pair<EstimateMessage, int>>> mail_;
+  int rounds_ = 0;
+};
+
+std::vector<CameraObserver> make_cameras(const Paper5& p, const ObserverSettings& s) {
+  std::vector<CameraObserver> cams;
+  for (int i = 0; i < 5; ++i) {
+    cams.emplace_back(i, p.graph.neighbors(i), s);
+    cams.back().set_camera_pose(p.g_wi[size_t(i)]);
+    cams.back().reset(make_pose({0, 0, 1}, Vec3::Zero()));
+    cams.back().set_measurement(p.z(i));
+  }
+  return cams;
+}
+
+}  // namespace
+
+TEST(CameraObserver, ComposedWithAToyTransportTheyAverageAsTheNetworkDoes) {
+  Paper5 p;
+  ObserverSettings s;  // exact error model, k_e = 1, k_s = 50
+  auto cams = make_cameras(p, s);
+  OneRoundLateTransport net(p.graph);
+  const double h = 1.0 / 30.0 / 11.0;
+  std::vector<EstimateMessage> inbox;
+  for (int k = 0; k < 30 * 11 * 30; ++k) {  // 30 s
+    for (auto& c : cams) net.send(c.publish(k * h));
+    net.next_round();
+    for (auto& c : cams) {
+      net.receive(c.index(), inbox);
+      for (const auto& m : inbox) EXPECT_EQ(c.receive(m), MessageVerdict::accepted);
+    }
+    for (auto& c : cams) c.step(h);
+  }
+  // The same network in process, for reference.
+  NetworkedObserver ref(p.graph, s);
+  ref.set_camera_poses(p.g_wi);
+  ref.reset(std::vector<SE3>(5, make_pose({0, 0, 1}, Vec3::Zero())));
+  std::vector<Measurement> z;
+  for (int i = 0; i < 5; ++i) z.push_back(p.z(i));
+  for (int k = 0; k < 30 * 30; ++k) ref.step(1.0 / 30.0, z);
+  // A one-round delay of a stable linear consensus moves its equilibrium not at all: every
+  // camera ends where the in-process network ends (to the integration's precision).
+  for (int i = 0; i < 5; ++i) {
+    const SE3 a = cams[size_t(i)].estimate_world(), b = ref.camera(i).estimate_world();
+    EXPECT_LT((a.translation() - b.translation()).norm(), 1e-6) << "camera " << i + 1;
+    EXPECT_LT(log_so3(a.linear().transpose() * b.linear()).norm(), 1e-6) << "camera " << i + 1;
+  }
+  // And blind cameras 4 and 5 sit at the average like the others.
+  const SE3 g_star = average_pose(p.g_wo);
+  for (int i : {3, 4})
+    EXPECT_LT((cams[size_t(i)].estimate_world().translation() - g_star.translation()).norm(), 0.01);
+}
+
+TEST(CameraObserver, StepIsTheLieGroupEulerStepOfTheModel) {
+  // One step equals exp(-h V^) g_bar exp(h u^) with u of (eq:input_f-), computed here by hand.
+  ObserverSettings s;
+  s.k_e = 2.0;
+  s.k_s = 3.0;
+  CameraObserver c(0, {1, 2}, s);
+  const SE3 g_wi = make_pose({0.1, 0.2, 0.3}, {0.1, -0.2, 0.3});
+  const SE3 g_bar = make_pose({0.0, 0.1, 1.5}, {2.9, 0.1, 0.2});
+  const Vec6 V = (Vec6() << 0.1, 0.0, -0.2, 0.05, 0.0, 0.1).finished();
+  c.set_camera_pose(g_wi);
+  c.set_camera_velocity(V);
+  c.reset(g_bar);
+  Measurement z;
+  z.delta = true;
+  z.g_io_true = make_pose({0.05, 0.1, 1.6}, {2.95, 0.05, 0.25});
+  c.set_measurement(z);
+  EstimateMessage m1, m2;
+  m1.sender = 1;
+  m1.round = 1;
+  m1.initialized = true;
+  m1.g_w = make_pose({0.2, 0.3, 1.7}, {2.8, 0.2, 0.1});
+  m2 = m1;
+  m2.sender = 2;
+  m2.g_w = make_pose({0.0, 0.4, 1.9}, {3.0, 0.0, 0.3});
+  ASSERT_EQ(c.receive(m1), MessageVerdict::accepted);
+  ASSERT_EQ(c.receive(m2), MessageVerdict::accepted);
+  const double h = 0.01;
+  c.step(h);
+  const Vec6 u = 2.0 * E_R(g_bar.inverse() * *z.g_io_true) +
+                 3.0 * (E_R(g_bar.inverse() * g_wi.inverse() * m1.g_w) +
+                        E_R(g_bar.inverse() * g_wi.inverse() * m2.g_w));
+  const SE3 expected = exp_se3(-h * V) * g_bar * exp_se3(h * u);
+  EXPECT_LT((c.input() - u).norm(), 1e-12);
+  EXPECT_LT((c.estimate().matrix() - expected.matrix()).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+TEST(CameraObserver, UninitialisedNeighboursAndCamerasTakeNoPart) {
+  ObserverSettings s;
+  CameraObserver c(0, {1}, s);
+  const SE3 g0 = make_pose({0, 0, 1}, Vec3::Zero());
+  c.reset(g0);
+  EstimateMessage m;
+  m.sender = 1;
+  m.round = 1;
+  m.initialized = false;  // the neighbour has no estimate yet
+  m.g_w = make_pose({5, 5, 5}, Vec3::Zero());
+  ASSERT_EQ(c.receive(m), MessageVerdict::accepted);
+  c.step(0.01);
+  EXPECT_TRUE(c.estimate().isApprox(g0));  // no measurement, no initialised neighbour
+  m.round = 2;
+  m.initialized = true;
+  c.receive(m);
+  c.set_initialized(false);
+  c.step(0.01);
+  EXPECT_TRUE(c.estimate().isApprox(g0));  // an uninitialised camera is frozen
+  c.set_initialized(true);
+  c.step(0.01);
+  EXPECT_FALSE(c.estimate().isApprox(g0));
+  c.forget(1);  // silent past a staleness bound: it leaves the mutual term
+  const SE3 before = c.estimate();
+  c.step(0.01);
+  EXPECT_TRUE(c.estimate().isApprox(before));
+}
+
+TEST(CameraObserver, RefusesAndCountsBadMessages) {
+  ObserverSettings s;
+  CameraObserver c(0, {1, 2}, s);
+  const SE3 g0 = make_pose({0, 0, 1}, Vec3::Zero());
+  c.reset(g0);
+  EstimateMessage good;
+  good.sender = 1;
+  good.round = 5;
+  good.initialized = true;
+  good.g_w = make_pose({0, 0, 1.1}, Vec3::Zero());
+
+  auto bad = good;
+  bad.sender = 7;
+  EXPECT_EQ(c.receive(bad), MessageVerdict::not_a_neighbour);
+  bad.sender = 0;  // itself
+  EXPECT_EQ(c.receive(bad), MessageVerdict::not_a_neighbour);
+  bad = good;
+  bad.g_w.matrix()(0, 3) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(c.receive(bad), MessageVerdict::not_finite);
+  bad = good;
+  bad.g_w.linear() *= 1.01;  // not orthonormal
+  EXPECT_EQ(c.receive(bad), MessageVerdict::not_a_rotation);
+  bad = good;
+  bad.g_w.linear() = -Mat3::Identity();  // orthonormal, but a reflection
+  EXPECT_EQ(c.receive(bad), MessageVerdict::not_a_rotation);
+  // None of them moved the estimate.
+  c.step(0.01);
+  EXPECT_TRUE(c.estimate().isApprox(g0));
+  EXPECT_EQ(c.receive(good), MessageVerdict::accepted);
+  auto older = good;
+  older.round = 4;
+  EXPECT_EQ(c.receive(older), MessageVerdict::out_of_order);
+  const auto& r = c.refused();
+  EXPECT_EQ(r[size_t(MessageVerdict::not_a_neighbour)], 2u);
+  EXPECT_EQ(r[size_t(MessageVerdict::not_finite)], 1u);
+  EXPECT_EQ(r[size_t(MessageVerdict::not_a_rotation)], 2u);
+  EXPECT_EQ(r[size_t(MessageVerdict::out_of_order)], 1u);
+  EXPECT_EQ(c.latest()[0]->round, 5u);
+}
+
+TEST(CameraObserver, RejectsBadSettingsAndNeighbourLists) {
+  ObserverSettings s;
+  EXPECT_THROW(CameraObserver(0, {0}, s), std::invalid_argument);
+  EXPECT_THROW(CameraObserver(0, {1, 1}, s), std::invalid_argument);
+  s.error_model = "nonsense";
+  EXPECT_THROW(CameraObserver(0, {1}, s), std::invalid_argument);
+  s = ObserverSettings{};
+  s.k_s = -1;
+  EXPECT_THROW(CameraObserver(0, {1}, s), std::invalid_argument);
+}
+
+TEST(ErrorModels, OneRegistryByName) {
+  std::vector<std::string> names;
+  for (const auto* m : error_models()) {
+    names.emplace_back(m->name());
+    EXPECT_EQ(&find_error_model(m->name()), m);
+    EXPECT_FALSE(m->description().empty());
+  }
+  EXPECT_EQ(names, (std::vector<std::string>{"exact", "jacobian", "pnp"}));
+  EXPECT_EQ(error_model_names(), "exact, jacobian, pnp");
+  try {
+    find_error_model("jacobain");
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("exact, jacobian, pnp"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ErrorModels, EachReadsItsOwnMeasurementField) {
+  const SE3 g_bar = make_pose({0, 0, 2}, {3.0, 0.1, 0.0});
+  const SE3 g_true = make_pose({0.1, 0, 2.1}, {3.0, 0.15, 0.05});
+  const SE3 g_pnp = make_pose({0.12, 0.01, 2.05}, {2.95, 0.1, 0.05});
+  const FeatureModel fm = FeatureModel::square(0.2);
+  Measurement z;
+  z.delta = true;
+  z.g_io_true = g_true;
+  z.g_io_pnp = g_pnp;
+  z.f = project(g_true, fm);
+  EXPECT_LT((find_error_model("exact").error(g_bar, z, fm) - E_R(g_bar.inverse() * g_true)).norm(),
+            1e-15);
+  EXPECT_LT((find_error_model("pnp").error(g_bar, z, fm) - E_R(g_bar.inverse() * g_pnp)).norm(),
+            1e-15);
+  EXPECT_LT(
+      (find_error_model("jacobian").error(g_bar, z, fm) - reconstruct_error(g_bar, z.f, fm)).norm(),
+      1e-15);
+  // usable() needs delta and the model's own field.
+  Measurement only_f;
+  only_f.delta = true;
+  only_f.f = z.f;
+  EXPECT_TRUE(find_error_model("jacobian").usable(only_f));
+  EXPECT_FALSE(find_error_model("pnp").usable(only_f));
+  EXPECT_FALSE(find_error_model("exact").usable(only_f));
+  z.delta = false;
+  for (const auto* m : error_models()) EXPECT_FALSE(m->usable(z)) << m->name();
+}

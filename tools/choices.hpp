@@ -1,0 +1,16 @@
+// Command-line choices read from the libraries' registries, so that a new error model or
+// transport appears in every command's checks and --help without an edit here.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <string>
+
+namespace netvmo::tools {
+
+enum class ErrorModelUse { images, simulation };
+
+/// Adds --error, restricted to the registered error models usable for `use`, with one help line
+/// per model.
+CLI::Option* add_error_model_option(CLI::App& cmd, std::string& value, ErrorModelUse use);
+
+}  // namespace netvmo::tools
