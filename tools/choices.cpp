@@ -3,7 +3,7 @@
 #include <vector>
 
 #include "netvmo/observer/error_model.hpp"
-#include "netvmo/pipeline/simulation.hpp"
+#include "netvmo/pipeline/sim/simulation.hpp"
 
 namespace netvmo::tools {
 

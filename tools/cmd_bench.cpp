@@ -7,10 +7,10 @@
 #include <unistd.h>
 
 #include "commands.hpp"
-#include "netvmo/pipeline/dataset_writer.hpp"
-#include "netvmo/pipeline/image_run.hpp"
-#include "netvmo/pipeline/render_provider.hpp"
-#include "netvmo/pipeline/render_scenario.hpp"
+#include "netvmo/pipeline/io/dataset_writer.hpp"
+#include "netvmo/pipeline/run/image_run.hpp"
+#include "netvmo/pipeline/sources/render_source.hpp"
+#include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/render/renderer.hpp"
 #include "scenario_path.hpp"
 
@@ -18,7 +18,7 @@ namespace netvmo::tools {
 namespace fs = std::filesystem;
 
 namespace {
-void report(const char* what, const pipeline::ImageRunResult& r, size_t cameras) {
+void report(const char* what, const run::ImageRunResult& r, size_t cameras) {
   const double frames = static_cast<double>(r.history.size());
   std::printf("%-36s %6.1f network frames/s  (%zu cameras; per network frame: %.1f ms front end%s, %.2f ms observer)\n",
               what, frames / r.seconds, cameras, 1000.0 * r.seconds_front_end / frames,
@@ -49,36 +49,36 @@ void add_bench(CLI::App& app, int& exit_code) {
   cmd->callback([o, &exit_code] {
     exit_code = guarded("bench", [&] {
       const fs::path scenario = find_scenario(o->scenario);
-      const auto scene = pipeline::load_render_scenario(scenario);
-      pipeline::ImageRunOptions run;
+      const auto scene = io::load_render_scenario(scenario);
+      run::ImageRunOptions run;
       run.progress = false;
       run.max_frames = o->frames;
       // Recorded: render a dataset first (not timed), then decode + detect + observe.
       const fs::path tmp = fs::temp_directory_path() / ("netvmo_bench_" + std::to_string(::getpid()));
       {
         render::Renderer renderer(scene);
-        pipeline::DatasetOptions d;
+        io::DatasetOptions d;
         d.frames = o->frames;
         d.progress = false;
         std::printf("rendering %d frames of %s for the recorded measurement...\n", o->frames,
                     scenario.string().c_str());
-        pipeline::write_dataset(renderer, tmp, d);
+        io::write_dataset(renderer, tmp, d);
       }
-      auto recorded = pipeline::open_dataset_provider(tmp);
-      const auto r1 = pipeline::run_images(*recorded, run);
+      auto recorded = sources::open_dataset_source(tmp);
+      const auto r1 = run::run_images(*recorded, run);
       report("recorded (PNG decode+detect+observe)", r1, scene.cameras.size());
       fs::remove_all(tmp);
       auto live_scene = scene;
       live_scene.imaging.spp = o->live_spp;
-      auto live = pipeline::make_render_provider(live_scene, o->frames);
-      const auto r2 = pipeline::run_images(*live, run);
+      auto live = sources::make_render_source(live_scene, o->frames);
+      const auto r2 = run::run_images(*live, run);
       char label[96];
       std::snprintf(label, sizeof label, "live, static scene (%d spp)", o->live_spp);
       report(label, r2, scene.cameras.size());
-      auto moving_scene = pipeline::load_render_scenario(find_scenario(o->moving));
+      auto moving_scene = io::load_render_scenario(find_scenario(o->moving));
       moving_scene.imaging.spp = o->live_spp;
-      auto live_moving = pipeline::make_render_provider(moving_scene, std::min(o->frames, moving_scene.frames));
-      const auto r3 = pipeline::run_images(*live_moving, run);
+      auto live_moving = sources::make_render_source(moving_scene, std::min(o->frames, moving_scene.frames));
+      const auto r3 = run::run_images(*live_moving, run);
       std::snprintf(label, sizeof label, "live, moving scene (%d spp)", o->live_spp);
       report(label, r3, moving_scene.cameras.size());
       return 0;

@@ -5,8 +5,8 @@
 #include <memory>
 
 #include "commands.hpp"
-#include "netvmo/pipeline/dataset_writer.hpp"
-#include "netvmo/pipeline/render_scenario.hpp"
+#include "netvmo/pipeline/io/dataset_writer.hpp"
+#include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/render/renderer.hpp"
 #include "run_options.hpp"
 #include "scenario_path.hpp"
@@ -39,12 +39,12 @@ void add_demo(CLI::App& app, int& exit_code) {
       const fs::path out = o->out, dataset = out / "dataset";
       const fs::path scenario = find_scenario(o->scenario);
       std::printf("rendering %s into %s\n", scenario.string().c_str(), dataset.string().c_str());
-      render::Renderer renderer(pipeline::load_render_scenario(scenario));
-      pipeline::DatasetOptions dopt;
+      render::Renderer renderer(io::load_render_scenario(scenario));
+      io::DatasetOptions dopt;
       dopt.frames = o->frames;
-      pipeline::write_dataset(renderer, dataset, dopt);
+      io::write_dataset(renderer, dataset, dopt);
       std::printf("running the networked observer on %s\n", dataset.string().c_str());
-      auto provider = pipeline::open_dataset_provider(dataset);
+      auto provider = sources::open_dataset_source(dataset);
       const auto summary = run_and_report(*provider, o->run, out);
       print_run_summary(summary, out);
       std::printf("open %s/overlays/mosaic.png, %s/energies.png and %s/errors.png\n",

@@ -13,15 +13,17 @@
 
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/frame_source.hpp"
-#include "netvmo/pipeline/front_end.hpp"
-#include "netvmo/pipeline/io.hpp"
+#include "netvmo/pipeline/sources/camera_stream.hpp"
+#include "netvmo/pipeline/frontend/front_end.hpp"
+#include "netvmo/pipeline/io/atomic_file.hpp"
 #include "netvmo/pipeline/progress.hpp"
-#include "netvmo/pipeline/truth_io.hpp"
+#include "netvmo/pipeline/io/truth_io.hpp"
 
 namespace netvmo::tools {
 namespace fs = std::filesystem;
-using namespace netvmo::pipeline;
+using namespace netvmo::io;
+using namespace netvmo::sources;
+using namespace netvmo::frontend;
 
 namespace {
 

@@ -4,9 +4,9 @@
 #include <memory>
 
 #include "commands.hpp"
-#include "netvmo/pipeline/dataset_writer.hpp"
+#include "netvmo/pipeline/io/dataset_writer.hpp"
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/render_scenario.hpp"
+#include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/render/renderer.hpp"
 
 namespace netvmo::tools {
@@ -35,7 +35,7 @@ void add_render(CLI::App& app, int& exit_code) {
   cmd->add_flag("--quiet", o->quiet, "no progress bar");
   cmd->callback([o, &exit_code]() {
     exit_code = guarded("render", [&]() {
-      render::SceneDescription scene = pipeline::load_render_scenario(o->scenario);
+      render::SceneDescription scene = io::load_render_scenario(o->scenario);
       if (o->spp > 0) scene.imaging.spp = o->spp;
       if (o->seed >= 0) scene.imaging.seed = static_cast<std::uint64_t>(o->seed);
       if (o->frames > 0) scene.frames = o->frames;
@@ -45,9 +45,9 @@ void add_render(CLI::App& app, int& exit_code) {
       } catch (const std::invalid_argument& e) {
         throw InputError(o->scenario + ": " + e.what());
       }
-      pipeline::DatasetOptions opt;
+      io::DatasetOptions opt;
       opt.progress = !o->quiet;
-      const auto summary = pipeline::write_dataset(*renderer, o->out, opt);
+      const auto summary = io::write_dataset(*renderer, o->out, opt);
 
       std::printf("wrote %s: %d frames x %zu cameras at %.6g fps, %d spp, seed %llu\n", o->out.c_str(),
                   summary.frames, summary.cameras.size(), scene.fps, scene.imaging.spp,

@@ -5,8 +5,8 @@
 
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/overlay.hpp"
-#include "netvmo/pipeline/run_report.hpp"
+#include "netvmo/pipeline/run/overlay.hpp"
+#include "netvmo/pipeline/run/run_report.hpp"
 #include "run_options.hpp"
 #include "run_plots.hpp"
 
@@ -30,7 +30,7 @@ void add_run(CLI::App& app, int& exit_code) {
   add_run_options(*cmd, o->run);
   cmd->callback([o, &exit_code] {
     exit_code = guarded("run", [&] {
-      auto provider = pipeline::open_dataset_provider(o->dataset);
+      auto provider = sources::open_dataset_source(o->dataset);
       const auto summary = run_and_report(*provider, o->run, o->out);
       print_run_summary(summary, o->out);
       return 0;

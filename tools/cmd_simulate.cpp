@@ -7,7 +7,7 @@
 #include "choices.hpp"
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/simulation.hpp"
+#include "netvmo/pipeline/sim/simulation.hpp"
 #include "plot.hpp"
 
 namespace netvmo::tools {

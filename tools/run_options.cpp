@@ -4,8 +4,8 @@
 
 #include "choices.hpp"
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/overlay.hpp"
-#include "netvmo/pipeline/run_report.hpp"
+#include "netvmo/pipeline/run/overlay.hpp"
+#include "netvmo/pipeline/run/run_report.hpp"
 #include "run_plots.hpp"
 
 namespace netvmo::tools {
@@ -45,9 +45,9 @@ void add_run_options(CLI::App& cmd, RunCliOptions& o) {
       ->capture_default_str();
 }
 
-pipeline::ImageRunOptions to_image_run_options(const RunCliOptions& o) {
+run::ImageRunOptions to_image_run_options(const RunCliOptions& o) {
   if (!(o.k_e > 0) || !(o.k_s >= 0)) throw InputError("--ke must be > 0 and --ks >= 0");
-  pipeline::ImageRunOptions r;
+  run::ImageRunOptions r;
   r.runner.k_e = o.k_e;
   r.runner.k_s = o.k_s;
   r.runner.error_model = o.error;
@@ -56,28 +56,28 @@ pipeline::ImageRunOptions to_image_run_options(const RunCliOptions& o) {
   r.keep_going = o.keep_going;
   if (o.max_frames > 0) r.max_frames = o.max_frames;
   r.detector.quad_decimate = o.decimate;
-  r.detector.refinement = pipeline::parse_refinement(o.refine);
+  r.detector.refinement = frontend::parse_refinement(o.refine);
   r.tracking.enabled = !o.no_track;
   return r;
 }
 
-json run_and_report(pipeline::FrameProvider& provider, const RunCliOptions& o, const fs::path& dir) {
+json run_and_report(sources::NetworkSource& provider, const RunCliOptions& o, const fs::path& dir) {
   const auto options = to_image_run_options(o);
   for (const auto& w : provider.warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
-  std::unique_ptr<pipeline::OverlayWriter> overlays;
-  pipeline::FrameHook hook;
+  std::unique_ptr<run::OverlayWriter> overlays;
+  run::FrameHook hook;
   if (!o.no_overlays) {
-    overlays = std::make_unique<pipeline::OverlayWriter>(dir, provider);
+    overlays = std::make_unique<run::OverlayWriter>(dir, provider);
     hook = [&](int k, const std::vector<cv::Mat>& images,
-               const std::vector<pipeline::CameraFrame>& cams, const run::FrameRecord& r) {
+               const std::vector<run::CameraFrame>& cams, const run::FrameRecord& r) {
       (*overlays)(k, images, cams, r);
     };
   }
-  const auto result = pipeline::run_images(provider, options, hook);
+  const auto result = run::run_images(provider, options, hook);
   if (overlays) overlays->finish();
   for (size_t k = provider.warnings().size(); k < result.warnings.size(); ++k)
     std::fprintf(stderr, "warning: %s\n", result.warnings[k].c_str());
-  const json s = pipeline::write_run_outputs(dir, provider, options, result);
+  const json s = run::write_run_outputs(dir, provider, options, result);
   if (!o.no_plots) {
     std::vector<int> ids;
     for (const auto& c : provider.network().cameras) ids.push_back(c.id);

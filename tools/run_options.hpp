@@ -6,8 +6,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "netvmo/pipeline/frame_provider.hpp"
-#include "netvmo/pipeline/image_run.hpp"
+#include "netvmo/pipeline/sources/network_source.hpp"
+#include "netvmo/pipeline/run/image_run.hpp"
 
 namespace netvmo::tools {
 
@@ -27,10 +27,10 @@ struct RunCliOptions {
 };
 
 void add_run_options(CLI::App& cmd, RunCliOptions& o);
-pipeline::ImageRunOptions to_image_run_options(const RunCliOptions& o);
+run::ImageRunOptions to_image_run_options(const RunCliOptions& o);
 
 /// Runs the provider, writes the outputs, overlays and plots into dir; returns the summary.
-nlohmann::json run_and_report(pipeline::FrameProvider& provider, const RunCliOptions& o,
+nlohmann::json run_and_report(sources::NetworkSource& provider, const RunCliOptions& o,
                               const std::filesystem::path& dir);
 
 /// Prints the per-camera table of the summary.

@@ -5,9 +5,9 @@
 #include <cmath>
 #include <filesystem>
 
-#include "netvmo/pipeline/front_end.hpp"
-#include "netvmo/pipeline/pnp.hpp"
-#include "netvmo/pipeline/render_scenario.hpp"
+#include "netvmo/pipeline/frontend/front_end.hpp"
+#include "netvmo/pipeline/frontend/pnp.hpp"
+#include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/render/renderer.hpp"
 
 namespace fs = std::filesystem;
@@ -16,8 +16,8 @@ using namespace netvmo;
 namespace {
 const fs::path kSource = NETVMO_SOURCE_DIR;
 
-pipeline::Calibration calibration(const render::Intrinsics& k) {
-  pipeline::Calibration c;
+io::Calibration calibration(const render::Intrinsics& k) {
+  io::Calibration c;
   c.width = k.width;
   c.height = k.height;
   c.K = cv::Matx33d(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1);
@@ -33,9 +33,9 @@ struct CornerStats {
 };
 CornerStats corner_rms(render::SceneDescription scene, int frames) {
   render::Renderer r(std::move(scene));
-  pipeline::DetectorSettings ds;
+  frontend::DetectorSettings ds;
   ds.target_id = r.scene().target.tag.id;
-  pipeline::FrontEnd fe(ds);
+  frontend::FrontEnd fe(ds);
   double sum = 0.0;
   CornerStats s;
   for (int k = 0; k < frames; ++k) {
@@ -59,7 +59,7 @@ CornerStats corner_rms(render::SceneDescription scene, int frames) {
 }  // namespace
 
 TEST(FrontEndOnRenderedImages, CornerRmsCleanAt4x4Supersampling) {
-  auto scene = pipeline::load_render_scenario(kSource / "datasets/paper5_render.yaml");
+  auto scene = io::load_render_scenario(kSource / "datasets/paper5_render.yaml");
   scene.imaging.spp = 16;
   scene.imaging.noise = false;
   const auto s = corner_rms(scene, 1);
@@ -69,7 +69,7 @@ TEST(FrontEndOnRenderedImages, CornerRmsCleanAt4x4Supersampling) {
 }
 
 TEST(FrontEndOnRenderedImages, CornerRmsWithDefaultNoise) {
-  auto scene = pipeline::load_render_scenario(kSource / "datasets/paper5_render.yaml");
+  auto scene = io::load_render_scenario(kSource / "datasets/paper5_render.yaml");
   const auto s = corner_rms(scene, 4);  // the scenario's own spp and sensor noise
   EXPECT_EQ(s.detections, 12);
   EXPECT_LE(s.rms, 0.3);
@@ -81,7 +81,7 @@ TEST(FrontEndOnRenderedImages, PnpOfATwentyCentimetreTagAtTwoMetres) {
   // normal, 4x4 supersampling with the default sensor noise. (Head-on, a 0.5 degree tilt moves
   // the 60 px tag's corners by only ~0.05 px, so the tilt is not resolved to 0.5 degrees from
   // four corners; README, "Front end".)
-  auto scene = pipeline::load_render_scenario(kSource / "datasets/paper5_render.yaml");
+  auto scene = io::load_render_scenario(kSource / "datasets/paper5_render.yaml");
   const render::Pose g_wo = scene.target.motion.at(0.0);
   const render::Vec3 centre = g_wo.translation();
   const auto intrinsics = scene.cameras[0].intrinsics;
@@ -101,14 +101,14 @@ TEST(FrontEndOnRenderedImages, PnpOfATwentyCentimetreTagAtTwoMetres) {
   scene.edges = {{1, 2}, {2, 3}};
   scene.imaging.spp = 16;
   render::Renderer r(scene);
-  pipeline::DetectorSettings ds;
+  frontend::DetectorSettings ds;
   ds.target_id = scene.target.tag.id;
-  pipeline::FrontEnd fe(ds);
+  frontend::FrontEnd fe(ds);
   const auto model = obs::FeatureModel::square(scene.target.tag.size);
   for (int i = 0; i < 3; ++i) {
     const auto obs = fe.observe(r.render(i, 0), calibration(intrinsics));
     ASSERT_TRUE(obs.delta) << "camera " << i + 1;
-    const auto pose = pipeline::pnp_pose(obs.f_normalized, model);
+    const auto pose = frontend::pnp_pose(obs.f_normalized, model);
     ASSERT_TRUE(pose.has_value());
     const obs::SE3 g_io = r.truth(i, 0).g_io;
     EXPECT_NEAR((g_io.translation()).norm(), 2.0, 0.25);
@@ -124,12 +124,12 @@ TEST(FrontEndOnRenderedImages, DetectionAgreesWithGeometricVisibility) {
   // part (out of view or fully occluded) is not.
   // Geometry is the only variable here: cast shadows are switched off, since a hard shadow
   // edge across a fully visible tag can also defeat the detector (README, confusion table).
-  auto scene = pipeline::load_render_scenario(kSource / "datasets/moving_target.yaml");
+  auto scene = io::load_render_scenario(kSource / "datasets/moving_target.yaml");
   for (auto& light : scene.lights) light.shadows = false;
   render::Renderer r(scene);  // the scenario's own 4 samples per pixel and sensor noise
-  pipeline::DetectorSettings ds;
+  frontend::DetectorSettings ds;
   ds.target_id = scene.target.tag.id;
-  pipeline::FrontEnd fe(ds);
+  frontend::FrontEnd fe(ds);
   int must = 0, must_not = 0;
   for (int k = 0; k < r.frame_count(); k += 2) {
     for (int i = 0; i < r.camera_count(); ++i) {
@@ -164,13 +164,13 @@ TEST(FrontEndOnRenderedImages, TrackingWindowFindsTheTagWithFullFrameCorners) {
   // While a camera keeps the tag, the window around the last corners finds it (no full-frame
   // fallback), with the corners a full-frame search gives (to 1e-4 px: libapriltag fits in
   // shifted coordinates); losing the tag resets the state.
-  auto scene = pipeline::load_render_scenario(kSource / "datasets/paper5_render.yaml");
+  auto scene = io::load_render_scenario(kSource / "datasets/paper5_render.yaml");
   render::Renderer r(scene);
-  pipeline::DetectorSettings ds;
+  frontend::DetectorSettings ds;
   ds.target_id = scene.target.tag.id;
-  pipeline::FrontEnd tracked(ds), full(ds, pipeline::TrackingSettings{false});
+  frontend::FrontEnd tracked(ds), full(ds, frontend::TrackingSettings{false});
   const auto calib = calibration(scene.cameras[0].intrinsics);
-  pipeline::TrackState track;
+  frontend::TrackState track;
   for (int k = 0; k < 4; ++k) {
     const cv::Mat img = r.render(0, k);
     const auto a = tracked.observe(img, calib, nullptr, &track);

@@ -9,11 +9,11 @@
 #include <opencv2/videoio.hpp>
 #include <sstream>
 
-#include "netvmo/pipeline/dataset_writer.hpp"
-#include "netvmo/pipeline/image_run.hpp"
-#include "netvmo/pipeline/render_provider.hpp"
-#include "netvmo/pipeline/render_scenario.hpp"
-#include "netvmo/pipeline/run_report.hpp"
+#include "netvmo/pipeline/io/dataset_writer.hpp"
+#include "netvmo/pipeline/run/image_run.hpp"
+#include "netvmo/pipeline/sources/render_source.hpp"
+#include "netvmo/pipeline/io/render_scenario.hpp"
+#include "netvmo/pipeline/run/run_report.hpp"
 #include "netvmo/render/renderer.hpp"
 #include "test_util.hpp"
 
@@ -26,11 +26,11 @@ namespace {
 const fs::path kSource = NETVMO_SOURCE_DIR;
 
 render::SceneDescription scenario(const char* name) {
-  return pipeline::load_render_scenario(kSource / "datasets" / name);
+  return io::load_render_scenario(kSource / "datasets" / name);
 }
 
-pipeline::ImageRunOptions quiet_options() {
-  pipeline::ImageRunOptions o;
+run::ImageRunOptions quiet_options() {
+  run::ImageRunOptions o;
   o.progress = false;
   return o;
 }
@@ -44,10 +44,10 @@ class SmallDataset : public ::testing::Test {
     auto scene = scenario("paper5_render.yaml");
     scene.imaging.spp = 1;
     render::Renderer r(scene);
-    pipeline::DatasetOptions o;
+    io::DatasetOptions o;
     o.frames = 12;
     o.progress = false;
-    pipeline::write_dataset(r, *dir_ / "rendered", o);
+    io::write_dataset(r, *dir_ / "rendered", o);
   }
   static void TearDownTestSuite() {
     fs::remove_all(*dir_);
@@ -65,8 +65,8 @@ double angle_deg(const obs::SE3& a, const obs::SE3& b) {
 // The paper's setting made visible: cameras 1-3 see the tag, camera 4 looks away and camera 5
 // is blocked by a pillar. Static target, k_e = 1, k_s = 50, five seconds.
 TEST(EndToEnd, StaticTargetEveryCameraConvergesToGStar) {
-  auto provider = pipeline::make_render_provider(scenario("paper5_render.yaml"), 150);
-  const auto r = pipeline::run_images(*provider, quiet_options());
+  auto provider = sources::make_render_source(scenario("paper5_render.yaml"), 150);
+  const auto r = run::run_images(*provider, quiet_options());
   const auto& last = r.history.back();
   ASSERT_TRUE(last.g_star.has_value());
   for (size_t i = 0; i < 5; ++i) {
@@ -77,7 +77,7 @@ TEST(EndToEnd, StaticTargetEveryCameraConvergesToGStar) {
     } else {
       EXPECT_EQ(seen, 0) << "camera " << i + 1 << " should never see the tag";
     }
-    const auto e = pipeline::pose_error(last.cameras[i].est_w, *last.g_star);
+    const auto e = run::pose_error(last.cameras[i].est_w, *last.g_star);
     EXPECT_LT(e.position, 0.01) << "camera " << i + 1;
     EXPECT_LT(e.orientation_deg, 0.5) << "camera " << i + 1;
   }
@@ -96,18 +96,18 @@ TEST(EndToEnd, MovingTargetDeltaIsDetectionAndEstimatesStayBounded) {
   auto scene = scenario("moving_target.yaml");
   scene.imaging.spp = 1;
   const int frames = scene.frames;
-  auto provider = pipeline::make_render_provider(scene, frames);
+  auto provider = sources::make_render_source(scene, frames);
   auto options = quiet_options();
   options.runner.k_e = 10.0;  // faster tracking of a moving target (README: tracking lag)
   options.runner.k_s = 100.0;
-  const auto r = pipeline::run_images(*provider, options);
+  const auto r = run::run_images(*provider, options);
   ASSERT_EQ(static_cast<int>(r.history.size()), frames);
 
   // delta_i(t) equals an independent full-frame detection of the same images, frame by frame.
-  pipeline::DetectorSettings ds;
+  frontend::DetectorSettings ds;
   ds.target_id = scene.target.tag.id;
-  pipeline::FrontEnd fe(ds);
-  auto again = pipeline::make_render_provider(scene, frames);
+  frontend::FrontEnd fe(ds);
+  auto again = sources::make_render_source(scene, frames);
   int changes = 0, detected = 0;
   for (int k = 0; k < frames; ++k) {
     for (size_t i = 0; i < scene.cameras.size(); ++i) {
@@ -176,10 +176,10 @@ TEST_F(SmallDataset, RecordedFoldersAndVideoGiveTheSameEstimates) {
       }
     }
   }
-  auto a = pipeline::open_dataset_provider(rendered);
-  auto b = pipeline::open_dataset_provider(recorded);
-  const auto ra = pipeline::run_images(*a, quiet_options());
-  const auto rb = pipeline::run_images(*b, quiet_options());
+  auto a = sources::open_dataset_source(rendered);
+  auto b = sources::open_dataset_source(recorded);
+  const auto ra = run::run_images(*a, quiet_options());
+  const auto rb = run::run_images(*b, quiet_options());
   ASSERT_EQ(ra.history.size(), 12u);
   ASSERT_EQ(rb.history.size(), 12u);
   int detections = 0;

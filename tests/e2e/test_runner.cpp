@@ -5,7 +5,7 @@
 #include <random>
 
 #include "netvmo/observer/jacobian.hpp"
-#include "netvmo/pipeline/runner.hpp"
+#include "netvmo/pipeline/run/runner.hpp"
 
 using namespace netvmo;
 using obs::make_pose;

@@ -20,7 +20,7 @@
 
 namespace netvmo::testing {
 namespace fs = std::filesystem;
-using pipeline::Calibration;
+using io::Calibration;
 
 namespace {
 
@@ -81,7 +81,7 @@ const std::vector<cv::Point2d>& subsample_rays(const Calibration& c, int ss) {
           px.emplace_back(col - 0.5 + (sc + 0.5) / ss, r - 0.5 + (sr + 0.5) / ss);
   auto& rays = entry->rays;
   if (c.has_distortion()) {
-    rays = pipeline::normalize_points(px, c);
+    rays = io::normalize_points(px, c);
   } else {
     rays.resize(px.size());
     const cv::Matx33d Ki = c.K.inv();
@@ -279,7 +279,7 @@ std::vector<std::vector<std::array<cv::Point2d, 4>>> write_synth_dataset(
   for (size_t ci = 0; ci < spec.cameras.size(); ++ci) {
     const auto& cam = spec.cameras[ci];
     const std::string name = "cam_" + std::to_string(cam.id);
-    pipeline::save_calibration_opencv(dir / "calib" / (name + ".yaml"), cam.calib);
+    io::save_calibration_opencv(dir / "calib" / (name + ".yaml"), cam.calib);
     cv::VideoWriter vw;
     if (spec.video) {
       const std::string& cc = spec.video_fourcc;

@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "netvmo/observer/lie.hpp"
-#include "netvmo/pipeline/calibration.hpp"
+#include "netvmo/pipeline/io/calibration.hpp"
 
 namespace netvmo::testing {
 
@@ -42,17 +42,17 @@ struct SynthOptions {
 };
 
 /// 8-bit gray image of the tags seen by a camera.
-cv::Mat render_tags(const pipeline::Calibration& calib, const std::vector<SynthTag>& tags,
+cv::Mat render_tags(const io::Calibration& calib, const std::vector<SynthTag>& tags,
                     const SynthOptions& opt = {});
 
 /// The true corners of a tag (obs::FeatureModel::square order) in OpenCV pixels, with
 /// distortion (cv::projectPoints).
-std::array<cv::Point2d, 4> project_corners(const pipeline::Calibration& calib,
+std::array<cv::Point2d, 4> project_corners(const io::Calibration& calib,
                                            const obs::SE3& g_io, double size);
 
 /// A 640x480 calibration (fx 610, fy 605, cx 321.7, cy 238.4), optionally with moderate
 /// distortion (k1 -0.12, k2 0.05, p1 4e-4, p2 -3e-4, k3 0).
-pipeline::Calibration test_calibration(bool distortion = false);
+io::Calibration test_calibration(bool distortion = false);
 
 /// g_io for a tag at `distance` along the optical axis offset by (dx, dy) metres, facing the
 /// camera (tag z toward -z_camera) and then tilted by the rotation vector `tilt` (tag frame).
@@ -65,7 +65,7 @@ double corner_rms(const std::array<cv::Point2d, 4>& a, const std::array<cv::Poin
 /// One camera of a synthetic dataset: its id, calibration and per-frame tag pose g_io.
 struct SynthCamera {
   int id = 1;
-  pipeline::Calibration calib;
+  io::Calibration calib;
   obs::SE3 g_wi = obs::SE3::Identity();
 };
 

@@ -6,13 +6,13 @@
 #include <fstream>
 #include <sstream>
 
-#include "netvmo/pipeline/truth_io.hpp"
+#include "netvmo/pipeline/io/truth_io.hpp"
 #include "synth.hpp"
 #include "test_util.hpp"
 
 namespace netvmo {
 namespace {
-using namespace pipeline;
+using namespace io;
 namespace fs = std::filesystem;
 
 

@@ -8,13 +8,14 @@
 
 #include "netvmo/observer/jacobian.hpp"
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/front_end.hpp"
-#include "netvmo/pipeline/tag_detector.hpp"
+#include "netvmo/pipeline/frontend/front_end.hpp"
+#include "netvmo/pipeline/frontend/tag_detector.hpp"
 #include "synth.hpp"
 
 namespace netvmo {
 namespace {
-using namespace pipeline;
+using namespace io;
+using namespace frontend;
 using testing::facing_pose;
 using testing::project_corners;
 using testing::render_tags;

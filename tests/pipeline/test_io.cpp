@@ -6,16 +6,16 @@
 #include <visp3/core/vpCameraParameters.h>
 #include <visp3/core/vpXmlParserCamera.h>
 
-#include "netvmo/pipeline/calibration.hpp"
+#include "netvmo/pipeline/io/calibration.hpp"
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/network_config.hpp"
-#include "netvmo/pipeline/truth_io.hpp"
+#include "netvmo/pipeline/io/network_config.hpp"
+#include "netvmo/pipeline/io/truth_io.hpp"
 #include "synth.hpp"
 #include "test_util.hpp"
 
 namespace netvmo {
 namespace {
-using namespace pipeline;
+using namespace io;
 namespace fs = std::filesystem;
 
 using test::expect_input_error;

@@ -5,13 +5,14 @@
 #include <cstdio>
 
 #include "netvmo/observer/jacobian.hpp"
-#include "netvmo/pipeline/front_end.hpp"
-#include "netvmo/pipeline/pnp.hpp"
+#include "netvmo/pipeline/frontend/front_end.hpp"
+#include "netvmo/pipeline/frontend/pnp.hpp"
 #include "synth.hpp"
 
 namespace netvmo {
 namespace {
-using namespace pipeline;
+using namespace io;
+using namespace frontend;
 using testing::facing_pose;
 
 double angle_deg(const obs::SE3& a, const obs::SE3& b) {

@@ -9,14 +9,16 @@
 #include <visp3/core/vpXmlParserCamera.h>
 
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/frame_source.hpp"
-#include "netvmo/pipeline/front_end.hpp"
+#include "netvmo/pipeline/sources/camera_stream.hpp"
+#include "netvmo/pipeline/frontend/front_end.hpp"
 #include "synth.hpp"
 #include "test_util.hpp"
 
 namespace netvmo {
 namespace {
-using namespace pipeline;
+using namespace io;
+using namespace sources;
+using namespace frontend;
 namespace fs = std::filesystem;
 
 using test::expect_input_error;

@@ -7,12 +7,13 @@
 #include <cstdlib>
 #include <opencv2/imgcodecs.hpp>
 
-#include "netvmo/pipeline/tag_detector.hpp"
+#include "netvmo/pipeline/frontend/tag_detector.hpp"
 #include "synth.hpp"
 
 namespace netvmo {
 namespace {
-using namespace pipeline;
+using namespace io;
+using namespace frontend;
 using testing::facing_pose;
 
 enum class Geo { visible, small, partial, out_of_view, occluded };

@@ -9,8 +9,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
-#include "netvmo/pipeline/dataset_writer.hpp"
-#include "netvmo/pipeline/render_scenario.hpp"
+#include "netvmo/pipeline/io/dataset_writer.hpp"
+#include "netvmo/pipeline/io/render_scenario.hpp"
 
 namespace fs = std::filesystem;
 
@@ -49,12 +49,12 @@ TEST(DatasetWriter, WritesDocumentedLayout) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   std::ofstream(dir / "scenario.yaml") << kScenario;
-  const auto scene = netvmo::pipeline::load_render_scenario(dir / "scenario.yaml");
+  const auto scene = netvmo::io::load_render_scenario(dir / "scenario.yaml");
   netvmo::render::Renderer r(scene);
   const fs::path out = dir / "dataset";
-  netvmo::pipeline::DatasetOptions opt;
+  netvmo::io::DatasetOptions opt;
   opt.progress = false;
-  const auto summary = netvmo::pipeline::write_dataset(r, out, opt);
+  const auto summary = netvmo::io::write_dataset(r, out, opt);
   EXPECT_EQ(summary.frames, 3);
   ASSERT_EQ(summary.cameras.size(), 2u);
   EXPECT_EQ(summary.cameras[0].frames_in_fov, 3);  // camera 3 faces the tag
@@ -137,7 +137,7 @@ TEST(DatasetWriter, WritesDocumentedLayout) {
   }
   // Rewriting with fewer frames removes the old run's extra images.
   opt.frames = 2;
-  netvmo::pipeline::write_dataset(r, out, opt);
+  netvmo::io::write_dataset(r, out, opt);
   EXPECT_TRUE(fs::exists(out / "cam_7" / "000001.png"));
   EXPECT_FALSE(fs::exists(out / "cam_7" / "000002.png"));
   EXPECT_EQ(lines(out / "truth.csv").size(), 1u + 2 * 2);

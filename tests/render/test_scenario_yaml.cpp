@@ -6,7 +6,7 @@
 #include <fstream>
 
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/render_scenario.hpp"
+#include "netvmo/pipeline/io/render_scenario.hpp"
 
 namespace fs = std::filesystem;
 
@@ -56,7 +56,7 @@ std::string replaced(std::string s, const std::string& from, const std::string& 
 // Loads and returns the InputError message ("" if it loaded).
 std::string load_error(const fs::path& f) {
   try {
-    netvmo::pipeline::load_render_scenario(f);
+    netvmo::io::load_render_scenario(f);
   } catch (const netvmo::InputError& e) {
     return e.what();
   }
@@ -64,7 +64,7 @@ std::string load_error(const fs::path& f) {
 }
 
 TEST(RenderScenario, MinimalLoads) {
-  const auto s = netvmo::pipeline::load_render_scenario(write_scenario("ok.yaml", kMinimal));
+  const auto s = netvmo::io::load_render_scenario(write_scenario("ok.yaml", kMinimal));
   ASSERT_EQ(s.cameras.size(), 2u);
   EXPECT_EQ(s.cameras[0].id, 4);
   EXPECT_EQ(s.cameras[1].id, 9);
@@ -81,7 +81,7 @@ TEST(RenderScenario, MinimalLoads) {
 
 TEST(RenderScenario, ShippedScenariosLoad) {
   for (const char* name : {"paper5_render.yaml", "moving_target.yaml"}) {
-    const auto s = netvmo::pipeline::load_render_scenario(fs::path(NETVMO_SOURCE_DIR) / "datasets" / name);
+    const auto s = netvmo::io::load_render_scenario(fs::path(NETVMO_SOURCE_DIR) / "datasets" / name);
     EXPECT_EQ(s.cameras.size(), 5u) << name;
     EXPECT_EQ(s.edges.size(), 6u) << name;
   }
@@ -118,7 +118,7 @@ TEST(RenderScenario, MissingValueNamesPath) {
 TEST(RenderScenario, ObjShapeIsReadRelativeToTheScenario) {
   const auto dir = write_scenario("mesh.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n").parent_path();
   const std::string with_obj = replaced(kMinimal, "{type: plane, size: [6, 6],", "{type: obj, file: mesh.obj, scale: 2.0,");
-  const auto s = netvmo::pipeline::load_render_scenario(write_scenario("obj.yaml", with_obj));
+  const auto s = netvmo::io::load_render_scenario(write_scenario("obj.yaml", with_obj));
   ASSERT_EQ(s.occluders.size(), 1u);
   const auto& m = s.occluders[0].shapes[0].mesh;
   EXPECT_EQ(m.triangles.size(), 2u);

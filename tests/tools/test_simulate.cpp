@@ -10,7 +10,7 @@
 #include <sstream>
 
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/simulation.hpp"
+#include "netvmo/pipeline/sim/simulation.hpp"
 #include "test_util.hpp"
 
 namespace fs = std::filesystem;

@@ -11,12 +11,13 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "netvmo/pipeline/front_end.hpp"
-#include "netvmo/pipeline/render_scenario.hpp"
+#include "netvmo/pipeline/frontend/front_end.hpp"
+#include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/render/renderer.hpp"
 
 namespace {
-using namespace netvmo::pipeline;
+using namespace netvmo::io;
+using namespace netvmo::frontend;
 
 Calibration bench_calibration() {
   Calibration c;
@@ -142,7 +143,7 @@ void BM_RefineOnly(benchmark::State& state) {
 void BM_FrontEndRendered(benchmark::State& state) {
   const int cam = static_cast<int>(state.range(0));
   const bool tracking = state.range(1) != 0;
-  auto scene = netvmo::pipeline::load_render_scenario(std::string(NETVMO_SOURCE_DIR) +
+  auto scene = netvmo::io::load_render_scenario(std::string(NETVMO_SOURCE_DIR) +
                                                       "/datasets/paper5_render.yaml");
   netvmo::render::Renderer r(scene);
   const cv::Mat frame = r.render(cam, 0);

@@ -7,7 +7,7 @@
 #include <memory>
 #include <thread>
 
-#include "netvmo/pipeline/render_scenario.hpp"
+#include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/render/renderer.hpp"
 
 namespace {
@@ -15,7 +15,7 @@ namespace {
 using netvmo::render::Renderer;
 
 std::unique_ptr<Renderer> make_renderer(int spp, bool shadows = true, bool textures = true) {
-  auto scene = netvmo::pipeline::load_render_scenario(NETVMO_SOURCE_DIR "/datasets/paper5_render.yaml");
+  auto scene = netvmo::io::load_render_scenario(NETVMO_SOURCE_DIR "/datasets/paper5_render.yaml");
   scene.imaging.spp = spp;
   scene.imaging.reuse_static = false;  // measure tracing, not the static-scene reuse
   for (auto& l : scene.lights) l.shadows = shadows;

@@ -1,0 +1,50 @@
+// Writes a rendered dataset folder (layout in datasets/README.md):
+//   cam_<id>/<frame:06d>.png   8-bit grayscale images
+//   calib/cam_<id>.yaml        OpenCV FileStorage: image_width, image_height, camera_matrix,
+//                              distortion_coefficients (1x5)
+//   network.yaml               fps, frames, target {family, id, size},
+//                              cameras [{id, p_wi, r_wi}] (believed poses), edges
+//   truth.csv                  frame,t,camera,in_fov,visible_fraction,u0,v0,...,u3,v3
+//   target.csv                 frame,t,px,py,pz,rx,ry,rz (true target pose in the world)
+//   truth_cameras.csv          camera,px,py,pz,rx,ry,rz (true camera poses in the world)
+// Every file is written to a temporary sibling and renamed into place.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "netvmo/render/renderer.hpp"
+
+namespace netvmo::io {
+
+struct DatasetOptions {
+  int frames = 0;         ///< frames to write; 0 = the scene's frame count
+  bool progress = true;   ///< progress bar on stderr
+};
+
+struct CameraDatasetStats {
+  int id = 0;
+  int frames_in_fov = 0;   ///< frames with the whole tag inside the field of view
+  int frames_visible = 0;  ///< frames with visible_fraction > 0
+};
+
+struct DatasetSummary {
+  int frames = 0;
+  std::vector<CameraDatasetStats> cameras;
+};
+
+/// Renders every camera for frames 0..N-1 and writes the dataset folder `out` (created if
+/// needed; existing files of the same names are replaced).
+DatasetSummary write_dataset(render::Renderer& renderer, const std::filesystem::path& out,
+                             const DatasetOptions& options = {});
+
+/// calib/cam_<id>.yaml content (OpenCV FileStorage YAML).
+void write_calibration(const std::filesystem::path& file, const render::Intrinsics& k);
+/// network.yaml content.
+std::string network_yaml(const render::SceneDescription& scene, int frames);
+/// One truth.csv row (without newline) and the header.
+std::string truth_csv_header();
+std::string truth_csv_row(const render::FrameTruth& t);
+
+}  // namespace netvmo::io

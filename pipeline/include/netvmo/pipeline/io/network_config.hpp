@@ -1,0 +1,51 @@
+// network.yaml: the camera network of a dataset folder (rendered or recorded).
+//
+//   fps: 30                                   # frames per second (> 0)
+//   frames: 300                               # optional: the dataset's frame count
+//   target: {family: tag36h11, id: 0, size: 0.2}   # size = side of the black border square, m
+//   cameras:                                  # believed camera poses g_wi in the world
+//     - {id: 1, p_wi: [x, y, z], r_wi: [rx, ry, rz]}   # r_wi: rotation vector of R_wi
+//   edges: [[1, 2], [2, 3]]                   # undirected communication graph (camera ids)
+//
+// Read strictly: a misspelt or unknown key anywhere is an InputError naming network.yaml and
+// the key path; so are duplicate camera ids, non-positive ids, unknown ids or self-loops or
+// duplicates in edges, an unsupported tag family, and non-positive fps or size. `frames` is the
+// only optional top-level key.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "netvmo/observer/lie.hpp"
+
+namespace netvmo::io {
+
+struct TargetSpec {
+  std::string family = "tag36h11";
+  int id = 0;
+  double size = 0.0;  ///< metres, side of the black border square
+};
+
+struct CameraConfig {
+  int id = 0;                                ///< positive, unique
+  obs::SE3 g_wi = obs::SE3::Identity();      ///< believed pose of camera i in the world
+};
+
+struct NetworkConfig {
+  double fps = 0.0;
+  std::optional<int> frames;  ///< optional frame count declared by the dataset
+  TargetSpec target;
+  std::vector<CameraConfig> cameras;
+  std::vector<std::pair<int, int>> edges;  ///< camera ids
+  std::string source;                      ///< file it was read from
+
+  /// Index of a camera id in `cameras`, or -1.
+  int index_of(int camera_id) const;
+};
+
+NetworkConfig load_network_config(const std::filesystem::path& file);
+
+}  // namespace netvmo::io

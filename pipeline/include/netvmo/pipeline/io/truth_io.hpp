@@ -1,0 +1,70 @@
+// Readers for a rendered dataset's ground truth and the front end's detections.csv.
+//
+//   truth.csv   frame,t,camera,in_fov,visible_fraction,u0,v0,u1,v1,u2,v2,u3,v3
+//               corners in OpenCV pixels (libapriltag corner order), empty when the tag is
+//               behind the camera
+//   target.csv  frame,t,px,py,pz,rx,ry,rz         (g_wo: target position, rotation vector)
+//   detections.csv  frame,camera,tag_id,detected,margin,u0,v0,u1,v1,u2,v2,u3,v3
+//               one row per camera and frame; corners empty when detected = 0
+//
+// The header must match exactly; every error is an InputError "<file>:<line>: <column>: ...".
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "netvmo/observer/lie.hpp"
+
+namespace netvmo::io {
+
+struct TruthRow {
+  int frame = 0;
+  double t = 0.0;
+  int camera = 0;
+  bool in_fov = false;
+  double visible_fraction = 0.0;
+  std::optional<std::array<cv::Point2d, 4>> corners;  ///< empty when behind the camera
+};
+
+struct TargetTruthRow {
+  int frame = 0;
+  double t = 0.0;
+  obs::SE3 g_wo = obs::SE3::Identity();
+};
+
+struct DetectionRow {
+  int frame = 0;
+  int camera = 0;
+  int tag_id = -1;  ///< -1 when not detected (written as empty)
+  bool detected = false;
+  double margin = 0.0;
+  std::optional<std::array<cv::Point2d, 4>> corners;
+};
+
+inline constexpr const char* kTruthHeader =
+    "frame,t,camera,in_fov,visible_fraction,u0,v0,u1,v1,u2,v2,u3,v3";
+inline constexpr const char* kTargetHeader = "frame,t,px,py,pz,rx,ry,rz";
+inline constexpr const char* kDetectionsHeader =
+    "frame,camera,tag_id,detected,margin,u0,v0,u1,v1,u2,v2,u3,v3";
+
+std::vector<TruthRow> read_truth_csv(const std::filesystem::path& file);
+std::vector<TargetTruthRow> read_target_csv(const std::filesystem::path& file);
+std::vector<DetectionRow> read_detections_csv(const std::filesystem::path& file);
+
+/// truth_cameras.csv: the true (rendering) pose of every camera, header
+/// camera,px,py,pz,rx,ry,rz (position, rotation vector of R_wi).
+inline constexpr const char* kTruthCamerasHeader = "camera,px,py,pz,rx,ry,rz";
+struct CameraTruthRow {
+  int camera = 0;
+  obs::SE3 g_wi = obs::SE3::Identity();
+};
+std::vector<CameraTruthRow> read_truth_cameras_csv(const std::filesystem::path& file);
+
+/// One detections.csv line (without newline). Corners with 4 decimals, margin with 2.
+std::string format_detection_row(const DetectionRow& row);
+
+}  // namespace netvmo::io

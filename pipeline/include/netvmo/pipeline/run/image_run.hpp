@@ -1,0 +1,56 @@
+// Images -> front end -> networked observer, frame by frame. delta_i(t) is the front end's
+// detection success; ground truth, when the provider has it, is used only for evaluation and
+// for the `exact` error model.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "netvmo/pipeline/sources/network_source.hpp"
+#include "netvmo/pipeline/frontend/front_end.hpp"
+#include "netvmo/pipeline/run/runner.hpp"
+
+namespace netvmo::run {
+
+struct ImageRunOptions {
+  run::RunnerSettings runner;  ///< gains, error model, initialisation, rounds (tag size: dataset)
+  frontend::DetectorSettings detector;   ///< detector settings (family and target id: from the dataset)
+  frontend::TrackingSettings tracking;   ///< windowed search around the last detection
+  bool keep_going = false;     ///< an unreadable image blinds its camera for that frame (warning)
+                               ///< instead of stopping the run
+  int workers = 2;             ///< threads detecting cameras in parallel (one detector each)
+  std::optional<int> max_frames;  ///< stop after this many frames
+  bool progress = true;           ///< progress bar on stderr
+};
+
+/// What one camera made of one frame.
+struct CameraFrame {
+  frontend::TagObservation obs;              ///< detection (delta, corners, normalized features)
+  std::optional<obs::SE3> g_io_pnp;  ///< ViSP pose when detected
+  bool read_failed = false;        ///< the image could not be read (only with keep_going)
+};
+
+/// Called after each frame with the frame's images, the front-end results and the record.
+using FrameHook = std::function<void(int frame, const std::vector<cv::Mat>& images,
+                                     const std::vector<CameraFrame>& cams,
+                                     const run::FrameRecord& record)>;
+
+struct ImageRunResult {
+  std::vector<run::FrameRecord> history;
+  std::vector<std::vector<CameraFrame>> frames;  ///< [frame][camera]
+  std::vector<std::string> warnings;
+  int substeps = 0;
+  double step_factor = 0.0;
+  double seconds = 0.0;             ///< wall time of the loop
+  double seconds_front_end = 0.0;   ///< of which reading + detection + PnP
+  double seconds_observer = 0.0;    ///< of which the observer and baselines
+};
+
+/// Runs the whole network over the provider's frames. Throws InputError for bad input (an
+/// unreadable image without keep_going, a disconnected graph, an unknown camera id).
+ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOptions& options,
+                          const FrameHook& hook = {});
+
+}  // namespace netvmo::run

@@ -1,0 +1,33 @@
+// Results of an image run: estimates.csv, energies.csv, errors.csv and summary.json.
+#pragma once
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "netvmo/pipeline/run/image_run.hpp"
+
+namespace netvmo::run {
+
+/// Position error [m] and orientation error [deg] between two poses.
+struct PoseError {
+  double position = 0.0;
+  double orientation_deg = 0.0;
+};
+PoseError pose_error(const obs::SE3& estimate, const obs::SE3& reference);
+
+/// The summary (also written to summary.json): settings, per-camera final and time-averaged
+/// errors of the networked observer and of each baseline against g*(t) (the average of the
+/// detecting cameras' fictitious target poses) and against the true target pose, the
+/// epsilon-levels and the fraction of frames each camera saw the target.
+nlohmann::json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& options,
+                           const ImageRunResult& result);
+
+/// Writes estimates.csv (frame,t,camera,delta,px,py,pz,rx,ry,rz), energies.csv
+/// (frame,t,U_p,U_R, only frames with ground truth), errors.csv (frame,t and per camera the
+/// networked observer's position [mm] and orientation [deg] error to g*) and summary.json, each
+/// atomically. Returns the summary.
+nlohmann::json write_run_outputs(const std::filesystem::path& dir, const sources::NetworkSource& provider,
+                                 const ImageRunOptions& options, const ImageRunResult& result);
+
+}  // namespace netvmo::run

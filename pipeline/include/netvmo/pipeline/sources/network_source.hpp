@@ -1,0 +1,44 @@
+// Where a run's images come from: a dataset folder (rendered or recorded) or the live
+// renderer. Both give the camera network, every camera's calibration and frames, and ground
+// truth when it is known.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "netvmo/pipeline/io/calibration.hpp"
+#include "netvmo/pipeline/sources/camera_stream.hpp"
+#include "netvmo/pipeline/io/network_config.hpp"
+
+namespace netvmo::sources {
+
+class NetworkSource {
+ public:
+  virtual ~NetworkSource() = default;
+  virtual const io::NetworkConfig& network() const = 0;
+  virtual const io::Calibration& calibration(size_t camera_index) const = 0;
+  virtual int frame_count() const = 0;
+  /// 8-bit gray image of a camera at a frame; empty when the camera has none there. Throws
+  /// InputError naming the file when an image exists but cannot be read. Thread-safe for
+  /// different cameras of the same frame.
+  virtual cv::Mat read(size_t camera_index, int frame) = 0;
+  /// True target pose in the world at a frame, when known.
+  virtual std::optional<obs::SE3> target_truth(int frame) const = 0;
+  /// True pose of a camera in the world, when known (the believed one is in network()).
+  virtual std::optional<obs::SE3> camera_truth(size_t camera_index) const = 0;
+  /// Warnings found when opening (missing frames, short cameras, ...), one line each.
+  virtual std::vector<std::string> warnings() const { return {}; }
+  /// A name for messages and summaries.
+  virtual std::string name() const = 0;
+};
+
+/// A dataset folder (frame_source.hpp documents the layout). Ground truth is read from
+/// target.csv (true target poses) and truth_cameras.csv (true camera poses,
+/// header camera,px,py,pz,rx,ry,rz) when both are present.
+std::unique_ptr<NetworkSource> open_dataset_source(const std::filesystem::path& dir);
+
+}  // namespace netvmo::sources

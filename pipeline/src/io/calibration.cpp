@@ -1,0 +1,139 @@
+#include "netvmo/pipeline/io/calibration.hpp"
+
+#include <opencv2/calib3d.hpp>
+#include <visp3/core/vpCameraParameters.h>
+#include <visp3/core/vpException.h>
+#include <visp3/core/vpXmlParserCamera.h>
+
+#include "netvmo/pipeline/error.hpp"
+
+namespace netvmo::io {
+namespace fs = std::filesystem;
+
+namespace {
+
+void validate(const Calibration& c, const std::string& file) {
+  if (c.width <= 0 || c.height <= 0)
+    throw InputError(file + ": image_width/image_height: must be positive (got " +
+                     std::to_string(c.width) + "x" + std::to_string(c.height) + ")");
+  const cv::Matx33d& K = c.K;
+  if (!(K(0, 0) > 0) || !(K(1, 1) > 0))
+    throw InputError(file + ": camera_matrix: focal lengths fx, fy must be positive");
+  if (K(1, 0) != 0 || K(2, 0) != 0 || K(2, 1) != 0 || K(2, 2) != 1)
+    throw InputError(file + ": camera_matrix: expected [fx s cx; 0 fy cy; 0 0 1]");
+  for (int i = 0; i < 5; ++i)
+    if (!std::isfinite(c.dist[i]))
+      throw InputError(file + ": distortion_coefficients: not finite");
+}
+
+}  // namespace
+
+Calibration load_calibration_opencv(const fs::path& path) {
+  const std::string file = path.string();
+  if (!fs::is_regular_file(path)) throw InputError(file + ": calibration file not found");
+  Calibration c;
+  c.source = file;
+  try {
+    cv::FileStorage fsr(file, cv::FileStorage::READ);
+    if (!fsr.isOpened()) throw InputError(file + ": cannot open as an OpenCV FileStorage file");
+    auto need = [&](const char* key) {
+      cv::FileNode n = fsr[key];
+      if (n.empty() || n.isNone()) throw InputError(file + ": " + key + ": missing");
+      return n;
+    };
+    cv::FileNode w = need("image_width"), h = need("image_height");
+    if (!w.isInt() || !h.isInt())
+      throw InputError(file + ": image_width/image_height: expected integers");
+    c.width = static_cast<int>(w);
+    c.height = static_cast<int>(h);
+    cv::Mat K, D;
+    need("camera_matrix") >> K;
+    if (K.rows != 3 || K.cols != 3)
+      throw InputError(file + ": camera_matrix: expected a 3x3 matrix");
+    K.convertTo(K, CV_64F);
+    for (int r = 0; r < 3; ++r)
+      for (int col = 0; col < 3; ++col) c.K(r, col) = K.at<double>(r, col);
+    need("distortion_coefficients") >> D;
+    D.convertTo(D, CV_64F);
+    D = D.reshape(1, 1);
+    const int n = D.empty() ? 0 : D.cols;
+    if (n != 4 && n != 5 && n != 8 && n != 12 && n != 14)
+      throw InputError(file + ": distortion_coefficients: expected 4 or 5 numbers, got " +
+                       std::to_string(n));
+    for (int i = 0; i < n; ++i) {
+      const double v = D.at<double>(0, i);
+      if (i < 5) c.dist[i] = v;
+      else if (v != 0.0)
+        throw InputError(file + ": distortion_coefficients: only the 5-coefficient model "
+                                "(k1 k2 p1 p2 k3) is supported; coefficient " +
+                         std::to_string(i) + " is non-zero");
+    }
+  } catch (const cv::Exception& e) {
+    throw InputError(file + ": cannot parse calibration: " + e.err);
+  }
+  validate(c, file);
+  return c;
+}
+
+Calibration load_calibration_visp_xml(const fs::path& path, const std::string& camera_name) {
+  const std::string file = path.string();
+  if (!fs::is_regular_file(path)) throw InputError(file + ": calibration file not found");
+  Calibration c;
+  c.source = file;
+  try {
+    for (auto model : {vpCameraParameters::perspectiveProjWithDistortion,
+                       vpCameraParameters::perspectiveProjWithoutDistortion}) {
+      vpXmlParserCamera parser;
+      vpCameraParameters cam;
+      if (parser.parse(cam, file, camera_name, model) != vpXmlParserCamera::SEQUENCE_OK) continue;
+      c.width = static_cast<int>(parser.getWidth());
+      c.height = static_cast<int>(parser.getHeight());
+      c.K = cv::Matx33d(cam.get_px(), 0, cam.get_u0(), 0, cam.get_py(), cam.get_v0(), 0, 0, 1);
+      c.dist = {0, 0, 0, 0, 0};
+      if (model == vpCameraParameters::perspectiveProjWithDistortion) c.dist[0] = cam.get_kud();
+      validate(c, file + ": camera " + camera_name);
+      return c;
+    }
+  } catch (const vpException& e) {
+    throw InputError(file + ": cannot parse ViSP camera XML: " + e.getStringMessage());
+  }
+  throw InputError(file + ": no camera named '" + camera_name +
+                   "' with a perspective projection (with or without distortion)");
+}
+
+void save_calibration_opencv(const fs::path& path, const Calibration& c) {
+  try {
+    cv::FileStorage fsw(path.string(), cv::FileStorage::WRITE);
+    if (!fsw.isOpened()) throw InputError(path.string() + ": cannot open for writing");
+    fsw << "image_width" << c.width << "image_height" << c.height;
+    fsw << "camera_matrix" << cv::Mat(c.K);
+    fsw << "distortion_coefficients" << cv::Mat(cv::Matx<double, 1, 5>(c.dist.val));
+  } catch (const cv::Exception& e) {
+    throw InputError(path.string() + ": cannot write calibration: " + e.err);
+  }
+}
+
+std::vector<cv::Point2d> normalize_points(const std::vector<cv::Point2d>& px,
+                                          const Calibration& calib) {
+  std::vector<cv::Point2d> out;
+  if (px.empty()) return out;
+  cv::undistortPoints(px, out, cv::Mat(calib.K), cv::Mat(calib.dist), cv::noArray(),
+                      cv::noArray(),
+                      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100,
+                                       1e-12));
+  return out;
+}
+
+std::vector<cv::Point2d> denormalize_points(const std::vector<cv::Point2d>& xy,
+                                            const Calibration& calib) {
+  std::vector<cv::Point2d> out;
+  if (xy.empty()) return out;
+  std::vector<cv::Point3d> rays;
+  rays.reserve(xy.size());
+  for (const auto& p : xy) rays.emplace_back(p.x, p.y, 1.0);
+  cv::projectPoints(rays, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(calib.K),
+                    cv::Mat(calib.dist), out);
+  return out;
+}
+
+}  // namespace netvmo::io

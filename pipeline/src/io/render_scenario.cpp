@@ -1,0 +1,377 @@
+#include "netvmo/pipeline/io/render_scenario.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/io/yaml_reader.hpp"
+#include "netvmo/render/geometry.hpp"
+
+namespace netvmo::io {
+namespace {
+
+using render::Pose;
+using render::Vec3;
+using io::MapReader;
+using io::Value;
+
+// pose: {p: [x,y,z], r: [rx,ry,rz]} or {eye: [..], look_at: [..], up: [..]} (camera poses).
+Pose read_pose(const Value& v) {
+  MapReader m = v.map();
+  Pose g;
+  if (m.has("eye") || m.has("look_at")) {
+    const Vec3 eye = m.get("eye").vec<3>();
+    const Vec3 at = m.get("look_at").vec<3>();
+    const auto up_v = m.find("up");
+    const Vec3 up = up_v ? up_v->vec<3>() : Vec3(0, 0, 1);
+    try {
+      g = render::look_at(eye, at, up);
+    } catch (const std::invalid_argument& e) {
+      m.fail(e.what());
+    }
+  } else {
+    const auto p = m.find("p");
+    const auto r = m.find("r");
+    if (!p && !r) m.fail("expected p: [x, y, z] and r: [rx, ry, rz], or eye/look_at/up");
+    g = render::make_pose(p ? p->vec<3>() : Vec3::Zero(), r ? r->vec<3>() : Vec3::Zero());
+  }
+  m.finish();
+  return g;
+}
+
+double positive(const Value& v) {
+  const double x = v.number();
+  if (!(x > 0)) v.fail("must be positive");
+  return x;
+}
+
+double unit_interval(const Value& v) {
+  const double x = v.number();
+  if (!(x >= 0 && x <= 1)) v.fail("must be between 0 and 1");
+  return x;
+}
+
+render::Material read_material(const Value& v) {
+  MapReader m = v.map();
+  render::Material mat;
+  if (const auto p = m.find("pattern")) {
+    try {
+      mat.pattern = render::parse_pattern(p->string());
+    } catch (const std::invalid_argument& e) {
+      p->fail(e.what());
+    }
+  }
+  if (const auto a = m.find("albedo")) mat.albedo = unit_interval(*a);
+  if (const auto a = m.find("albedo2")) mat.albedo2 = unit_interval(*a);
+  if (const auto a = m.find("scale")) mat.scale = positive(*a);
+  if (const auto a = m.find("seed")) {
+    const int s = a->integer();
+    if (s < 0) a->fail("must be >= 0");
+    mat.seed = std::uint32_t(s);
+  }
+  m.finish();
+  return mat;
+}
+
+render::Shape read_shape(const Value& v, const std::filesystem::path& base_dir) {
+  MapReader m = v.map();
+  render::Shape s;
+  const Value type = m.get("type");
+  const std::string t = type.string();
+  s.name = m.get_or("name", std::string());
+  if (t == "box") {
+    s.kind = render::Shape::Kind::Box;
+    const Value size = m.get("size");
+    s.size = size.vec<3>();
+    if (!(s.size.minCoeff() > 0)) size.fail("sizes must be positive");
+  } else if (t == "plane") {
+    s.kind = render::Shape::Kind::Plane;
+    const Value size = m.get("size");
+    const auto xy = size.vec<2>();
+    if (!(xy.minCoeff() > 0)) size.fail("sizes must be positive");
+    s.size = Vec3(xy.x(), xy.y(), 0);
+  } else if (t == "cylinder") {
+    s.kind = render::Shape::Kind::Cylinder;
+    s.size = Vec3(positive(m.get("radius")), 0, positive(m.get("height")));
+    if (const auto seg = m.find("segments")) {
+      s.segments = seg->integer();
+      if (s.segments < 3 || s.segments > 4096) seg->fail("must be between 3 and 4096");
+    }
+  } else if (t == "obj") {
+    s.kind = render::Shape::Kind::Mesh;
+    const Value file = m.get("file");
+    std::filesystem::path path = file.string();
+    if (path.is_relative()) path = base_dir / path;
+    std::ifstream in(path);
+    if (!in) file.fail("cannot read OBJ file " + path.string());
+    std::stringstream ss;
+    ss << in.rdbuf();
+    try {
+      s.mesh = render::parse_obj(ss.str(), path.string());
+    } catch (const std::invalid_argument& e) {
+      file.fail(e.what());
+    }
+    if (const auto sc = m.find("scale")) {
+      const float k = float(positive(*sc));
+      for (auto& p : s.mesh.vertices) p *= k;
+    }
+  } else {
+    type.fail("unknown shape type '" + t + "' (use box, plane, cylinder or obj)");
+  }
+  if (const auto p = m.find("pose")) s.pose = read_pose(*p);
+  if (const auto mat = m.find("material")) s.material = read_material(*mat);
+  m.finish();
+  return s;
+}
+
+std::vector<render::Shape> read_shapes(const Value& v, const std::filesystem::path& base_dir) {
+  std::vector<render::Shape> out;
+  for (const auto& s : v.sequence()) out.push_back(read_shape(s, base_dir));
+  return out;
+}
+
+// motion: {type: static, pose}, {type: twist, pose, v, w}, {type: keyframes, keyframes: [{t, pose}]}
+render::Trajectory read_motion(const Value& v) {
+  MapReader m = v.map();
+  render::Trajectory tr;
+  const Value type = m.get("type");
+  const std::string t = type.string();
+  if (t == "static") {
+    tr.kind = render::Trajectory::Kind::Static;
+    tr.g0 = read_pose(m.get("pose"));
+  } else if (t == "twist") {
+    tr.kind = render::Trajectory::Kind::Twist;
+    tr.g0 = read_pose(m.get("pose"));
+    const auto lin = m.find("v");
+    const auto ang = m.find("w");
+    tr.twist.head<3>() = lin ? lin->vec<3>() : Vec3::Zero();
+    tr.twist.tail<3>() = ang ? ang->vec<3>() : Vec3::Zero();
+  } else if (t == "keyframes") {
+    tr.kind = render::Trajectory::Kind::Keyframes;
+    const Value kfs = m.get("keyframes");
+    for (const auto& k : kfs.sequence()) {
+      MapReader km = k.map();
+      render::Keyframe kf;
+      const Value tv = km.get("t");
+      kf.t = tv.number();
+      if (!tr.keyframes.empty() && !(kf.t > tr.keyframes.back().t))
+        tv.fail("keyframe times must be strictly increasing");
+      kf.g = read_pose(km.get("pose"));
+      km.finish();
+      tr.keyframes.push_back(kf);
+    }
+    if (tr.keyframes.empty()) kfs.fail("needs at least one keyframe");
+    tr.g0 = tr.keyframes.front().g;
+  } else {
+    type.fail("unknown motion type '" + t + "' (use static, twist or keyframes)");
+  }
+  m.finish();
+  return tr;
+}
+
+render::TagSpec read_tag(const Value& v) {
+  MapReader m = v.map();
+  render::TagSpec tag;
+  tag.family = m.get_or("family", tag.family);
+  if (const auto id = m.find("id")) tag.id = id->integer();
+  tag.size = positive(m.get("size"));
+  if (const auto q = m.find("quiet_cells")) {
+    tag.quiet_cells = q->integer();
+    if (tag.quiet_cells < 0 || tag.quiet_cells > 100) q->fail("must be between 0 and 100");
+  }
+  if (const auto w = m.find("white")) tag.white_albedo = unit_interval(*w);
+  if (const auto b = m.find("black")) tag.black_albedo = unit_interval(*b);
+  m.finish();
+  try {
+    render::TagTexture check(tag);  // family and id range, from libapriltag itself
+  } catch (const std::invalid_argument& e) {
+    v.fail(e.what());
+  }
+  return tag;
+}
+
+render::Intrinsics read_intrinsics(const Value& v) {
+  MapReader m = v.map();
+  render::Intrinsics k;
+  const Value w = m.get("width"), h = m.get("height");
+  k.width = w.integer();
+  k.height = h.integer();
+  if (k.width < 1 || k.width > 16384) w.fail("must be between 1 and 16384");
+  if (k.height < 1 || k.height > 16384) h.fail("must be between 1 and 16384");
+  k.fx = positive(m.get("fx"));
+  k.fy = positive(m.get("fy"));
+  // Default principal point: the image centre in OpenCV pixel coordinates.
+  k.cx = m.get_or("cx", (k.width - 1) / 2.0);
+  k.cy = m.get_or("cy", (k.height - 1) / 2.0);
+  if (const auto d = m.find("distortion")) {
+    const auto c = d->vec<5>();
+    for (int i = 0; i < 5; ++i) k.dist[size_t(i)] = c[i];
+  }
+  m.finish();
+  return k;
+}
+
+render::Light read_light(const Value& v) {
+  MapReader m = v.map();
+  render::Light l;
+  const Value type = m.get("type");
+  const std::string t = type.string();
+  if (t == "directional") {
+    l.kind = render::Light::Kind::Directional;
+    const Value d = m.get("direction");
+    l.direction = d.vec<3>();
+    if (l.direction.norm() < 1e-12) d.fail("must be a non-zero vector");
+  } else if (t == "point") {
+    l.kind = render::Light::Kind::Point;
+    l.position = m.get("position").vec<3>();
+  } else {
+    type.fail("unknown light type '" + t + "' (use directional or point)");
+  }
+  if (const auto i = m.find("intensity")) {
+    l.intensity = i->number();
+    if (l.intensity < 0) i->fail("must be >= 0");
+  }
+  l.shadows = m.get_or("shadows", l.shadows);
+  m.finish();
+  return l;
+}
+
+void read_imaging(const Value& v, render::Imaging& im) {
+  MapReader m = v.map();
+  if (const auto x = m.find("spp")) {
+    im.spp = x->integer();
+    if (im.spp < 1 || im.spp > 1024) x->fail("must be between 1 and 1024");
+  }
+  if (const auto x = m.find("seed")) {
+    const double s = x->number();
+    if (s < 0 || s != std::floor(s) || s > 9.0e15) x->fail("must be a non-negative integer");
+    im.seed = std::uint64_t(s);
+  }
+  if (const auto x = m.find("exposure")) im.exposure = positive(*x);
+  if (const auto x = m.find("background")) im.background = x->number();
+  if (const auto x = m.find("ambient")) im.ambient = x->number();
+  im.noise = m.get_or("noise", im.noise);
+  if (const auto x = m.find("read_noise")) {
+    im.read_noise = x->number();
+    if (im.read_noise < 0) x->fail("must be >= 0");
+  }
+  if (const auto x = m.find("shot_noise")) {
+    im.shot_noise = x->number();
+    if (im.shot_noise < 0) x->fail("must be >= 0");
+  }
+  if (const auto x = m.find("threads")) {
+    im.threads = x->integer();
+    if (im.threads < 0) x->fail("must be >= 0 (0 = all cores)");
+  }
+  if (const auto x = m.find("tile")) {
+    im.tile = x->integer();
+    if (im.tile < 1 || im.tile > 1024) x->fail("must be between 1 and 1024");
+  }
+  if (const auto x = m.find("visibility_grid")) {
+    im.visibility_grid = x->integer();
+    if (im.visibility_grid < 1 || im.visibility_grid > 256) x->fail("must be between 1 and 256");
+  }
+  m.finish();
+}
+
+}  // namespace
+
+render::SceneDescription load_render_scenario(const std::filesystem::path& file) {
+  MapReader root = MapReader::from_file(file);
+  const std::filesystem::path base_dir = file.parent_path();
+  render::SceneDescription s;
+  const Value fps = root.get("fps");
+  s.fps = positive(fps);
+  const Value frames = root.get("frames");
+  s.frames = frames.integer();
+  if (s.frames < 1) frames.fail("must be at least 1");
+  if (const auto im = root.find("imaging")) read_imaging(*im, s.imaging);
+
+  s.lights.clear();
+  if (const auto ls = root.find("lights"))
+    for (const auto& l : ls->sequence()) s.lights.push_back(read_light(l));
+
+  {
+    MapReader t = root.get("target").map();
+    s.target.tag = read_tag(t.get("tag"));
+    if (const auto extra = t.find("extra_tags"))
+      for (const auto& e : extra->sequence()) {
+        MapReader em = e.map();
+        render::PlacedTag pt;
+        pt.tag = read_tag(em.get("tag"));
+        pt.g_ot = read_pose(em.get("pose"));
+        em.finish();
+        s.target.extra_tags.push_back(pt);
+      }
+    if (const auto sh = t.find("shapes")) s.target.shapes = read_shapes(*sh, base_dir);
+    s.target.motion = read_motion(t.get("motion"));
+    t.finish();
+  }
+
+  const Value cams = root.get("cameras");
+  for (const auto& c : cams.sequence()) {
+    MapReader cm = c.map();
+    render::CameraSpec cam;
+    const Value id = cm.get("id");
+    cam.id = id.integer();
+    if (cam.id <= 0) id.fail("camera ids must be positive integers");
+    for (const auto& other : s.cameras)
+      if (other.id == cam.id) id.fail("duplicate camera id " + std::to_string(cam.id));
+    cam.intrinsics = read_intrinsics(cm.get("intrinsics"));
+    cam.g_wi_true = read_pose(cm.get("pose"));
+    const auto believed = cm.find("believed");
+    const auto offset = cm.find("believed_offset");
+    if (believed && offset) offset->fail("give either believed or believed_offset, not both");
+    cam.g_wi_believed = cam.g_wi_true;
+    if (believed) cam.g_wi_believed = read_pose(*believed);
+    if (offset) {
+      MapReader om = offset->map();
+      const auto dp = om.find("dp");
+      const auto dr = om.find("dr");
+      // Believed = true pose moved by dp (world) and turned by dr (world rotation vector).
+      if (dp) cam.g_wi_believed.translation() += dp->vec<3>();
+      if (dr) cam.g_wi_believed.linear() = render::rotation_from_vector(dr->vec<3>()) * cam.g_wi_true.linear();
+      om.finish();
+    }
+    cm.finish();
+    s.cameras.push_back(cam);
+  }
+  if (s.cameras.empty()) cams.fail("needs at least one camera");
+
+  if (const auto occ = root.find("occluders"))
+    for (const auto& o : occ->sequence()) {
+      MapReader om = o.map();
+      render::Body b;
+      b.name = om.get_or("name", std::string("occluder"));
+      b.shapes = read_shapes(om.get("shapes"), base_dir);
+      if (const auto mo = om.find("motion")) b.motion = read_motion(*mo);
+      om.finish();
+      s.occluders.push_back(std::move(b));
+    }
+
+  if (const auto edges = root.find("edges"))
+    for (const auto& e : edges->sequence()) {
+      const auto ij = e.vec<2>();
+      if (ij[0] != std::floor(ij[0]) || ij[1] != std::floor(ij[1])) e.fail("expected two camera ids");
+      const int i = int(ij[0]), j = int(ij[1]);
+      auto known = [&](int id) {
+        for (const auto& c : s.cameras)
+          if (c.id == id) return true;
+        return false;
+      };
+      if (!known(i) || !known(j)) e.fail("edge refers to an unknown camera id");
+      if (i == j) e.fail("an edge must join two different cameras");
+      s.edges.emplace_back(i, j);
+    }
+  root.finish();
+
+  try {
+    s.validate();
+  } catch (const std::invalid_argument& e) {
+    throw InputError(file.string() + ": " + e.what());
+  }
+  return s;
+}
+
+}  // namespace netvmo::io

@@ -1,0 +1,181 @@
+#include "netvmo/pipeline/io/truth_io.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+
+#include "netvmo/pipeline/error.hpp"
+
+namespace netvmo::io {
+namespace fs = std::filesystem;
+
+namespace {
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char ch : line) {
+    if (ch == ',') {
+      out.push_back(cur);
+      cur.clear();
+    } else if (ch != '\r') {
+      cur += ch;
+    }
+  }
+  out.push_back(cur);
+  return out;
+}
+
+/// Reads a CSV with an exact header and calls `row(fields, fail)` for each non-empty line.
+template <class F>
+void read_csv(const fs::path& file, const char* header, F row) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file.string() + ": cannot open (missing or unreadable)");
+  std::string line;
+  if (!std::getline(in, line)) throw InputError(file.string() + ": empty file, expected header");
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  if (line != header)
+    throw InputError(file.string() + ":1: unexpected header '" + line + "', expected '" + header +
+                     "'");
+  const auto names = split(header);
+  int lineno = 1;
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (line.empty() || line == "\r") continue;
+    const auto fields = split(line);
+    const std::string where = file.string() + ":" + std::to_string(lineno);
+    if (fields.size() != names.size())
+      throw InputError(where + ": expected " + std::to_string(names.size()) + " fields, got " +
+                       std::to_string(fields.size()));
+    row(fields, names, where);
+  }
+}
+
+double num(const std::vector<std::string>& f, const std::vector<std::string>& names, size_t i,
+           const std::string& where) {
+  const char* s = f[i].c_str();
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(s, &end);
+  if (f[i].empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v))
+    throw InputError(where + ": " + names[i] + ": expected a number, got '" + f[i] + "'");
+  return v;
+}
+
+int integer(const std::vector<std::string>& f, const std::vector<std::string>& names, size_t i,
+            const std::string& where) {
+  const double v = num(f, names, i, where);
+  if (v != static_cast<int>(v))
+    throw InputError(where + ": " + names[i] + ": expected an integer, got '" + f[i] + "'");
+  return static_cast<int>(v);
+}
+
+bool flag(const std::vector<std::string>& f, const std::vector<std::string>& names, size_t i,
+          const std::string& where) {
+  if (f[i] == "1" || f[i] == "true") return true;
+  if (f[i] == "0" || f[i] == "false") return false;
+  throw InputError(where + ": " + names[i] + ": expected 0 or 1, got '" + f[i] + "'");
+}
+
+/// Eight corner fields from index i: all empty -> nullopt, all numbers -> corners.
+std::optional<std::array<cv::Point2d, 4>> corners(const std::vector<std::string>& f,
+                                                  const std::vector<std::string>& names, size_t i,
+                                                  const std::string& where) {
+  size_t empty = 0;
+  for (size_t k = 0; k < 8; ++k) empty += f[i + k].empty();
+  if (empty == 8) return std::nullopt;
+  std::array<cv::Point2d, 4> c;
+  for (size_t k = 0; k < 4; ++k)
+    c[k] = cv::Point2d(num(f, names, i + 2 * k, where), num(f, names, i + 2 * k + 1, where));
+  return c;
+}
+
+}  // namespace
+
+std::vector<TruthRow> read_truth_csv(const fs::path& file) {
+  std::vector<TruthRow> rows;
+  read_csv(file, kTruthHeader, [&](const auto& f, const auto& names, const std::string& where) {
+    TruthRow r;
+    r.frame = integer(f, names, 0, where);
+    r.t = num(f, names, 1, where);
+    r.camera = integer(f, names, 2, where);
+    r.in_fov = flag(f, names, 3, where);
+    r.visible_fraction = num(f, names, 4, where);
+    r.corners = corners(f, names, 5, where);
+    rows.push_back(r);
+  });
+  return rows;
+}
+
+std::vector<TargetTruthRow> read_target_csv(const fs::path& file) {
+  std::vector<TargetTruthRow> rows;
+  read_csv(file, kTargetHeader, [&](const auto& f, const auto& names, const std::string& where) {
+    TargetTruthRow r;
+    r.frame = integer(f, names, 0, where);
+    r.t = num(f, names, 1, where);
+    const obs::Vec3 p(num(f, names, 2, where), num(f, names, 3, where), num(f, names, 4, where));
+    const obs::Vec3 w(num(f, names, 5, where), num(f, names, 6, where), num(f, names, 7, where));
+    r.g_wo = obs::make_pose(p, w);
+    rows.push_back(r);
+  });
+  return rows;
+}
+
+std::vector<DetectionRow> read_detections_csv(const fs::path& file) {
+  std::vector<DetectionRow> rows;
+  read_csv(file, kDetectionsHeader,
+           [&](const auto& f, const auto& names, const std::string& where) {
+             DetectionRow r;
+             r.frame = integer(f, names, 0, where);
+             r.camera = integer(f, names, 1, where);
+             r.tag_id = f[2].empty() ? -1 : integer(f, names, 2, where);
+             r.detected = flag(f, names, 3, where);
+             r.margin = f[4].empty() ? 0.0 : num(f, names, 4, where);
+             r.corners = corners(f, names, 5, where);
+             if (r.detected != r.corners.has_value())
+               throw InputError(where + ": corners must be given exactly when detected = 1");
+             rows.push_back(r);
+           });
+  return rows;
+}
+
+std::string format_detection_row(const DetectionRow& r) {
+  char buf[512];
+  int n = std::snprintf(buf, sizeof buf, "%d,%d,", r.frame, r.camera);
+  std::string s(buf, static_cast<size_t>(n));
+  if (r.tag_id >= 0) s += std::to_string(r.tag_id);
+  s += r.detected ? ",1," : ",0,";
+  if (r.detected) {
+    n = std::snprintf(buf, sizeof buf, "%.2f", r.margin);
+    s.append(buf, static_cast<size_t>(n));
+  }
+  for (size_t k = 0; k < 4; ++k) {
+    if (r.corners) {
+      n = std::snprintf(buf, sizeof buf, ",%.4f,%.4f", (*r.corners)[k].x, (*r.corners)[k].y);
+      s.append(buf, static_cast<size_t>(n));
+    } else {
+      s += ",,";
+    }
+  }
+  return s;
+}
+
+std::vector<CameraTruthRow> read_truth_cameras_csv(const fs::path& file) {
+  std::vector<CameraTruthRow> rows;
+  read_csv(file, kTruthCamerasHeader,
+           [&](const auto& f, const auto& names, const std::string& where) {
+             CameraTruthRow r;
+             r.camera = integer(f, names, 0, where);
+             const obs::Vec3 p(num(f, names, 1, where), num(f, names, 2, where),
+                               num(f, names, 3, where));
+             const obs::Vec3 w(num(f, names, 4, where), num(f, names, 5, where),
+                               num(f, names, 6, where));
+             r.g_wi = obs::make_pose(p, w);
+             rows.push_back(r);
+           });
+  return rows;
+}
+
+}  // namespace netvmo::io

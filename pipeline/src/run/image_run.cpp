@@ -1,0 +1,150 @@
+#include "netvmo/pipeline/run/image_run.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <exception>
+#include <thread>
+
+#include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/frontend/pnp.hpp"
+#include "netvmo/pipeline/progress.hpp"
+
+namespace netvmo::run {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+obs::Graph network_graph(const io::NetworkConfig& net) {
+  std::vector<obs::Graph::Edge> edges;
+  for (const auto& [a, b] : net.edges) edges.emplace_back(net.index_of(a), net.index_of(b));
+  obs::Graph g(static_cast<int>(net.cameras.size()), edges);
+  if (!g.connected()) {
+    std::vector<int> labels;
+    for (const auto& c : net.cameras) labels.push_back(c.id);
+    throw InputError(net.source + ": edges: the communication graph is disconnected " +
+                     "(Assumption 1); components " + obs::describe_components(g.components(), labels) +
+                     ": add an edge joining them");
+  }
+  return g;
+}
+}  // namespace
+
+ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOptions& options,
+                          const FrameHook& hook) {
+  const io::NetworkConfig& net = provider.network();
+  const size_t n = net.cameras.size();
+  const obs::Graph graph = network_graph(net);
+
+  run::RunnerSettings rs = options.runner;
+  rs.tag_size = net.target.size;
+  std::vector<obs::SE3> g_wi;
+  for (const auto& c : net.cameras) g_wi.push_back(c.g_wi);
+  run::NetworkRunner runner(graph, g_wi, rs);
+
+  frontend::DetectorSettings ds = options.detector;
+  ds.family = net.target.family;
+  ds.target_id = net.target.id;
+  const int workers = std::max(1, std::min<int>(options.workers, static_cast<int>(n)));
+  // Cameras run in parallel; each worker owns a detector whose libapriltag threads share the
+  // remaining cores.
+  ds.nthreads = std::max(1, ds.nthreads / workers);
+  std::vector<frontend::FrontEnd> front_ends;
+  for (int w = 0; w < workers; ++w) front_ends.emplace_back(ds, options.tracking);
+  std::vector<frontend::TrackState> tracks(n);  // camera i is always handled by worker i % workers
+  const auto model = obs::FeatureModel::square(net.target.size);
+
+  std::vector<std::optional<obs::SE3>> true_wi(n);
+  for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth(i);
+
+  ImageRunResult result;
+  result.warnings = provider.warnings();
+  const double dt = 1.0 / net.fps;
+  result.substeps = runner.substeps(dt);
+  result.step_factor = runner.step_factor(dt);
+  if (result.step_factor >= 2.0) {
+    char b[200];
+    std::snprintf(b, sizeof b,
+                  "%d exchange rounds per frame give h (k_e + 2 k_s d_max) = %.2f >= 2: the "
+                  "discrete observer is unstable; use more rounds",
+                  result.substeps, result.step_factor);
+    result.warnings.emplace_back(b);
+  }
+  int frames = provider.frame_count();
+  if (options.max_frames) frames = std::min(frames, *options.max_frames);
+
+  Progress progress("run", frames, options.progress);
+  const auto t_start = Clock::now();
+  std::vector<cv::Mat> images(n);
+  std::vector<CameraFrame> cams(n);
+  std::vector<std::exception_ptr> errors(n);
+  for (int k = 0; k < frames; ++k) {
+    const auto t_fe = Clock::now();
+    auto work = [&](int w) {
+      for (size_t i = static_cast<size_t>(w); i < n; i += static_cast<size_t>(workers)) {
+        cams[i] = CameraFrame{};
+        errors[i] = nullptr;
+        try {
+          images[i] = provider.read(i, k);
+        } catch (const InputError&) {
+          images[i].release();
+          if (!options.keep_going) {
+            errors[i] = std::current_exception();
+            continue;
+          }
+          cams[i].read_failed = true;
+          errors[i] = std::current_exception();
+          continue;
+        }
+        cams[i].obs = front_ends[static_cast<size_t>(w)].observe(images[i], provider.calibration(i),
+                                                                  nullptr, &tracks[i]);
+        if (cams[i].obs.delta) {
+          const auto pose = frontend::pnp_pose(cams[i].obs.f_normalized, model);
+          if (pose) cams[i].g_io_pnp = pose->g_io;
+        }
+      }
+    };
+    std::vector<std::thread> pool;
+    for (int w = 1; w < workers; ++w) pool.emplace_back(work, w);
+    work(0);
+    for (auto& t : pool) t.join();
+    for (size_t i = 0; i < n; ++i) {
+      if (!errors[i]) continue;
+      if (!options.keep_going) std::rethrow_exception(errors[i]);
+      try {
+        std::rethrow_exception(errors[i]);
+      } catch (const InputError& e) {
+        result.warnings.push_back(std::string(e.what()) + " (camera " +
+                                  std::to_string(net.cameras[i].id) + " blind at frame " +
+                                  std::to_string(k) + ")");
+      }
+    }
+    result.seconds_front_end += seconds_since(t_fe);
+
+    const auto t_obs = Clock::now();
+    std::vector<run::CameraInput> in(n);
+    for (size_t i = 0; i < n; ++i) {
+      in[i].delta = cams[i].obs.delta;
+      in[i].f = cams[i].obs.f_normalized;  // (eq:visual_mea) with lambda = 1
+      in[i].g_io_pnp = cams[i].g_io_pnp;
+    }
+    const auto target = provider.target_truth(k);
+    if (target) {
+      for (size_t i = 0; i < n; ++i)
+        if (true_wi[i]) in[i].g_io_true = true_wi[i]->inverse() * *target;  // g_io = g_wi^-1 g_wo
+    }
+    const auto& record = runner.process(k, k * dt, dt, in, target);
+    result.seconds_observer += seconds_since(t_obs);
+    if (hook) hook(k, images, cams, record);
+    result.frames.push_back(cams);
+    progress.update(k + 1);
+  }
+  progress.finish();
+  result.seconds = seconds_since(t_start);
+  result.history = runner.history();
+  return result;
+}
+
+}  // namespace netvmo::run

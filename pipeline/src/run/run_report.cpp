@@ -1,0 +1,195 @@
+#include "netvmo/pipeline/run/run_report.hpp"
+
+#include <cmath>
+
+#include "netvmo/pipeline/io/atomic_file.hpp"
+
+namespace netvmo::run {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+PoseError pose_error(const obs::SE3& estimate, const obs::SE3& reference) {
+  return {(estimate.translation() - reference.translation()).norm(),
+          obs::log_so3(reference.linear().transpose() * estimate.linear()).norm() * 180.0 / M_PI};
+}
+
+namespace {
+
+// Final and mean error of one estimate stream against one reference stream.
+class ErrorStats {
+ public:
+  void add(const std::optional<obs::SE3>& est, const std::optional<obs::SE3>& ref) {
+    if (!est || !ref) return;
+    last_ = pose_error(*est, *ref);
+    sum_p_ += last_->position;
+    sum_r_ += last_->orientation_deg;
+    ++count_;
+  }
+  json to_json() const {
+    if (!count_) return nullptr;
+    return {{"final_position_m", last_->position},
+            {"final_orientation_deg", last_->orientation_deg},
+            {"mean_position_m", sum_p_ / count_},
+            {"mean_orientation_deg", sum_r_ / count_},
+            {"frames", count_}};
+  }
+
+ private:
+  std::optional<PoseError> last_;
+  double sum_p_ = 0, sum_r_ = 0;
+  int count_ = 0;
+};
+
+json vec3(const obs::Vec3& v) { return json::array({v.x(), v.y(), v.z()}); }
+
+}  // namespace
+
+json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& options,
+                 const ImageRunResult& result) {
+  const io::NetworkConfig& net = provider.network();
+  const size_t n = net.cameras.size();
+  const auto& h = result.history;
+  json s;
+  s["dataset"] = provider.name();
+  s["frames"] = h.size();
+  s["fps"] = net.fps;
+  s["k_e"] = options.runner.k_e;
+  s["k_s"] = options.runner.k_s;
+  s["error"] = options.runner.error_model;
+  s["init"] = run::to_string(options.runner.init);
+  s["rounds_per_frame"] = result.substeps;
+  s["step_factor"] = result.step_factor;  // h (k_e + 2 k_s d_max): < 2 stable
+  s["reference"] =
+      "g_star: average (eq:g_ave) of the fictitious target poses g_wi g_io,true of the cameras "
+      "that detect the tag in that frame; true: the true target pose";
+
+  std::vector<ErrorStats> net_star(n), net_true(n), ind_star(n), ind_true(n), pnp_star(n),
+      pnp_true(n), pnp_own(n);
+  ErrorStats central_star, central_true;
+  std::vector<int> seen(n, 0), failed(n, 0);
+  for (size_t k = 0; k < h.size(); ++k) {
+    const auto& r = h[k];
+    for (size_t i = 0; i < n; ++i) {
+      const auto& c = r.cameras[i];
+      seen[i] += c.delta;
+      failed[i] += result.frames[k][i].read_failed;
+      const std::optional<obs::SE3> est =
+          c.initialized ? std::optional<obs::SE3>(c.est_w) : std::nullopt;
+      net_star[i].add(est, r.g_star);
+      net_true[i].add(est, r.g_wo_true);
+      ind_star[i].add(c.indep_w, r.g_star);
+      ind_true[i].add(c.indep_w, r.g_wo_true);
+      pnp_star[i].add(c.pnp_w, r.g_star);
+      pnp_true[i].add(c.pnp_w, r.g_wo_true);
+      pnp_own[i].add(c.pnp_w, c.fictitious_w);  // measurement error: PnP vs the true g_io
+    }
+    central_star.add(r.central_w, r.g_star);
+    central_true.add(r.central_w, r.g_wo_true);
+  }
+  json cams = json::array();
+  for (size_t i = 0; i < n; ++i) {
+    json c;
+    c["id"] = net.cameras[i].id;
+    c["seen_fraction"] = h.empty() ? 0.0 : static_cast<double>(seen[i]) / h.size();
+    c["unreadable_frames"] = failed[i];
+    c["networked"] = {{"vs_g_star", net_star[i].to_json()}, {"vs_true", net_true[i].to_json()}};
+    c["independent"] = {{"vs_g_star", ind_star[i].to_json()}, {"vs_true", ind_true[i].to_json()}};
+    c["pnp"] = {{"vs_g_star", pnp_star[i].to_json()},
+                {"vs_true", pnp_true[i].to_json()},
+                {"vs_own_fictitious_target", pnp_own[i].to_json()}};
+    if (!h.empty()) {
+      const auto& last = h.back().cameras[i];
+      c["final_estimate"] = {{"p", vec3(last.est_w.translation())},
+                             {"r", vec3(obs::rotvec(last.est_w))}};
+    }
+    cams.push_back(c);
+  }
+  s["cameras"] = cams;
+  s["centralized_pnp_average"] = {{"vs_g_star", central_star.to_json()},
+                                  {"vs_true", central_true.to_json()}};
+  // Energies and epsilon-levels at the last frame with ground truth, and the sup of the
+  // epsilon-levels over the last quarter of the run.
+  json energy = nullptr;
+  double eps_p_tail = 0, eps_R_tail = 0;
+  for (size_t k = 0; k < h.size(); ++k) {
+    if (!h[k].energies) continue;
+    energy = {{"U_p", h[k].energies->U_p}, {"U_R", h[k].energies->U_R},
+              {"eps_p", h[k].eps->eps_p}, {"eps_R", h[k].eps->eps_R}, {"frame", h[k].frame}};
+    if (h[k].energies_indep) {
+      energy["U_p_independent_observers"] = h[k].energies_indep->U_p;
+      energy["U_R_independent_observers"] = h[k].energies_indep->U_R;
+    }
+    if (k >= h.size() - h.size() / 4) {
+      eps_p_tail = std::max(eps_p_tail, h[k].eps->eps_p);
+      eps_R_tail = std::max(eps_R_tail, h[k].eps->eps_R);
+    }
+  }
+  s["final"] = energy;
+  s["eps_p_last_quarter"] = energy.is_null() ? json(nullptr) : json(eps_p_tail);
+  s["eps_R_last_quarter"] = energy.is_null() ? json(nullptr) : json(eps_R_tail);
+  s["timing"] = {{"seconds", result.seconds},
+                 {"front_end_seconds", result.seconds_front_end},
+                 {"observer_seconds", result.seconds_observer},
+                 {"network_frames_per_second", result.seconds > 0 ? h.size() / result.seconds : 0.0}};
+  s["warnings"] = result.warnings;
+  return s;
+}
+
+json write_run_outputs(const fs::path& dir, const sources::NetworkSource& provider,
+                       const ImageRunOptions& options, const ImageRunResult& result) {
+  io::ensure_directory(dir);
+  const io::NetworkConfig& net = provider.network();
+  const size_t n = net.cameras.size();
+  const auto& h = result.history;
+  {
+    io::AtomicFile f(dir / "estimates.csv");
+    f << "frame,t,camera,delta,px,py,pz,rx,ry,rz\n";
+    for (const auto& r : h) {
+      for (size_t i = 0; i < n; ++i) {
+        const auto& c = r.cameras[i];
+        f << r.frame << ',' << r.t << ',' << net.cameras[i].id << ',' << (c.delta ? 1 : 0);
+        if (c.initialized) {
+          const obs::Vec3 p = c.est_w.translation(), w = obs::rotvec(c.est_w);
+          f << ',' << p.x() << ',' << p.y() << ',' << p.z() << ',' << w.x() << ',' << w.y() << ','
+            << w.z();
+        } else {
+          f << ",,,,,,";
+        }
+        f << '\n';
+      }
+    }
+    f.commit();
+  }
+  {
+    io::AtomicFile f(dir / "energies.csv");
+    f << "frame,t,U_p,U_R\n";
+    for (const auto& r : h)
+      if (r.energies) f << r.frame << ',' << r.t << ',' << r.energies->U_p << ',' << r.energies->U_R << '\n';
+    f.commit();
+  }
+  {
+    io::AtomicFile f(dir / "errors.csv");
+    f << "frame,t";
+    for (const auto& c : net.cameras) f << ",cam" << c.id << "_position_mm,cam" << c.id << "_orientation_deg";
+    f << '\n';
+    for (const auto& r : h) {
+      if (!r.g_star) continue;
+      f << r.frame << ',' << r.t;
+      for (size_t i = 0; i < n; ++i) {
+        if (r.cameras[i].initialized) {
+          const auto e = pose_error(r.cameras[i].est_w, *r.g_star);
+          f << ',' << e.position * 1000.0 << ',' << e.orientation_deg;
+        } else {
+          f << ",,";
+        }
+      }
+      f << '\n';
+    }
+    f.commit();
+  }
+  json s = run_summary(provider, options, result);
+  io::write_file_atomic(dir / "summary.json", s.dump(2) + "\n");
+  return s;
+}
+
+}  // namespace netvmo::run
