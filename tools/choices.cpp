@@ -20,4 +20,18 @@ CLI::Option* add_error_model_option(CLI::App& cmd, std::string& value, ErrorMode
   return cmd.add_option("--error", value, help)->check(CLI::IsMember(names));
 }
 
+void add_transport_options(CLI::App& cmd, run::TransportSettings& s) {
+  std::vector<std::string> names;
+  std::string help = "How estimates travel between the cameras' observers:";
+  for (const auto* k : run::transport_kinds()) {
+    names.emplace_back(k->name);
+    help += "\n" + std::string(k->name) + ": " + k->description;
+  }
+  cmd.add_option("--transport", s.kind, help)->check(CLI::IsMember(names))->capture_default_str();
+  cmd.add_option("--drop", s.drop, "lossy transport: probability that a message is lost")
+      ->check(CLI::Range(0.0, 0.99))
+      ->capture_default_str();
+  cmd.add_option("--seed", s.seed, "lossy transport: seed of the losses")->capture_default_str();
+}
+
 }  // namespace netvmo::tools

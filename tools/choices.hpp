@@ -5,6 +5,8 @@
 #include <CLI/CLI.hpp>
 #include <string>
 
+#include "netvmo/pipeline/run/transports.hpp"
+
 namespace netvmo::tools {
 
 enum class ErrorModelUse { images, simulation };
@@ -12,5 +14,8 @@ enum class ErrorModelUse { images, simulation };
 /// Adds --error, restricted to the registered error models usable for `use`, with one help line
 /// per model.
 CLI::Option* add_error_model_option(CLI::App& cmd, std::string& value, ErrorModelUse use);
+
+/// Adds --transport (the registered kinds, one help line each), --drop and --seed.
+void add_transport_options(CLI::App& cmd, run::TransportSettings& s);
 
 }  // namespace netvmo::tools

@@ -13,7 +13,7 @@
 
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/sources/camera_stream.hpp"
+#include "netvmo/pipeline/sources/dataset.hpp"
 #include "netvmo/pipeline/frontend/front_end.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
 #include "netvmo/pipeline/progress.hpp"

@@ -2,10 +2,10 @@
 # Proves that a change leaves netvmo's outputs unchanged: builds a reference commit and the
 # working tree, runs both on the same inputs and compares every output file byte for byte.
 #
-#   bash tools/compare_outputs.sh [REF] [--frames N]
+#   bash tools/compare_outputs.sh [REF [NEW]] [--frames N]
 #
 # REF defaults to the commit recorded in tools/compare_outputs.ref (the last commit before the
-# restructuring). Compared:
+# restructuring); NEW to the working tree (uncommitted changes included). Compared:
 #   simulate datasets/paper5.yaml and datasets/paper5_jacobian.yaml:
 #       energies.csv, estimates.csv, orientation_x.csv, summary.json
 #   render datasets/paper5_render.yaml: every image, calibration, network.yaml and truth file
@@ -17,12 +17,13 @@ cd "$(dirname "$0")/.."
 top=$(pwd)
 
 ref=""
+new=""
 frames=60
 while [ $# -gt 0 ]; do
   case "$1" in
     --frames) frames="$2"; shift 2 ;;
     -h|--help) sed -n 2,15p "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
-    *) ref="$1"; shift ;;
+    *) if [ -z "$ref" ]; then ref="$1"; else new="$1"; fi; shift ;;
   esac
 done
 [ -n "$ref" ] || ref=$(tr -d ' \n' < tools/compare_outputs.ref)
@@ -33,18 +34,27 @@ git rev-parse --verify -q "$ref^{commit}" >/dev/null || {
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/netvmo-compare.XXXXXX")
 trap 'rm -rf "$work"' EXIT
-echo "compare_outputs: reference $(git rev-parse --short "$ref"), working tree $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo '+changes'), $frames frames"
-
 mkdir -p "$work/ref-src"
 git archive "$ref" | tar -x -C "$work/ref-src"
+if [ -n "$new" ]; then
+  git rev-parse --verify -q "$new^{commit}" >/dev/null || { echo "compare_outputs: '$new' is not a commit" >&2; exit 2; }
+  mkdir -p "$work/new-src"
+  git archive "$new" | tar -x -C "$work/new-src"
+  new_src=$work/new-src new_build=$work/new-build
+  new_name=$(git rev-parse --short "$new")
+else
+  new_src=$top new_build=$top/build-compare
+  new_name="working tree $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo '+changes')"
+fi
+echo "compare_outputs: reference $(git rev-parse --short "$ref"), against $new_name, $frames frames"
 build() {  # build SRC_DIR BUILD_DIR
   cmake -S "$1" -B "$2" -DNETVMO_BUILD_TESTS=OFF -DNETVMO_BUILD_BENCHMARKS=OFF >/dev/null
   cmake --build "$2" -j2 --target netvmo >/dev/null
 }
 echo "compare_outputs: building the reference"
 build "$work/ref-src" "$work/ref-build"
-echo "compare_outputs: building the working tree"
-build "$top" "$top/build-compare"
+echo "compare_outputs: building $new_name"
+build "$new_src" "$new_build"
 
 produce() {  # produce NETVMO NAME: outputs in $work/NAME, produced under one common path
   local bin=$1 out=$work/current
@@ -62,8 +72,8 @@ produce() {  # produce NETVMO NAME: outputs in $work/NAME, produced under one co
 }
 echo "compare_outputs: running the reference"
 produce "$work/ref-build/netvmo" ref
-echo "compare_outputs: running the working tree"
-produce "$top/build-compare/netvmo" new
+echo "compare_outputs: running $new_name"
+produce "$new_build/netvmo" new
 
 status=0
 count=0
@@ -77,7 +87,7 @@ while IFS= read -r f; do
 done < <(find "$work/ref" -type f | sort)
 extra=$(cd "$work/new" && find . -type f | sort | sed 's|^\./||' | while read -r r; do [ -e "$work/ref/$r" ] || echo "$r"; done)
 if [ -n "$extra" ]; then
-  echo "only in the working tree: $extra"
+  echo "only in $new_name: $extra"
   status=1
 fi
 if [ $status = 0 ]; then

@@ -40,6 +40,7 @@ void add_run_options(CLI::App& cmd, RunCliOptions& o) {
   cmd.add_flag("--no-track", o.no_track,
                "Always search the whole image (default: search a window around the last "
                "detection first, the whole image when that fails and every 30 frames)");
+  add_transport_options(cmd, o.transport);
   cmd.add_option("--refine", o.refine, "Corner refinement: none, subpix or edges")
       ->check(CLI::IsMember({"none", "subpix", "edges"}))
       ->capture_default_str();
@@ -58,6 +59,7 @@ run::ImageRunOptions to_image_run_options(const RunCliOptions& o) {
   r.detector.quad_decimate = o.decimate;
   r.detector.refinement = frontend::parse_refinement(o.refine);
   r.tracking.enabled = !o.no_track;
+  r.transport = o.transport;
   return r;
 }
 
@@ -68,10 +70,8 @@ json run_and_report(sources::NetworkSource& provider, const RunCliOptions& o, co
   run::FrameHook hook;
   if (!o.no_overlays) {
     overlays = std::make_unique<run::OverlayWriter>(dir, provider);
-    hook = [&](int k, const std::vector<cv::Mat>& images,
-               const std::vector<run::CameraFrame>& cams, const run::FrameRecord& r) {
-      (*overlays)(k, images, cams, r);
-    };
+    hook = [&](int k, const std::vector<cv::Mat>& images, const std::vector<run::CameraFrame>& cams,
+               const run::FrameRecord& r) { (*overlays)(k, images, cams, r); };
   }
   const auto result = run::run_images(provider, options, hook);
   if (overlays) overlays->finish();
@@ -96,13 +96,17 @@ std::string cell(const json& stats, const char* key, double scale, const char* f
 }  // namespace
 
 void print_run_summary(const json& s, const fs::path& dir) {
-  std::printf("%s: %d frames, k_e = %g, k_s = %g, error %s, init %s, %d rounds/frame, %.1f network frames/s\n",
-              s["dataset"].get<std::string>().c_str(), s["frames"].get<int>(), s["k_e"].get<double>(),
-              s["k_s"].get<double>(), s["error"].get<std::string>().c_str(),
-              s["init"].get<std::string>().c_str(), s["rounds_per_frame"].get<int>(),
-              s["timing"]["network_frames_per_second"].get<double>());
+  std::printf(
+      "%s: %d frames, k_e = %g, k_s = %g, error %s, init %s, %d rounds/frame, %.1f network "
+      "frames/s\n",
+      s["dataset"].get<std::string>().c_str(), s["frames"].get<int>(), s["k_e"].get<double>(),
+      s["k_s"].get<double>(), s["error"].get<std::string>().c_str(),
+      s["init"].get<std::string>().c_str(), s["rounds_per_frame"].get<int>(),
+      s["timing"]["network_frames_per_second"].get<double>());
   const bool truth = !s["final"].is_null();
-  std::printf("camera  seen   %s\n", truth ? "final error to g*: networked | independent | PnP   [mm, deg]" : "(no ground truth: no errors)");
+  std::printf("camera  seen   %s\n",
+              truth ? "final error to g*: networked | independent | PnP   [mm, deg]"
+                    : "(no ground truth: no errors)");
   for (const auto& c : s["cameras"]) {
     std::printf("%6d  %3.0f%%", c["id"].get<int>(), 100.0 * c["seen_fraction"].get<double>());
     if (truth) {

@@ -6,24 +6,26 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "netvmo/pipeline/sources/network_source.hpp"
 #include "netvmo/pipeline/run/image_run.hpp"
+#include "netvmo/pipeline/sources/network_source.hpp"
 
 namespace netvmo::tools {
 
+/// The command line's view of run::ImageRunOptions: every default is the library's own.
 struct RunCliOptions {
-  double k_e = 1.0;
-  double k_s = 50.0;
-  std::string error = "pnp";
-  std::string init = "pnp";
-  int rounds = 0;
-  bool keep_going = false;
+  double k_e = run::RunnerSettings{}.k_e;
+  double k_s = run::RunnerSettings{}.k_s;
+  std::string error = run::RunnerSettings{}.error_model;
+  std::string init = run::to_string(run::RunnerSettings{}.init);
+  int rounds = run::RunnerSettings{}.rounds;
+  bool keep_going = run::ImageRunOptions{}.keep_going;
   bool no_overlays = false;
   bool no_plots = false;
   int max_frames = 0;
-  double decimate = 2.0;
-  std::string refine = "edges";
-  bool no_track = false;
+  double decimate = frontend::DetectorSettings{}.quad_decimate;
+  std::string refine = frontend::to_string(frontend::DetectorSettings{}.refinement);
+  bool no_track = !frontend::TrackingSettings{}.enabled;
+  run::TransportSettings transport;
 };
 
 void add_run_options(CLI::App& cmd, RunCliOptions& o);

@@ -5,7 +5,9 @@
 #include <random>
 
 #include "netvmo/observer/jacobian.hpp"
+#include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/run/runner.hpp"
+#include "netvmo/pipeline/run/transports.hpp"
 
 using namespace netvmo;
 using obs::make_pose;
@@ -163,4 +165,39 @@ TEST(Runner, MovingCamerasTrackAStaticTarget) {
   }
   EXPECT_LT(err[1], 0.01);              // with the camera-motion term: locked on
   EXPECT_GT(err[0], 5.0 * err[1]);      // without it: the estimate lags the moving cameras
+}
+
+TEST(Runner, TransportIsChosenByNameFromTheRegistry) {
+  // The in-process transport chosen by name is the default; a lossy one (30 % of the messages
+  // lost, seeded) gives different trajectories that still converge to g*; an unknown name is
+  // refused with the known ones.
+  PaperNetwork s;
+  auto run_with = [&](const run::TransportSettings& t) {
+    run::RunnerSettings rs;
+    rs.error_model = "exact";
+    run::NetworkRunner r(s.graph, s.g_wi, rs);
+    if (!t.kind.empty()) r.set_transport(run::make_transport(t, s.graph));
+    std::mt19937 rng(3);
+    for (int k = 0; k < 300; ++k) r.process(k, k / 30.0, 1.0 / 30, s.inputs(rng, 0.0));
+    return r.history().back();
+  };
+  const auto plain = run_with({"", 0.0, 1});
+  const auto named = run_with({"in-process", 0.0, 1});
+  const auto lossy = run_with({"lossy", 0.3, 7});
+  const auto lossy_again = run_with({"lossy", 0.3, 7});
+  for (size_t i = 0; i < 5; ++i) {
+    EXPECT_TRUE(named.cameras[i].est_w.isApprox(plain.cameras[i].est_w, 0.0)) << i;
+    EXPECT_TRUE(lossy.cameras[i].est_w.isApprox(lossy_again.cameras[i].est_w, 0.0)) << i;
+  }
+  EXPECT_GT(max_position_error(lossy, *plain.g_star) + max_orientation_error_deg(lossy, *plain.g_star),
+            0.0);
+  EXPECT_FALSE(lossy.cameras[3].est_w.isApprox(plain.cameras[3].est_w, 1e-12));
+  EXPECT_LT(max_position_error(lossy, *lossy.g_star), 0.01);
+  EXPECT_LT(max_orientation_error_deg(lossy, *lossy.g_star), 0.5);
+  try {
+    run::make_transport({"carrier-pigeon", 0.0, 1}, s.graph);
+    FAIL() << "no exception";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("in-process, lossy"), std::string::npos) << e.what();
+  }
 }

@@ -9,7 +9,7 @@
 #include <visp3/core/vpXmlParserCamera.h>
 
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/sources/camera_stream.hpp"
+#include "netvmo/pipeline/sources/dataset.hpp"
 #include "netvmo/pipeline/frontend/front_end.hpp"
 #include "synth.hpp"
 #include "test_util.hpp"

@@ -43,6 +43,7 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
   std::vector<obs::SE3> g_wi;
   for (const auto& c : net.cameras) g_wi.push_back(c.g_wi);
   run::NetworkRunner runner(graph, g_wi, rs);
+  runner.set_transport(make_transport(options.transport, graph));
 
   frontend::DetectorSettings ds = options.detector;
   ds.family = net.target.family;

@@ -57,6 +57,10 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
   s["k_s"] = options.runner.k_s;
   s["error"] = options.runner.error_model;
   s["init"] = run::to_string(options.runner.init);
+  if (options.transport.kind != TransportSettings{}.kind)  // recorded when not the default
+    s["transport"] = {{"kind", options.transport.kind},
+                      {"drop", options.transport.drop},
+                      {"seed", options.transport.seed}};
   s["rounds_per_frame"] = result.substeps;
   s["step_factor"] = result.step_factor;  // h (k_e + 2 k_s d_max): < 2 stable
   s["reference"] =

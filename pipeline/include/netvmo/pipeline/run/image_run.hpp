@@ -11,6 +11,7 @@
 #include "netvmo/pipeline/sources/network_source.hpp"
 #include "netvmo/pipeline/frontend/front_end.hpp"
 #include "netvmo/pipeline/run/runner.hpp"
+#include "netvmo/pipeline/run/transports.hpp"
 
 namespace netvmo::run {
 
@@ -18,6 +19,7 @@ struct ImageRunOptions {
   run::RunnerSettings runner;  ///< gains, error model, initialisation, rounds (tag size: dataset)
   frontend::DetectorSettings detector;   ///< detector settings (family and target id: from the dataset)
   frontend::TrackingSettings tracking;   ///< windowed search around the last detection
+  TransportSettings transport;  ///< how estimates travel between cameras (transports.hpp)
   bool keep_going = false;     ///< an unreadable image blinds its camera for that frame (warning)
                                ///< instead of stopping the run
   int workers = 2;             ///< threads detecting cameras in parallel (one detector each)

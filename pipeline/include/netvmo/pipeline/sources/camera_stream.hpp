@@ -1,25 +1,11 @@
-// Frame sources (image folders and video files) and dataset folders.
+// One camera's image stream (CameraStream) and the registry of stream kinds a dataset folder can
+// hold for a camera: an image folder cam_<id>/ or a video file cam_<id>.<ext>. The network-level
+// source of a run (every camera's stream, calibrations, ground truth) is NetworkSource
+// (network_source.hpp); dataset folders are read by open_dataset() (dataset.hpp).
 //
-// A dataset folder (rendered by `netvmo render` or recorded) holds
-//   network.yaml                        (see network_config.hpp)
-//   calib/cam_<id>.yaml                 OpenCV FileStorage (also .yml), or
-//   calib/cam_<id>.xml                  ViSP XML (vpXmlParserCamera, camera name cam_<id>)
-//   cam_<id>/                           images (png, jpg, jpeg, pgm), or
-//   cam_<id>.<ext>                      a video file cv::VideoCapture reads (avi, mp4, mkv, ...)
-//   truth.csv, target.csv               optional ground truth (truth_io.hpp)
-//
-// Frame-count rule (never a silent shift of frames):
-//  - Image folder, all file stems numeric (e.g. 000042.png): the number IS the frame index
-//    (rendered datasets start at 0). A number absent from the folder is a missing frame: the
-//    camera is blind there, and open_dataset() warns. Two files with the same number are an
-//    error.
-//  - Image folder, any non-numeric stem: frame index = position in the name-sorted list.
-//  - Video file: frame index = position in the decoded stream (count from the container).
-//  - The dataset's frame count is network.yaml's `frames` if given, otherwise the largest
-//    count over the cameras. A camera with fewer frames is blind after its last one (warning);
-//    frames beyond `frames` are ignored (warning).
-//  - A frame that exists but cannot be decoded is an InputError naming the file (and frame for
-//    videos), thrown by read(); callers may treat that camera as blind for that frame.
+// Adding a stream kind: a file in pipeline/src/sources/ that implements CameraStream and defines a
+// function returning its StreamKind, and one line in the table of
+// pipeline/src/sources/stream_kinds.cpp.
 #pragma once
 
 #include <filesystem>
@@ -28,12 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "netvmo/pipeline/io/calibration.hpp"
-#include "netvmo/pipeline/io/network_config.hpp"
-
 namespace netvmo::sources {
-
-/// One camera's frames.
+/// One camera's frames, by frame index.
 class CameraStream {
  public:
   virtual ~CameraStream() = default;
@@ -57,30 +39,18 @@ std::unique_ptr<CameraStream> open_image_folder(const std::filesystem::path& dir
 /// Video file via cv::VideoCapture. Throws InputError naming the file if it cannot be opened.
 std::unique_ptr<CameraStream> open_video(const std::filesystem::path& file);
 
-struct DatasetCamera {
-  int id = 0;
-  io::Calibration calib;
-  std::unique_ptr<CameraStream> source;
+/// A kind of camera stream found in a dataset folder.
+struct StreamKind {
+  const char* name;         ///< e.g. "image-folder", "video"
+  const char* description;  ///< one phrase for messages ("a folder cam_<id>/ of ... images")
+  /// The entries of this kind for camera `stem` (= "cam_<id>") in a dataset folder.
+  std::vector<std::filesystem::path> (*find)(const std::filesystem::path& dataset,
+                                             const std::string& stem);
+  /// Opens one entry that find() returned.
+  std::unique_ptr<CameraStream> (*open)(const std::filesystem::path& entry);
 };
 
-struct Dataset {
-  std::filesystem::path dir;
-  io::NetworkConfig network;
-  std::vector<DatasetCamera> cameras;  ///< in network.yaml order
-  int frame_count = 0;                 ///< see the frame-count rule above
-  std::vector<std::string> warnings;   ///< one line each, for the user
-
-  /// Camera `camera_index` (position in `cameras`) at `frame`: 8-bit gray, or empty when the
-  /// camera is blind there (missing frame, after its last frame). Throws InputError naming the
-  /// file if the image is unreadable or its size differs from the calibration.
-  cv::Mat read(size_t camera_index, int frame);
-  /// Index of a camera id in `cameras`, or -1.
-  int index_of(int camera_id) const { return network.index_of(camera_id); }
-};
-
-/// Opens a dataset folder: network.yaml, then for every camera its calibration and its image
-/// folder or video. Throws InputError naming the offending file (missing calibration, no
-/// images or video for a declared camera, both a folder and a video, ...).
-Dataset open_dataset(const std::filesystem::path& dir);
+/// The registry: every stream kind, in the order they are looked for.
+const std::vector<const StreamKind*>& stream_kinds();
 
 }  // namespace netvmo::sources

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "netvmo/pipeline/io/calibration.hpp"
-#include "netvmo/pipeline/sources/camera_stream.hpp"
+#include "netvmo/pipeline/sources/dataset.hpp"
 #include "netvmo/pipeline/io/network_config.hpp"
 
 namespace netvmo::sources {

@@ -1,0 +1,64 @@
+// Dataset folders: the camera network, calibrations and every camera's stream.
+//
+// A dataset folder (rendered by `netvmo render` or recorded) holds
+//   network.yaml                        (see network_config.hpp)
+//   calib/cam_<id>.yaml                 OpenCV FileStorage (also .yml), or
+//   calib/cam_<id>.xml                  ViSP XML (vpXmlParserCamera, camera name cam_<id>)
+//   cam_<id>/ or cam_<id>.<ext>         the camera's frames: one entry of a registered stream
+//                                       kind (camera_stream.hpp): an image folder (png, jpg,
+//                                       jpeg, pgm) or a video file cv::VideoCapture reads
+//   truth.csv, target.csv               optional ground truth (truth_io.hpp)
+//
+// Frame-count rule (never a silent shift of frames):
+//  - Image folder, all file stems numeric (e.g. 000042.png): the number IS the frame index
+//    (rendered datasets start at 0). A number absent from the folder is a missing frame: the
+//    camera is blind there, and open_dataset() warns. Two files with the same number are an
+//    error.
+//  - Image folder, any non-numeric stem: frame index = position in the name-sorted list.
+//  - Video file: frame index = position in the decoded stream (count from the container).
+//  - The dataset's frame count is network.yaml's `frames` if given, otherwise the largest
+//    count over the cameras. A camera with fewer frames is blind after its last one (warning);
+//    frames beyond `frames` are ignored (warning).
+//  - A frame that exists but cannot be decoded is an InputError naming the file (and frame for
+//    videos), thrown by read(); callers may treat that camera as blind for that frame.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "netvmo/pipeline/io/calibration.hpp"
+#include "netvmo/pipeline/io/network_config.hpp"
+#include "netvmo/pipeline/sources/camera_stream.hpp"
+
+namespace netvmo::sources {
+
+struct DatasetCamera {
+  int id = 0;
+  io::Calibration calib;
+  std::unique_ptr<CameraStream> source;
+};
+
+struct Dataset {
+  std::filesystem::path dir;
+  io::NetworkConfig network;
+  std::vector<DatasetCamera> cameras;  ///< in network.yaml order
+  int frame_count = 0;                 ///< see the frame-count rule above
+  std::vector<std::string> warnings;   ///< one line each, for the user
+
+  /// Camera `camera_index` (position in `cameras`) at `frame`: 8-bit gray, or empty when the
+  /// camera is blind there (missing frame, after its last frame). Throws InputError naming the
+  /// file if the image is unreadable or its size differs from the calibration.
+  cv::Mat read(size_t camera_index, int frame);
+  /// Index of a camera id in `cameras`, or -1.
+  int index_of(int camera_id) const { return network.index_of(camera_id); }
+};
+
+/// Opens a dataset folder: network.yaml, then for every camera its calibration and its image
+/// folder or video. Throws InputError naming the offending file (missing calibration, no
+/// images or video for a declared camera, both a folder and a video, ...).
+Dataset open_dataset(const std::filesystem::path& dir);
+
+}  // namespace netvmo::sources

@@ -1,0 +1,121 @@
+#include "netvmo/pipeline/sources/dataset.hpp"
+
+#include <fstream>
+#include <set>
+
+#include "netvmo/pipeline/error.hpp"
+#include "stream_util.hpp"
+
+namespace netvmo::sources {
+namespace fs = std::filesystem;
+using detail::all_digits;
+
+namespace {
+
+bool looks_like_opencv_storage(const fs::path& xml) {
+  std::ifstream in(xml);
+  std::string head(512, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<size_t>(in.gcount()));
+  return head.find("<opencv_storage>") != std::string::npos;
+}
+
+std::string list_frames(const std::vector<int>& v) {
+  std::string s;
+  for (size_t i = 0; i < v.size() && i < 5; ++i) s += (i ? ", " : "") + std::to_string(v[i]);
+  if (v.size() > 5) s += ", ...";
+  return s;
+}
+
+}  // namespace
+
+cv::Mat Dataset::read(size_t camera_index, int frame) {
+  DatasetCamera& cam = cameras.at(camera_index);
+  if (frame >= frame_count) return {};
+  cv::Mat m = cam.source->read(frame);
+  if (!m.empty() && (m.cols != cam.calib.width || m.rows != cam.calib.height))
+    throw InputError(cam.source->frame_name(frame) + ": image is " + std::to_string(m.cols) + "x" +
+                     std::to_string(m.rows) + " but " + cam.calib.source + " says " +
+                     std::to_string(cam.calib.width) + "x" + std::to_string(cam.calib.height));
+  return m;
+}
+
+Dataset open_dataset(const fs::path& dir) {
+  if (!fs::is_directory(dir)) throw InputError(dir.string() + ": dataset folder not found");
+  Dataset ds;
+  ds.dir = dir;
+  ds.network = io::load_network_config(dir / "network.yaml");
+
+  std::set<std::string> declared;
+  for (const auto& cc : ds.network.cameras) {
+    const std::string name = "cam_" + std::to_string(cc.id);
+    declared.insert(name);
+    DatasetCamera cam;
+    cam.id = cc.id;
+    // Calibration
+    const fs::path cdir = dir / "calib";
+    const fs::path yaml = cdir / (name + ".yaml"), yml = cdir / (name + ".yml"),
+                   xml = cdir / (name + ".xml");
+    if (fs::exists(yaml)) {
+      cam.calib = io::load_calibration_opencv(yaml);
+    } else if (fs::exists(yml)) {
+      cam.calib = io::load_calibration_opencv(yml);
+    } else if (fs::exists(xml)) {
+      cam.calib = looks_like_opencv_storage(xml) ? io::load_calibration_opencv(xml)
+                                                 : io::load_calibration_visp_xml(xml, name);
+    } else {
+      throw InputError(yaml.string() + ": calibration not found for camera " +
+                       std::to_string(cc.id) + " (also looked for " + name + ".yml and " + name +
+                       ".xml)");
+    }
+    // Frames: exactly one entry of one registered stream kind (image folder, video, ...).
+    std::vector<std::pair<const StreamKind*, fs::path>> found;
+    for (const auto* kind : stream_kinds())
+      for (const auto& p : kind->find(dir, name)) found.emplace_back(kind, p);
+    if (found.empty()) {
+      std::string kinds;
+      for (const auto* kind : stream_kinds())
+        kinds += std::string(kinds.empty() ? "" : " or ") + kind->description;
+      throw InputError((dir / name).string() + ": no frames for camera " + std::to_string(cc.id) +
+                       " of network.yaml (expected " + kinds + ")");
+    }
+    if (found.size() > 1)
+      throw InputError(found[1].second.string() + ": camera " + std::to_string(cc.id) +
+                       " has both " + found[0].second.filename().string() + " (" +
+                       found[0].first->name + ") and " + found[1].second.filename().string() +
+                       " (" + found[1].first->name + "); keep one");
+    cam.source = found[0].first->open(found[0].second);
+    const auto missing = cam.source->missing_frames();
+    if (!missing.empty())
+      ds.warnings.push_back(cam.source->path().string() + ": " + std::to_string(missing.size()) +
+                            " missing frame(s) (" + list_frames(missing) + "); camera " +
+                            std::to_string(cc.id) + " is blind there");
+    ds.cameras.push_back(std::move(cam));
+  }
+  // Entries for cameras network.yaml does not declare are ignored, with a warning.
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string stem = e.path().stem().string();
+    if (stem.rfind("cam_", 0) == 0 && all_digits(stem.substr(4)) && !declared.count(stem))
+      ds.warnings.push_back(e.path().string() + ": camera " + stem.substr(4) +
+                            " is not in network.yaml; ignored");
+  }
+  // Frame count rule.
+  int longest = 0;
+  for (const auto& c : ds.cameras) longest = std::max(longest, c.source->frame_count());
+  ds.frame_count = ds.network.frames ? *ds.network.frames : longest;
+  for (const auto& c : ds.cameras) {
+    const int n = c.source->frame_count();
+    if (n < ds.frame_count)
+      ds.warnings.push_back(c.source->path().string() + ": camera " + std::to_string(c.id) +
+                            " has " + std::to_string(n) + " frames, the dataset " +
+                            std::to_string(ds.frame_count) + "; it is blind from frame " +
+                            std::to_string(n) + " on");
+    else if (n > ds.frame_count)
+      ds.warnings.push_back(c.source->path().string() + ": camera " + std::to_string(c.id) +
+                            " has " + std::to_string(n) + " frames but network.yaml says frames: " +
+                            std::to_string(ds.frame_count) + "; the extra frames are ignored");
+  }
+  return ds;
+}
+
+}  // namespace netvmo::sources

@@ -1,0 +1,112 @@
+// Image folders: cam_<id>/ holding png, jpg, jpeg or pgm images (frame-count rule in
+// sources/dataset.hpp).
+#include <algorithm>
+#include <map>
+#include <opencv2/imgcodecs.hpp>
+
+#include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/sources/camera_stream.hpp"
+#include "stream_util.hpp"
+
+namespace netvmo::sources {
+namespace fs = std::filesystem;
+using detail::all_digits;
+using detail::lower;
+using detail::to_gray;
+
+namespace {
+
+constexpr long kMaxFrameNumber = 100'000'000;
+
+bool is_image_ext(const fs::path& p) {
+  const std::string e = lower(p.extension().string());
+  return e == ".png" || e == ".jpg" || e == ".jpeg" || e == ".pgm";
+}
+
+class ImageFolderStream : public CameraStream {
+ public:
+  explicit ImageFolderStream(fs::path dir) : dir_(std::move(dir)) {
+    std::vector<fs::path> files;
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(dir_, ec))
+      if (e.is_regular_file() && is_image_ext(e.path())) files.push_back(e.path());
+    if (ec) throw InputError(dir_.string() + "/: cannot list folder: " + ec.message());
+    if (files.empty())
+      throw InputError(dir_.string() + "/: no images (png, jpg, jpeg, pgm) in the folder");
+    std::sort(files.begin(), files.end(),
+              [](const fs::path& a, const fs::path& b) { return a.filename() < b.filename(); });
+    const bool numeric = std::all_of(files.begin(), files.end(), [](const fs::path& p) {
+      return all_digits(p.stem().string());
+    });
+    if (!numeric) {
+      frames_ = files;
+      return;
+    }
+    std::map<long, fs::path> by_number;
+    for (const auto& p : files) {
+      const std::string stem = p.stem().string();
+      if (stem.size() > 9 || std::stol(stem) > kMaxFrameNumber)
+        throw InputError(p.string() + ": frame number too large");
+      const long n = std::stol(stem);
+      auto [it, inserted] = by_number.emplace(n, p);
+      if (!inserted)
+        throw InputError(p.string() + ": same frame number as " + it->second.filename().string() +
+                         "; keep one of them");
+    }
+    frames_.resize(static_cast<size_t>(by_number.rbegin()->first + 1));
+    for (const auto& [n, p] : by_number) frames_[static_cast<size_t>(n)] = p;
+    for (size_t i = 0; i < frames_.size(); ++i)
+      if (frames_[i].empty()) missing_.push_back(static_cast<int>(i));
+  }
+  int frame_count() const override { return static_cast<int>(frames_.size()); }
+  bool has_frame(int f) const override {
+    return f >= 0 && f < frame_count() && !frames_[static_cast<size_t>(f)].empty();
+  }
+  cv::Mat read(int f) override {
+    if (!has_frame(f)) return {};
+    const fs::path& p = frames_[static_cast<size_t>(f)];
+    cv::Mat m;
+    try {
+      m = cv::imread(p.string(), cv::IMREAD_GRAYSCALE);
+    } catch (const cv::Exception& e) {
+      throw InputError(p.string() + ": cannot read image: " + e.err);
+    }
+    if (m.empty())
+      throw InputError(p.string() + ": cannot read image (unreadable, corrupt or not an image)");
+    return to_gray(m);
+  }
+  std::string frame_name(int f) const override {
+    if (has_frame(f)) return frames_[static_cast<size_t>(f)].string();
+    return dir_.string() + "/ frame " + std::to_string(f) + " (missing)";
+  }
+  const fs::path& path() const override { return dir_; }
+  std::vector<int> missing_frames() const override { return missing_; }
+
+ private:
+  fs::path dir_;
+  std::vector<fs::path> frames_;  // by frame index; empty path = missing
+  std::vector<int> missing_;
+};
+
+}  // namespace
+
+std::unique_ptr<CameraStream> open_image_folder(const fs::path& dir) {
+  if (!fs::is_directory(dir)) throw InputError(dir.string() + "/: image folder not found");
+  return std::make_unique<ImageFolderStream>(dir);
+}
+
+namespace kinds {
+const StreamKind& image_folder() {
+  static const StreamKind kind{"image-folder", "a folder cam_<id>/ of png, jpg, jpeg or pgm images",
+                               [](const fs::path& dataset, const std::string& stem) {
+                                 std::vector<fs::path> found;
+                                 if (fs::is_directory(dataset / stem))
+                                   found.push_back(dataset / stem);
+                                 return found;
+                               },
+                               open_image_folder};
+  return kind;
+}
+}  // namespace kinds
+
+}  // namespace netvmo::sources

@@ -1,0 +1,94 @@
+// Video files: cam_<id>.<ext>, anything cv::VideoCapture decodes (avi, mp4, mkv, ...).
+#include <cmath>
+#include <opencv2/videoio.hpp>
+
+#include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/sources/camera_stream.hpp"
+#include "stream_util.hpp"
+
+namespace netvmo::sources {
+namespace fs = std::filesystem;
+using detail::to_gray;
+
+namespace {
+
+class VideoStream : public CameraStream {
+ public:
+  explicit VideoStream(fs::path file) : file_(std::move(file)) {
+    open();
+    const double n = cap_.get(cv::CAP_PROP_FRAME_COUNT);
+    if (std::isfinite(n) && n > 0) {
+      count_ = static_cast<int>(std::lround(n));
+    } else {  // container does not say: count by decoding
+      count_ = 0;
+      while (cap_.grab()) ++count_;
+      open();
+    }
+  }
+  int frame_count() const override { return count_; }
+  bool has_frame(int f) const override { return f >= 0 && f < count_; }
+  cv::Mat read(int f) override {
+    if (!has_frame(f)) return {};
+    if (f < next_) open();
+    while (next_ < f) {
+      if (!cap_.grab()) fail(next_);
+      ++next_;
+    }
+    cv::Mat m;
+    if (!cap_.read(m) || m.empty()) fail(f);
+    ++next_;
+    return to_gray(m).clone();
+  }
+  std::string frame_name(int f) const override {
+    return file_.string() + " frame " + std::to_string(f);
+  }
+  const fs::path& path() const override { return file_; }
+
+ private:
+  void open() {
+    cap_.release();
+    bool ok = false;
+    try {
+      ok = cap_.open(file_.string(), cv::CAP_ANY);
+    } catch (const cv::Exception&) {
+      ok = false;
+    }
+    if (!ok || !cap_.isOpened())
+      throw InputError(file_.string() + ": cannot open video (unsupported or corrupt file)");
+    next_ = 0;
+  }
+  [[noreturn]] void fail(int f) {
+    const int at = f;
+    open();  // leave the capture in a known state for the next call
+    throw InputError(file_.string() + ": cannot decode frame " + std::to_string(at) + " of " +
+                     std::to_string(count_) + " (corrupt or truncated video)");
+  }
+  fs::path file_;
+  cv::VideoCapture cap_;
+  int count_ = 0;
+  int next_ = 0;
+};
+}  // namespace
+
+std::unique_ptr<CameraStream> open_video(const fs::path& file) {
+  if (!fs::is_regular_file(file)) throw InputError(file.string() + ": video file not found");
+  return std::make_unique<VideoStream>(file);
+}
+
+namespace kinds {
+const StreamKind& video() {
+  static const StreamKind kind{
+      "video", "a video file cam_<id>.<ext> that OpenCV decodes (avi, mp4, mkv, ...)",
+      [](const fs::path& dataset, const std::string& stem) {
+        std::vector<fs::path> found;
+        for (const auto& e : fs::directory_iterator(dataset))
+          if (e.is_regular_file() && e.path().stem() == stem) found.push_back(e.path());
+        std::sort(found.begin(), found.end());
+        return found;
+      },
+      open_video};
+  return kind;
+}
+}  // namespace kinds
+
+}  // namespace netvmo::sources
