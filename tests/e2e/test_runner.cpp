@@ -8,6 +8,7 @@
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/run/runner.hpp"
 #include "netvmo/pipeline/run/transports.hpp"
+#include "paper5.hpp"
 
 using namespace netvmo;
 using obs::make_pose;
@@ -15,17 +16,9 @@ using obs::SE3;
 using obs::Vec3;
 
 namespace {
-struct PaperNetwork {
-  obs::Graph graph{5, {{0, 1}, {0, 2}, {0, 4}, {1, 2}, {2, 3}, {3, 4}}};
-  std::vector<SE3> g_wi;        // believed = true camera poses
-  std::vector<SE3> g_wo;        // fictitious targets (cameras 1-3)
-  PaperNetwork() {
-    const Vec3 p[5] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, 0}};
-    for (const auto& pi : p) g_wi.push_back(make_pose(pi, Vec3(3.141592653589793, 0, 0)));
-    g_wo = {make_pose({0.55, 1.00, -1.91}, {0.30, 0.19, 0.21}),
-            make_pose({0.30, 0.80, -1.84}, {0.21, 0.30, 0.19}),
-            make_pose({0.56, 1.05, -2.00}, {0.29, 0.20, 0.31})};
-  }
+// The paper's setup with the cameras turned to face the targets (believed = true poses).
+struct PaperNetwork : test::Paper5 {
+  PaperNetwork() : test::Paper5(/*turned=*/true) {}
   // Inputs of one frame: cameras 1-3 detect, PnP is the truth perturbed by noise.
   std::vector<run::CameraInput> inputs(std::mt19937& rng, double pnp_noise) const {
     std::normal_distribution<double> nd(0.0, pnp_noise);

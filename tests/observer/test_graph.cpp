@@ -8,12 +8,13 @@
 #include <random>
 
 #include "netvmo/observer/graph.hpp"
+#include "paper5.hpp"
 
 using namespace netvmo::obs;
 
 namespace {
 // The paper's Section 5 graph, 0-based.
-Graph paper_graph() { return Graph(5, {{0, 1}, {0, 2}, {0, 4}, {1, 2}, {2, 3}, {3, 4}}); }
+Graph paper_graph() { return netvmo::test::Paper5().graph; }
 
 Graph path_graph(int n) {
   std::vector<Graph::Edge> e;

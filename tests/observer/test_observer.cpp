@@ -6,21 +6,12 @@
 
 #include "netvmo/observer/metrics.hpp"
 #include "netvmo/observer/networked_observer.hpp"
+#include "paper5.hpp"
 
 using namespace netvmo::obs;
 
 namespace {
-struct PaperSetup {
-  Graph graph{5, {{0, 1}, {0, 2}, {0, 4}, {1, 2}, {2, 3}, {3, 4}}};
-  std::vector<SE3> g_wi;
-  std::vector<SE3> g_wo;  // fictitious targets of cameras 1..3
-  PaperSetup() {
-    const Vec3 p[5] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, 0}};
-    for (const auto& pi : p) g_wi.push_back(make_pose(pi, Vec3::Zero()));
-    g_wo = {make_pose({0.55, 1.00, -1.91}, {0.30, 0.19, 0.21}),
-            make_pose({0.30, 0.80, -1.84}, {0.21, 0.30, 0.19}),
-            make_pose({0.56, 1.05, -2.00}, {0.29, 0.20, 0.31})};
-  }
+struct PaperSetup : netvmo::test::Paper5 {
   std::vector<Measurement> measurements() const {
     std::vector<Measurement> z(5);
     for (int i = 0; i < 3; ++i) {
