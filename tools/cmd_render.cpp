@@ -57,7 +57,7 @@ void add_render(CLI::App& app, int& exit_code) {
         const auto& c = summary.cameras[i];
         const auto t0 = renderer->truth(int(i), 0);
         const render::Pose g_fict = scene.cameras[i].g_wi_believed * t0.g_io;
-        const render::Vec3 p = g_fict.translation(), r = render::rotation_to_vector(g_fict.linear());
+        const render::Vec3 p = g_fict.translation(), r = obs::log_so3(g_fict.linear());
         std::printf("%6d  %10.1f%%  %10.1f%%   p [%.3f %.3f %.3f]  r [%.3f %.3f %.3f]\n", c.id,
                     100.0 * c.frames_in_fov / summary.frames, 100.0 * c.frames_visible / summary.frames,
                     p.x(), p.y(), p.z(), r.x(), r.y(), r.z());

@@ -47,7 +47,7 @@ std::string network_yaml(const render::SceneDescription& scene, int frames) {
   y << YAML::Key << "cameras" << YAML::Value << YAML::BeginSeq;
   for (const auto& c : scene.cameras) {
     const render::Vec3 p = c.g_wi_believed.translation();
-    const render::Vec3 r = render::rotation_to_vector(c.g_wi_believed.linear());
+    const render::Vec3 r = obs::log_so3(c.g_wi_believed.linear());
     y << YAML::BeginMap;
     y << YAML::Key << "id" << YAML::Value << c.id;
     y << YAML::Key << "p_wi" << YAML::Value << YAML::Flow << std::vector<double>{p.x(), p.y(), p.z()};
@@ -91,7 +91,7 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
     io::AtomicFile cams(out / "truth_cameras.csv");
     cams << "camera,px,py,pz,rx,ry,rz\n";
     for (const auto& c : scene.cameras) {
-      const render::Vec3 p = c.g_wi_true.translation(), rv = render::rotation_to_vector(c.g_wi_true.linear());
+      const render::Vec3 p = c.g_wi_true.translation(), rv = obs::log_so3(c.g_wi_true.linear());
       cams << c.id;
       for (int i = 0; i < 3; ++i) cams << "," << fmt("%.9g", p[i]);
       for (int i = 0; i < 3; ++i) cams << "," << fmt("%.9g", rv[i]);
@@ -113,7 +113,7 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
   for (int f = 0; f < frames; ++f) {
     r.set_frame(f);
     const render::Pose g_wo = r.target_pose(f);
-    const render::Vec3 p = g_wo.translation(), rv = render::rotation_to_vector(g_wo.linear());
+    const render::Vec3 p = g_wo.translation(), rv = obs::log_so3(g_wo.linear());
     target << f << "," << fmt("%.6f", r.time_of(f));
     for (int i = 0; i < 3; ++i) target << "," << fmt("%.9g", p[i]);
     for (int i = 0; i < 3; ++i) target << "," << fmt("%.9g", rv[i]);

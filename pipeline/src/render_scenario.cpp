@@ -34,7 +34,7 @@ Pose read_pose(const Value& v) {
     const auto p = m.find("p");
     const auto r = m.find("r");
     if (!p && !r) m.fail("expected p: [x, y, z] and r: [rx, ry, rz], or eye/look_at/up");
-    g = render::make_pose(p ? p->vec<3>() : Vec3::Zero(), r ? r->vec<3>() : Vec3::Zero());
+    g = obs::make_pose(p ? p->vec<3>() : Vec3::Zero(), r ? r->vec<3>() : Vec3::Zero());
   }
   m.finish();
   return g;
@@ -331,7 +331,7 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
       const auto dr = om.find("dr");
       // Believed = true pose moved by dp (world) and turned by dr (world rotation vector).
       if (dp) cam.g_wi_believed.translation() += dp->vec<3>();
-      if (dr) cam.g_wi_believed.linear() = render::rotation_from_vector(dr->vec<3>()) * cam.g_wi_true.linear();
+      if (dr) cam.g_wi_believed.linear() = obs::exp_so3(dr->vec<3>()) * cam.g_wi_true.linear();
       om.finish();
     }
     cm.finish();
