@@ -50,8 +50,10 @@ std::string network_yaml(const render::SceneDescription& scene, int frames) {
     const render::Vec3 r = obs::log_so3(c.g_wi_believed.linear());
     y << YAML::BeginMap;
     y << YAML::Key << "id" << YAML::Value << c.id;
-    y << YAML::Key << "p_wi" << YAML::Value << YAML::Flow << std::vector<double>{p.x(), p.y(), p.z()};
-    y << YAML::Key << "r_wi" << YAML::Value << YAML::Flow << std::vector<double>{r.x(), r.y(), r.z()};
+    y << YAML::Key << "p_wi" << YAML::Value << YAML::Flow
+      << std::vector<double>{p.x(), p.y(), p.z()};
+    y << YAML::Key << "r_wi" << YAML::Value << YAML::Flow
+      << std::vector<double>{r.x(), r.y(), r.z()};
     y << YAML::EndMap;
   }
   y << YAML::EndSeq;
@@ -62,11 +64,14 @@ std::string network_yaml(const render::SceneDescription& scene, int frames) {
   return std::string(y.c_str()) + "\n";
 }
 
-std::string truth_csv_header() { return "frame,t,camera,in_fov,visible_fraction,u0,v0,u1,v1,u2,v2,u3,v3"; }
+std::string truth_csv_header() {
+  return "frame,t,camera,in_fov,visible_fraction,u0,v0,u1,v1,u2,v2,u3,v3";
+}
 
 std::string truth_csv_row(const render::FrameTruth& t) {
-  std::string row = std::to_string(t.frame) + "," + fmt("%.6f", t.t) + "," + std::to_string(t.camera_id) +
-                    "," + (t.in_fov ? "1" : "0") + "," + fmt("%.6f", t.visible_fraction);
+  std::string row = std::to_string(t.frame) + "," + fmt("%.6f", t.t) + "," +
+                    std::to_string(t.camera_id) + "," + (t.in_fov ? "1" : "0") + "," +
+                    fmt("%.6f", t.visible_fraction);
   for (const auto& c : t.corners) {
     if (c)
       row += "," + fmt("%.4f", c->x()) + "," + fmt("%.4f", c->y());
@@ -121,7 +126,8 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
     for (int ci = 0; ci < r.camera_count(); ++ci) {
       const int id = scene.cameras[size_t(ci)].id;
       const cv::Mat img = r.render(ci, f);
-      if (!cv::imencode(".png", img, png)) throw InputError("cannot encode PNG for camera " + std::to_string(id));
+      if (!cv::imencode(".png", img, png))
+        throw InputError("cannot encode PNG for camera " + std::to_string(id));
       char name[32];
       std::snprintf(name, sizeof name, "%06d.png", f);
       io::write_file_atomic(out / ("cam_" + std::to_string(id)) / name,

@@ -32,8 +32,8 @@ NetworkConfig load_network_config(const std::filesystem::path& file) {
     const auto fam = t.get("family");
     net.target.family = fam.string();
     if (!is_supported_family(net.target.family))
-      fam.fail("unsupported tag family '" + net.target.family + "' (supported: " +
-               supported_families() + ")");
+      fam.fail("unsupported tag family '" + net.target.family +
+               "' (supported: " + supported_families() + ")");
     const auto id = t.get("id");
     net.target.id = id.integer();
     if (net.target.id < 0) id.fail("must not be negative");

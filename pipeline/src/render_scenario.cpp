@@ -131,7 +131,8 @@ std::vector<render::Shape> read_shapes(const Value& v, const std::filesystem::pa
   return out;
 }
 
-// motion: {type: static, pose}, {type: twist, pose, v, w}, {type: keyframes, keyframes: [{t, pose}]}
+// motion: {type: static, pose}, {type: twist, pose, v, w}, {type: keyframes, keyframes: [{t,
+// pose}]}
 render::Trajectory read_motion(const Value& v) {
   MapReader m = v.map();
   render::Trajectory tr;
@@ -353,7 +354,8 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
   if (const auto edges = root.find("edges"))
     for (const auto& e : edges->sequence()) {
       const auto ij = e.vec<2>();
-      if (ij[0] != std::floor(ij[0]) || ij[1] != std::floor(ij[1])) e.fail("expected two camera ids");
+      if (ij[0] != std::floor(ij[0]) || ij[1] != std::floor(ij[1]))
+        e.fail("expected two camera ids");
       const int i = int(ij[0]), j = int(ij[1]);
       auto known = [&](int id) {
         for (const auto& c : s.cameras)

@@ -133,10 +133,9 @@ bool refine_edge_lines(const cv::Mat& g, std::array<cv::Point2d, 4>& c, int bord
     if (pts.size() < 4) return false;
     if (undistort) {
       std::vector<cv::Point2d> u;
-      cv::undistortPoints(pts, u, cv::Mat(calib->K), cv::Mat(calib->dist), cv::noArray(),
-                          cv::Mat(calib->K),
-                          cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 50,
-                                           1e-10));
+      cv::undistortPoints(
+          pts, u, cv::Mat(calib->K), cv::Mat(calib->dist), cv::noArray(), cv::Mat(calib->K),
+          cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 50, 1e-10));
       pts.swap(u);
     }
     // Total least squares line through the points.
@@ -188,8 +187,7 @@ void refine_subpix(const cv::Mat& g, std::array<cv::Point2d, 4>& c, int border_c
   std::vector<cv::Point2f> pts;
   for (const auto& p : c) pts.emplace_back(static_cast<float>(p.x), static_cast<float>(p.y));
   for (const auto& p : pts)  // cornerSubPix needs the window inside the image
-    if (p.x < win + 1 || p.y < win + 1 || p.x > g.cols - win - 2 || p.y > g.rows - win - 2)
-      return;
+    if (p.x < win + 1 || p.y < win + 1 || p.x > g.cols - win - 2 || p.y > g.rows - win - 2) return;
   cv::cornerSubPix(g, pts, cv::Size(win, win), cv::Size(-1, -1),
                    cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 40, 0.001));
   const double max_move = std::max(1.5, 0.5 * cell);
@@ -205,9 +203,12 @@ void refine_subpix(const cv::Mat& g, std::array<cv::Point2d, 4>& c, int border_c
 
 const char* to_string(Refinement r) {
   switch (r) {
-    case Refinement::none: return "none";
-    case Refinement::corner_subpix: return "subpix";
-    case Refinement::edge_lines: return "edges";
+    case Refinement::none:
+      return "none";
+    case Refinement::corner_subpix:
+      return "subpix";
+    case Refinement::edge_lines:
+      return "edges";
   }
   return "?";
 }
@@ -221,16 +222,23 @@ Refinement parse_refinement(const std::string& name) {
 
 const char* to_string(TargetStatus s) {
   switch (s) {
-    case TargetStatus::detected: return "detected";
-    case TargetStatus::not_found: return "not found";
-    case TargetStatus::duplicate_id: return "duplicate id";
-    case TargetStatus::low_margin: return "low decision margin";
-    case TargetStatus::high_hamming: return "too many corrected bits";
+    case TargetStatus::detected:
+      return "detected";
+    case TargetStatus::not_found:
+      return "not found";
+    case TargetStatus::duplicate_id:
+      return "duplicate id";
+    case TargetStatus::low_margin:
+      return "low decision margin";
+    case TargetStatus::high_hamming:
+      return "too many corrected bits";
   }
   return "?";
 }
 
-bool is_supported_family(const std::string& name) { return find_family(name) != nullptr; }
+bool is_supported_family(const std::string& name) {
+  return find_family(name) != nullptr;
+}
 
 std::string supported_families() {
   std::string out;
@@ -242,9 +250,14 @@ void refine_corners(const cv::Mat& gray, std::array<cv::Point2d, 4>& corners, Re
                     int border_cells, const Calibration* calib) {
   CV_Assert(gray.type() == CV_8UC1);
   switch (mode) {
-    case Refinement::none: return;
-    case Refinement::corner_subpix: refine_subpix(gray, corners, border_cells); return;
-    case Refinement::edge_lines: refine_edge_lines(gray, corners, border_cells, calib); return;
+    case Refinement::none:
+      return;
+    case Refinement::corner_subpix:
+      refine_subpix(gray, corners, border_cells);
+      return;
+    case Refinement::edge_lines:
+      refine_edge_lines(gray, corners, border_cells, calib);
+      return;
   }
 }
 
@@ -288,8 +301,12 @@ TagDetector::~TagDetector() = default;
 TagDetector::TagDetector(TagDetector&&) noexcept = default;
 TagDetector& TagDetector::operator=(TagDetector&&) noexcept = default;
 
-const DetectorSettings& TagDetector::settings() const { return impl_->s; }
-int TagDetector::border_cells() const { return impl_->family->width_at_border; }
+const DetectorSettings& TagDetector::settings() const {
+  return impl_->s;
+}
+int TagDetector::border_cells() const {
+  return impl_->family->width_at_border;
+}
 
 FrameDetections TagDetector::detect(const cv::Mat& image, const Calibration* calib) {
   return detect(image, cv::Rect(0, 0, image.cols, image.rows), calib);
@@ -333,9 +350,8 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
     d.hamming = det->hamming;
     d.margin = det->decision_margin;
     for (int k = 0; k < 4; ++k)
-      d.corners[static_cast<size_t>(k)] =
-          cv::Point2d(det->p[k][0] - kApriltagPixelOffset + roi.x,
-                      det->p[k][1] - kApriltagPixelOffset + roi.y);
+      d.corners[static_cast<size_t>(k)] = cv::Point2d(det->p[k][0] - kApriltagPixelOffset + roi.x,
+                                                      det->p[k][1] - kApriltagPixelOffset + roi.y);
     d.center = cv::Point2d(det->c[0] - kApriltagPixelOffset + roi.x,
                            det->c[1] - kApriltagPixelOffset + roi.y);
     out.all.push_back(d);
@@ -361,8 +377,8 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
   } else if (n_accepted == 1) {
     out.status = TargetStatus::detected;
     out.target_index = accepted;
-    refine_corners(*g, out.all[static_cast<size_t>(accepted)].corners, s.refinement,
-                   border_cells(), calib);
+    refine_corners(*g, out.all[static_cast<size_t>(accepted)].corners, s.refinement, border_cells(),
+                   calib);
   } else if (!any_id) {
     out.status = TargetStatus::not_found;
   } else {

@@ -28,7 +28,8 @@ Mesh make_box(const Vec3& s) {
   for (int i = 0; i < 8; ++i)
     m.vertices.emplace_back((i & 1) ? hx : -hx, (i & 2) ? hy : -hy, (i & 4) ? hz : -hz);
   // Quads (outward, counter-clockwise seen from outside), split into two triangles each.
-  const int q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  const int q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                       {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   for (const auto& f : q) {
     m.triangles.push_back({std::uint32_t(f[0]), std::uint32_t(f[1]), std::uint32_t(f[2])});
     m.triangles.push_back({std::uint32_t(f[0]), std::uint32_t(f[2]), std::uint32_t(f[3])});
@@ -98,11 +99,13 @@ Mesh parse_obj(const std::string& text, const std::string& name) {
         }
         const long n = static_cast<long>(m.vertices.size());
         if (i < 0) i = n + i + 1;
-        if (i < 1 || i > n) fail("face index " + tok + " out of range (1.." + std::to_string(n) + ")");
+        if (i < 1 || i > n)
+          fail("face index " + tok + " out of range (1.." + std::to_string(n) + ")");
         idx.push_back(std::uint32_t(i - 1));
       }
       if (idx.size() < 3) fail("face needs at least 3 vertices");
-      for (size_t k = 1; k + 1 < idx.size(); ++k) m.triangles.push_back({idx[0], idx[k], idx[k + 1]});
+      for (size_t k = 1; k + 1 < idx.size(); ++k)
+        m.triangles.push_back({idx[0], idx[k], idx[k + 1]});
     }
   }
   if (m.triangles.empty()) throw std::invalid_argument(name + ": no faces in OBJ file");

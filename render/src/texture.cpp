@@ -41,7 +41,9 @@ inline float lattice(std::int32_t i, std::int32_t j, std::int32_t k, std::uint32
   return float(h >> 8) * (2.0f / 16777216.0f) - 1.0f;
 }
 
-inline float smooth(float t) { return t * t * (3 - 2 * t); }
+inline float smooth(float t) {
+  return t * t * (3 - 2 * t);
+}
 
 // Trilinear value noise in [-1, 1] (single precision: this is the renderer's hot texture path).
 float value_noise(float x, float y, float z, std::uint32_t seed) {
@@ -72,7 +74,8 @@ TagTexture::TagTexture(const TagSpec& spec) : spec_(spec) {
     if (p) std::free(p->buf);
     std::free(p);
   };
-  std::unique_ptr<image_u8_t, decltype(free_image)> im(apriltag_to_image(f.get(), spec.id), free_image);
+  std::unique_ptr<image_u8_t, decltype(free_image)> im(apriltag_to_image(f.get(), spec.id),
+                                                       free_image);
   if (!im) throw std::runtime_error("apriltag_to_image failed");
   total_width_ = f->total_width;
   width_at_border_ = f->width_at_border;
@@ -101,8 +104,9 @@ double Material::eval(const Vec3& p, const Vec3& n) const {
       // Two octaves of value noise, feature size `scale` and about scale / 2.
       const float q = float(1.0 / scale);
       const float x = float(p.x()) * q, y = float(p.y()) * q, z = float(p.z()) * q;
-      const double n = 0.7f * value_noise(x, y, z, seed * 0x9e3779b9U) +
-                       0.3f * value_noise(2.03f * x + 17.1f, 2.03f * y, 2.03f * z, seed * 0x9e3779b9U + 1);
+      const double n =
+          0.7f * value_noise(x, y, z, seed * 0x9e3779b9U) +
+          0.3f * value_noise(2.03f * x + 17.1f, 2.03f * y, 2.03f * z, seed * 0x9e3779b9U + 1);
       return std::clamp(albedo + albedo2 * n, 0.0, 1.0);
     }
   }

@@ -5,9 +5,9 @@
 #include <apriltag/tag25h9.h>
 #include <apriltag/tag36h11.h>
 
+#include <unistd.h>
 #include <cmath>
 #include <cstdlib>
-#include <unistd.h>
 #include <fstream>
 #include <memory>
 #include <opencv2/calib3d.hpp>
@@ -32,10 +32,14 @@ struct Bitmap {
 Bitmap tag_bitmap(const std::string& family, int id) {
   apriltag_family_t* (*create)() = nullptr;
   void (*destroy)(apriltag_family_t*) = nullptr;
-  if (family == "tag36h11") create = tag36h11_create, destroy = tag36h11_destroy;
-  else if (family == "tag25h9") create = tag25h9_create, destroy = tag25h9_destroy;
-  else if (family == "tag16h5") create = tag16h5_create, destroy = tag16h5_destroy;
-  else throw std::invalid_argument("synth: unsupported family " + family);
+  if (family == "tag36h11")
+    create = tag36h11_create, destroy = tag36h11_destroy;
+  else if (family == "tag25h9")
+    create = tag25h9_create, destroy = tag25h9_destroy;
+  else if (family == "tag16h5")
+    create = tag16h5_create, destroy = tag16h5_destroy;
+  else
+    throw std::invalid_argument("synth: unsupported family " + family);
   apriltag_family_t* fam = create();
   if (id < 0 || static_cast<uint32_t>(id) >= fam->ncodes) {
     destroy(fam);
@@ -235,8 +239,8 @@ TempDirs g_temp_dirs;
 
 fs::path fresh_dir(const std::string& name) {
   // per process, so concurrent test runs (ctest -j, other worktrees) never collide
-  const fs::path d = fs::temp_directory_path() /
-                     ("netvmo_test_" + std::to_string(::getpid()) + "_" + name);
+  const fs::path d =
+      fs::temp_directory_path() / ("netvmo_test_" + std::to_string(::getpid()) + "_" + name);
   fs::remove_all(d);
   fs::create_directories(d);
   g_temp_dirs.dirs.push_back(d);
@@ -285,8 +289,8 @@ std::vector<std::vector<std::array<cv::Point2d, 4>>> write_synth_dataset(
       const std::string& cc = spec.video_fourcc;
       if (cc.size() != 4) throw std::invalid_argument("synth: fourcc must have 4 characters");
       vw.open((dir / (name + spec.video_ext)).string(),
-              cv::VideoWriter::fourcc(cc[0], cc[1], cc[2], cc[3]),
-              spec.fps, cv::Size(cam.calib.width, cam.calib.height), false);
+              cv::VideoWriter::fourcc(cc[0], cc[1], cc[2], cc[3]), spec.fps,
+              cv::Size(cam.calib.width, cam.calib.height), false);
       if (!vw.isOpened()) throw std::runtime_error("synth: cannot open VideoWriter " + cc);
     } else {
       fs::create_directories(dir / name);
@@ -313,8 +317,10 @@ std::vector<std::vector<std::array<cv::Point2d, 4>>> write_synth_dataset(
       truth << f << "," << f / spec.fps << "," << cam.id << "," << (in_fov ? 1 : 0) << ","
             << (in_fov ? 1.0 : 0.0);
       for (const auto& p : c) {
-        if (front) truth << "," << p.x << "," << p.y;
-        else truth << ",,";
+        if (front)
+          truth << "," << p.x << "," << p.y;
+        else
+          truth << ",,";
       }
       truth << "\n";
     }
