@@ -1,14 +1,6 @@
 #include "netvmo/pipeline/tag_detector.hpp"
 
 #include <apriltag/apriltag.h>
-#include <apriltag/tag16h5.h>
-#include <apriltag/tag25h9.h>
-#include <apriltag/tag36h11.h>
-#include <apriltag/tagCircle21h7.h>
-#include <apriltag/tagCircle49h12.h>
-#include <apriltag/tagCustom48h12.h>
-#include <apriltag/tagStandard41h12.h>
-#include <apriltag/tagStandard52h13.h>
 
 #include <algorithm>
 #include <cmath>
@@ -16,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "netvmo/pipeline/error.hpp"
+#include "netvmo/render/tag_family.hpp"
 
 namespace netvmo::pipeline {
 
@@ -24,33 +17,11 @@ namespace {
 /// libapriltag reports pixel centres at +0.5 (measured, see tests/pipeline/test_detector.cpp).
 constexpr double kApriltagPixelOffset = 0.5;
 
-struct FamilyEntry {
-  const char* name;
-  apriltag_family_t* (*create)();
-  void (*destroy)(apriltag_family_t*);
-};
-
-const FamilyEntry kFamilies[] = {
-    {"tag36h11", tag36h11_create, tag36h11_destroy},
-    {"tag25h9", tag25h9_create, tag25h9_destroy},
-    {"tag16h5", tag16h5_create, tag16h5_destroy},
-    {"tagCircle21h7", tagCircle21h7_create, tagCircle21h7_destroy},
-    {"tagCircle49h12", tagCircle49h12_create, tagCircle49h12_destroy},
-    {"tagCustom48h12", tagCustom48h12_create, tagCustom48h12_destroy},
-    {"tagStandard41h12", tagStandard41h12_create, tagStandard41h12_destroy},
-    {"tagStandard52h13", tagStandard52h13_create, tagStandard52h13_destroy},
-};
-
-const FamilyEntry* find_family(const std::string& name) {
-  for (const auto& f : kFamilies)
-    if (name == f.name) return &f;
-  return nullptr;
-}
-
 void validate(const DetectorSettings& s) {
   auto bad = [](const std::string& what) { throw InputError("detector settings: " + what); };
-  if (!find_family(s.family))
-    bad("unsupported tag family '" + s.family + "' (supported: " + supported_families() + ")");
+  if (!render::find_tag_family(s.family))
+    bad("unsupported tag family '" + s.family + "' (supported: " + render::tag_family_names() +
+        ")");
   if (!(s.quad_decimate >= 1.0)) bad("quad_decimate must be >= 1");
   if (!(s.quad_sigma >= 0.0)) bad("quad_sigma must be >= 0");
   if (s.nthreads < 1) bad("nthreads must be >= 1");
@@ -236,16 +207,6 @@ const char* to_string(TargetStatus s) {
   return "?";
 }
 
-bool is_supported_family(const std::string& name) {
-  return find_family(name) != nullptr;
-}
-
-std::string supported_families() {
-  std::string out;
-  for (const auto& f : kFamilies) out += (out.empty() ? "" : ", ") + std::string(f.name);
-  return out;
-}
-
 void refine_corners(const cv::Mat& gray, std::array<cv::Point2d, 4>& corners, Refinement mode,
                     int border_cells, const Calibration* calib) {
   CV_Assert(gray.type() == CV_8UC1);
@@ -263,21 +224,16 @@ void refine_corners(const cv::Mat& gray, std::array<cv::Point2d, 4>& corners, Re
 
 struct TagDetector::Impl {
   DetectorSettings s;
-  const FamilyEntry* fam_entry = nullptr;
-  apriltag_family_t* family = nullptr;
+  render::TagFamilyPtr family{nullptr, nullptr};
   apriltag_detector_t* td = nullptr;
   cv::Mat gray;  // conversion buffer for non-gray input
 
   explicit Impl(DetectorSettings settings) : s(std::move(settings)) {
     validate(s);
-    fam_entry = find_family(s.family);
-    family = fam_entry->create();
+    family = render::create_tag_family(s.family);
     td = apriltag_detector_create();
-    if (!family || !td) {
-      cleanup();
-      throw std::runtime_error("libapriltag: cannot create the detector");
-    }
-    apriltag_detector_add_family_bits(td, family, s.bits_corrected);
+    if (!td) throw std::runtime_error("libapriltag: cannot create the detector");
+    apriltag_detector_add_family_bits(td, family.get(), s.bits_corrected);
     td->quad_decimate = static_cast<float>(s.quad_decimate);
     td->quad_sigma = static_cast<float>(s.quad_sigma);
     td->nthreads = s.nthreads;
@@ -286,13 +242,9 @@ struct TagDetector::Impl {
     td->qtp.min_white_black_diff = s.min_white_black_diff;
     td->debug = false;
   }
-  void cleanup() {
-    if (td) apriltag_detector_destroy(td);
-    if (family) fam_entry->destroy(family);
-    td = nullptr;
-    family = nullptr;
+  ~Impl() {
+    if (td) apriltag_detector_destroy(td);  // before the family it holds
   }
-  ~Impl() { cleanup(); }
 };
 
 TagDetector::TagDetector(DetectorSettings settings)

@@ -1,10 +1,6 @@
 #include "netvmo/render/texture.hpp"
 
 #include <apriltag/apriltag.h>
-#include <apriltag/tag16h5.h>
-#include <apriltag/tag25h9.h>
-#include <apriltag/tag36h11.h>
-#include <apriltag/tagStandard41h12.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -12,22 +8,10 @@
 #include <memory>
 #include <stdexcept>
 
+#include "netvmo/render/tag_family.hpp"
+
 namespace netvmo::render {
 namespace {
-
-struct Family {
-  apriltag_family_t* (*create)();
-  void (*destroy)(apriltag_family_t*);
-};
-
-Family family_by_name(const std::string& name) {
-  if (name == "tag36h11") return {tag36h11_create, tag36h11_destroy};
-  if (name == "tag25h9") return {tag25h9_create, tag25h9_destroy};
-  if (name == "tag16h5") return {tag16h5_create, tag16h5_destroy};
-  if (name == "tagStandard41h12") return {tagStandard41h12_create, tagStandard41h12_destroy};
-  throw std::invalid_argument("unknown tag family '" + name +
-                              "' (use tag36h11, tag25h9, tag16h5 or tagStandard41h12)");
-}
 
 // Lattice value in [-1, 1): a short integer hash of the cell and the seed.
 inline float lattice(std::int32_t i, std::int32_t j, std::int32_t k, std::uint32_t seed) {
@@ -63,8 +47,7 @@ float value_noise(float x, float y, float z, std::uint32_t seed) {
 TagTexture::TagTexture(const TagSpec& spec) : spec_(spec) {
   if (!(spec.size > 0)) throw std::invalid_argument("tag size must be positive");
   if (spec.quiet_cells < 0) throw std::invalid_argument("tag quiet_cells must be >= 0");
-  const Family fam = family_by_name(spec.family);
-  std::unique_ptr<apriltag_family_t, void (*)(apriltag_family_t*)> f(fam.create(), fam.destroy);
+  const TagFamilyPtr f = create_tag_family(spec.family);
   if (spec.id < 0 || static_cast<std::uint32_t>(spec.id) >= f->ncodes)
     throw std::invalid_argument("tag id " + std::to_string(spec.id) + " out of range for " +
                                 spec.family + " (0.." + std::to_string(f->ncodes - 1) + ")");

@@ -1,9 +1,6 @@
 #include "synth.hpp"
 
 #include <apriltag/apriltag.h>
-#include <apriltag/tag16h5.h>
-#include <apriltag/tag25h9.h>
-#include <apriltag/tag36h11.h>
 
 #include <unistd.h>
 #include <cmath>
@@ -17,6 +14,7 @@
 #include <stdexcept>
 
 #include "netvmo/observer/jacobian.hpp"
+#include "netvmo/render/tag_family.hpp"
 
 namespace netvmo::testing {
 namespace fs = std::filesystem;
@@ -30,22 +28,10 @@ struct Bitmap {
 };
 
 Bitmap tag_bitmap(const std::string& family, int id) {
-  apriltag_family_t* (*create)() = nullptr;
-  void (*destroy)(apriltag_family_t*) = nullptr;
-  if (family == "tag36h11")
-    create = tag36h11_create, destroy = tag36h11_destroy;
-  else if (family == "tag25h9")
-    create = tag25h9_create, destroy = tag25h9_destroy;
-  else if (family == "tag16h5")
-    create = tag16h5_create, destroy = tag16h5_destroy;
-  else
-    throw std::invalid_argument("synth: unsupported family " + family);
-  apriltag_family_t* fam = create();
-  if (id < 0 || static_cast<uint32_t>(id) >= fam->ncodes) {
-    destroy(fam);
+  const render::TagFamilyPtr fam = render::create_tag_family(family);
+  if (id < 0 || static_cast<uint32_t>(id) >= fam->ncodes)
     throw std::invalid_argument("synth: tag id out of range");
-  }
-  image_u8_t* im = apriltag_to_image(fam, id);
+  image_u8_t* im = apriltag_to_image(fam.get(), id);
   Bitmap b;
   b.total = fam->total_width;
   b.border = (fam->total_width - fam->width_at_border) / 2;
@@ -55,7 +41,6 @@ Bitmap tag_bitmap(const std::string& family, int id) {
   // libapriltag 3.3 does not export image_u8_destroy; it is free(buf) + free(im).
   std::free(im->buf);
   std::free(im);
-  destroy(fam);
   return b;
 }
 

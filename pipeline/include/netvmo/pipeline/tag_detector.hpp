@@ -35,7 +35,7 @@ Refinement parse_refinement(const std::string& name);
 /// Detector settings. Defaults documented next to each field.
 struct DetectorSettings {
   // libapriltag (apriltag_detector_t) settings
-  std::string family = "tag36h11";  ///< tag family (see supported_families())
+  std::string family = "tag36h11";  ///< tag family (see render::tag_families())
   double quad_decimate = 2.0;       ///< decimation of the image for quad search (>= 1)
   double quad_sigma = 0.0;          ///< Gaussian blur sigma applied before quad search
   int nthreads = 2;                 ///< worker threads of libapriltag
@@ -77,9 +77,6 @@ struct FrameDetections {
     return target_index >= 0 ? &all[static_cast<size_t>(target_index)] : nullptr;
   }
 };
-
-bool is_supported_family(const std::string& name);
-std::string supported_families();  ///< comma-separated list
 
 /// libapriltag detector, created once and reused across frames (not thread-safe: one
 /// detect() at a time; it uses `nthreads` workers internally).

@@ -14,7 +14,7 @@ namespace netvmo::render {
 
 /// One printed AprilTag. Defaults: tag36h11 id 0, 0.2 m.
 struct TagSpec {
-  std::string family = "tag36h11";  ///< tag36h11, tag25h9, tag16h5, tagStandard41h12
+  std::string family = "tag36h11";  ///< one of tag_families() (tag_family.hpp)
   int id = 0;
   double size = 0.2;           ///< side of the black border square [m] (libapriltag's definition)
   int quiet_cells = 1;         ///< extra white cells printed around libapriltag's bitmap, whose
