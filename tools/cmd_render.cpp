@@ -24,14 +24,18 @@ void add_render(CLI::App& app, int& exit_code) {
   cmd->footer(
       "Writes DATASET/cam_<id>/<frame>.png, calib/cam_<id>.yaml, network.yaml, truth.csv,\n"
       "target.csv and truth_cameras.csv (layout: datasets/README.md).");
-  cmd->add_option("SCENARIO", o->scenario, "render scenario YAML, e.g. datasets/paper5_render.yaml")->required();
+  cmd->add_option("SCENARIO", o->scenario, "render scenario YAML, e.g. datasets/paper5_render.yaml")
+      ->required();
   cmd->add_option("--out", o->out, "dataset folder to write (created if needed)")->required();
   cmd->add_option("--frames", o->frames, "number of frames (0 = the scenario's frames)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--spp", o->spp, "samples per pixel (0 = the scenario's imaging.spp)")
-      ->capture_default_str()->check(CLI::Range(0, 1024));
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1024));
   cmd->add_option("--seed", o->seed, "noise seed (-1 = the scenario's imaging.seed)")
-      ->capture_default_str()->check(CLI::Range(-1LL, 9000000000000000LL));
+      ->capture_default_str()
+      ->check(CLI::Range(-1LL, 9000000000000000LL));
   cmd->add_flag("--quiet", o->quiet, "no progress bar");
   cmd->callback([o, &exit_code]() {
     exit_code = guarded("render", [&]() {
@@ -49,18 +53,21 @@ void add_render(CLI::App& app, int& exit_code) {
       opt.progress = !o->quiet;
       const auto summary = io::write_dataset(*renderer, o->out, opt);
 
-      std::printf("wrote %s: %d frames x %zu cameras at %.6g fps, %d spp, seed %llu\n", o->out.c_str(),
-                  summary.frames, summary.cameras.size(), scene.fps, scene.imaging.spp,
-                  static_cast<unsigned long long>(scene.imaging.seed));
-      std::printf("camera  tag in view  tag visible   fictitious target at frame 0 (believed g_wi * true g_io)\n");
+      std::printf("wrote %s: %d frames x %zu cameras at %.6g fps, %d spp, seed %llu\n",
+                  o->out.c_str(), summary.frames, summary.cameras.size(), scene.fps,
+                  scene.imaging.spp, static_cast<unsigned long long>(scene.imaging.seed));
+      std::printf(
+          "camera  tag in view  tag visible   fictitious target at frame 0 (believed g_wi * true "
+          "g_io)\n");
       for (size_t i = 0; i < summary.cameras.size(); ++i) {
         const auto& c = summary.cameras[i];
         const auto t0 = renderer->truth(int(i), 0);
         const render::Pose g_fict = scene.cameras[i].g_wi_believed * t0.g_io;
-        const render::Vec3 p = g_fict.translation(), r = render::rotation_to_vector(g_fict.linear());
+        const render::Vec3 p = g_fict.translation(), r = obs::log_so3(g_fict.linear());
         std::printf("%6d  %10.1f%%  %10.1f%%   p [%.3f %.3f %.3f]  r [%.3f %.3f %.3f]\n", c.id,
-                    100.0 * c.frames_in_fov / summary.frames, 100.0 * c.frames_visible / summary.frames,
-                    p.x(), p.y(), p.z(), r.x(), r.y(), r.z());
+                    100.0 * c.frames_in_fov / summary.frames,
+                    100.0 * c.frames_visible / summary.frames, p.x(), p.y(), p.z(), r.x(), r.y(),
+                    r.z());
       }
       return 0;
     });

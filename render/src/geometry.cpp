@@ -5,58 +5,6 @@
 #include <stdexcept>
 
 namespace netvmo::render {
-namespace {
-Mat3 hat(const Vec3& a) {
-  Mat3 S;
-  S << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
-  return S;
-}
-}  // namespace
-
-Mat3 rotation_from_vector(const Vec3& r) {
-  const double th = r.norm();
-  if (th < 1e-12) return Mat3::Identity() + hat(r);
-  return Eigen::AngleAxisd(th, r / th).toRotationMatrix();
-}
-
-Vec3 rotation_to_vector(const Mat3& R) {
-  const Eigen::AngleAxisd aa(R);
-  Vec3 r = aa.axis() * aa.angle();
-  if (aa.angle() > M_PI) r = aa.axis() * (aa.angle() - 2 * M_PI);
-  return r;
-}
-
-Pose make_pose(const Vec3& p, const Vec3& r) {
-  Pose g = Pose::Identity();
-  g.linear() = rotation_from_vector(r);
-  g.translation() = p;
-  return g;
-}
-
-// Left Jacobian of SO(3): V = I + (1-cos)/th^2 W + (th - sin)/th^3 W^2.
-static Mat3 left_jacobian(const Vec3& w) {
-  const double th = w.norm();
-  const Mat3 W = hat(w);
-  if (th < 1e-8) return Mat3::Identity() + 0.5 * W + W * W / 6.0;
-  return Mat3::Identity() + (1 - std::cos(th)) / (th * th) * W +
-         (th - std::sin(th)) / (th * th * th) * W * W;
-}
-
-Pose exp_se3(const Vec6& V) {
-  const Vec3 v = V.head<3>(), w = V.tail<3>();
-  Pose g = Pose::Identity();
-  g.linear() = rotation_from_vector(w);
-  g.translation() = left_jacobian(w) * v;
-  return g;
-}
-
-Vec6 log_se3(const Pose& g) {
-  const Vec3 w = rotation_to_vector(g.linear());
-  Vec6 V;
-  V.head<3>() = left_jacobian(w).inverse() * g.translation();
-  V.tail<3>() = w;
-  return V;
-}
 
 Pose look_at(const Vec3& eye, const Vec3& target, const Vec3& up) {
   const Vec3 z = target - eye;
@@ -80,7 +28,8 @@ Mesh make_box(const Vec3& s) {
   for (int i = 0; i < 8; ++i)
     m.vertices.emplace_back((i & 1) ? hx : -hx, (i & 2) ? hy : -hy, (i & 4) ? hz : -hz);
   // Quads (outward, counter-clockwise seen from outside), split into two triangles each.
-  const int q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  const int q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                       {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   for (const auto& f : q) {
     m.triangles.push_back({std::uint32_t(f[0]), std::uint32_t(f[1]), std::uint32_t(f[2])});
     m.triangles.push_back({std::uint32_t(f[0]), std::uint32_t(f[2]), std::uint32_t(f[3])});
@@ -150,11 +99,13 @@ Mesh parse_obj(const std::string& text, const std::string& name) {
         }
         const long n = static_cast<long>(m.vertices.size());
         if (i < 0) i = n + i + 1;
-        if (i < 1 || i > n) fail("face index " + tok + " out of range (1.." + std::to_string(n) + ")");
+        if (i < 1 || i > n)
+          fail("face index " + tok + " out of range (1.." + std::to_string(n) + ")");
         idx.push_back(std::uint32_t(i - 1));
       }
       if (idx.size() < 3) fail("face needs at least 3 vertices");
-      for (size_t k = 1; k + 1 < idx.size(); ++k) m.triangles.push_back({idx[0], idx[k], idx[k + 1]});
+      for (size_t k = 1; k + 1 < idx.size(); ++k)
+        m.triangles.push_back({idx[0], idx[k], idx[k + 1]});
     }
   }
   if (m.triangles.empty()) throw std::invalid_argument(name + ": no faces in OBJ file");

@@ -1,10 +1,6 @@
 #include "netvmo/render/texture.hpp"
 
 #include <apriltag/apriltag.h>
-#include <apriltag/tag16h5.h>
-#include <apriltag/tag25h9.h>
-#include <apriltag/tag36h11.h>
-#include <apriltag/tagStandard41h12.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -12,22 +8,10 @@
 #include <memory>
 #include <stdexcept>
 
+#include "netvmo/render/tag_family.hpp"
+
 namespace netvmo::render {
 namespace {
-
-struct Family {
-  apriltag_family_t* (*create)();
-  void (*destroy)(apriltag_family_t*);
-};
-
-Family family_by_name(const std::string& name) {
-  if (name == "tag36h11") return {tag36h11_create, tag36h11_destroy};
-  if (name == "tag25h9") return {tag25h9_create, tag25h9_destroy};
-  if (name == "tag16h5") return {tag16h5_create, tag16h5_destroy};
-  if (name == "tagStandard41h12") return {tagStandard41h12_create, tagStandard41h12_destroy};
-  throw std::invalid_argument("unknown tag family '" + name +
-                              "' (use tag36h11, tag25h9, tag16h5 or tagStandard41h12)");
-}
 
 // Lattice value in [-1, 1): a short integer hash of the cell and the seed.
 inline float lattice(std::int32_t i, std::int32_t j, std::int32_t k, std::uint32_t seed) {
@@ -41,7 +25,9 @@ inline float lattice(std::int32_t i, std::int32_t j, std::int32_t k, std::uint32
   return float(h >> 8) * (2.0f / 16777216.0f) - 1.0f;
 }
 
-inline float smooth(float t) { return t * t * (3 - 2 * t); }
+inline float smooth(float t) {
+  return t * t * (3 - 2 * t);
+}
 
 // Trilinear value noise in [-1, 1] (single precision: this is the renderer's hot texture path).
 float value_noise(float x, float y, float z, std::uint32_t seed) {
@@ -61,8 +47,7 @@ float value_noise(float x, float y, float z, std::uint32_t seed) {
 TagTexture::TagTexture(const TagSpec& spec) : spec_(spec) {
   if (!(spec.size > 0)) throw std::invalid_argument("tag size must be positive");
   if (spec.quiet_cells < 0) throw std::invalid_argument("tag quiet_cells must be >= 0");
-  const Family fam = family_by_name(spec.family);
-  std::unique_ptr<apriltag_family_t, void (*)(apriltag_family_t*)> f(fam.create(), fam.destroy);
+  const TagFamilyPtr f = create_tag_family(spec.family);
   if (spec.id < 0 || static_cast<std::uint32_t>(spec.id) >= f->ncodes)
     throw std::invalid_argument("tag id " + std::to_string(spec.id) + " out of range for " +
                                 spec.family + " (0.." + std::to_string(f->ncodes - 1) + ")");
@@ -72,7 +57,8 @@ TagTexture::TagTexture(const TagSpec& spec) : spec_(spec) {
     if (p) std::free(p->buf);
     std::free(p);
   };
-  std::unique_ptr<image_u8_t, decltype(free_image)> im(apriltag_to_image(f.get(), spec.id), free_image);
+  std::unique_ptr<image_u8_t, decltype(free_image)> im(apriltag_to_image(f.get(), spec.id),
+                                                       free_image);
   if (!im) throw std::runtime_error("apriltag_to_image failed");
   total_width_ = f->total_width;
   width_at_border_ = f->width_at_border;
@@ -101,8 +87,9 @@ double Material::eval(const Vec3& p, const Vec3& n) const {
       // Two octaves of value noise, feature size `scale` and about scale / 2.
       const float q = float(1.0 / scale);
       const float x = float(p.x()) * q, y = float(p.y()) * q, z = float(p.z()) * q;
-      const double n = 0.7f * value_noise(x, y, z, seed * 0x9e3779b9U) +
-                       0.3f * value_noise(2.03f * x + 17.1f, 2.03f * y, 2.03f * z, seed * 0x9e3779b9U + 1);
+      const double n =
+          0.7f * value_noise(x, y, z, seed * 0x9e3779b9U) +
+          0.3f * value_noise(2.03f * x + 17.1f, 2.03f * y, 2.03f * z, seed * 0x9e3779b9U + 1);
       return std::clamp(albedo + albedo2 * n, 0.0, 1.0);
     }
   }

@@ -1,13 +1,10 @@
 #include "synth.hpp"
 
 #include <apriltag/apriltag.h>
-#include <apriltag/tag16h5.h>
-#include <apriltag/tag25h9.h>
-#include <apriltag/tag36h11.h>
 
+#include <unistd.h>
 #include <cmath>
 #include <cstdlib>
-#include <unistd.h>
 #include <fstream>
 #include <memory>
 #include <opencv2/calib3d.hpp>
@@ -17,6 +14,7 @@
 #include <stdexcept>
 
 #include "netvmo/observer/jacobian.hpp"
+#include "netvmo/render/tag_family.hpp"
 
 namespace netvmo::testing {
 namespace fs = std::filesystem;
@@ -30,18 +28,10 @@ struct Bitmap {
 };
 
 Bitmap tag_bitmap(const std::string& family, int id) {
-  apriltag_family_t* (*create)() = nullptr;
-  void (*destroy)(apriltag_family_t*) = nullptr;
-  if (family == "tag36h11") create = tag36h11_create, destroy = tag36h11_destroy;
-  else if (family == "tag25h9") create = tag25h9_create, destroy = tag25h9_destroy;
-  else if (family == "tag16h5") create = tag16h5_create, destroy = tag16h5_destroy;
-  else throw std::invalid_argument("synth: unsupported family " + family);
-  apriltag_family_t* fam = create();
-  if (id < 0 || static_cast<uint32_t>(id) >= fam->ncodes) {
-    destroy(fam);
+  const render::TagFamilyPtr fam = render::create_tag_family(family);
+  if (id < 0 || static_cast<uint32_t>(id) >= fam->ncodes)
     throw std::invalid_argument("synth: tag id out of range");
-  }
-  image_u8_t* im = apriltag_to_image(fam, id);
+  image_u8_t* im = apriltag_to_image(fam.get(), id);
   Bitmap b;
   b.total = fam->total_width;
   b.border = (fam->total_width - fam->width_at_border) / 2;
@@ -51,7 +41,6 @@ Bitmap tag_bitmap(const std::string& family, int id) {
   // libapriltag 3.3 does not export image_u8_destroy; it is free(buf) + free(im).
   std::free(im->buf);
   std::free(im);
-  destroy(fam);
   return b;
 }
 
@@ -235,8 +224,8 @@ TempDirs g_temp_dirs;
 
 fs::path fresh_dir(const std::string& name) {
   // per process, so concurrent test runs (ctest -j, other worktrees) never collide
-  const fs::path d = fs::temp_directory_path() /
-                     ("netvmo_test_" + std::to_string(::getpid()) + "_" + name);
+  const fs::path d =
+      fs::temp_directory_path() / ("netvmo_test_" + std::to_string(::getpid()) + "_" + name);
   fs::remove_all(d);
   fs::create_directories(d);
   g_temp_dirs.dirs.push_back(d);
@@ -285,8 +274,8 @@ std::vector<std::vector<std::array<cv::Point2d, 4>>> write_synth_dataset(
       const std::string& cc = spec.video_fourcc;
       if (cc.size() != 4) throw std::invalid_argument("synth: fourcc must have 4 characters");
       vw.open((dir / (name + spec.video_ext)).string(),
-              cv::VideoWriter::fourcc(cc[0], cc[1], cc[2], cc[3]),
-              spec.fps, cv::Size(cam.calib.width, cam.calib.height), false);
+              cv::VideoWriter::fourcc(cc[0], cc[1], cc[2], cc[3]), spec.fps,
+              cv::Size(cam.calib.width, cam.calib.height), false);
       if (!vw.isOpened()) throw std::runtime_error("synth: cannot open VideoWriter " + cc);
     } else {
       fs::create_directories(dir / name);
@@ -313,8 +302,10 @@ std::vector<std::vector<std::array<cv::Point2d, 4>>> write_synth_dataset(
       truth << f << "," << f / spec.fps << "," << cam.id << "," << (in_fov ? 1 : 0) << ","
             << (in_fov ? 1.0 : 0.0);
       for (const auto& p : c) {
-        if (front) truth << "," << p.x << "," << p.y;
-        else truth << ",,";
+        if (front)
+          truth << "," << p.x << "," << p.y;
+        else
+          truth << ",,";
       }
       truth << "\n";
     }

@@ -35,8 +35,7 @@ inline SceneDescription single_tag_scene(const Pose& g_wo, int spp = 16, double 
 /// roughly facing the camera (the camera looks along +z, so the tag's +z points back at it).
 inline Pose facing_pose(const Vec3& p, const Vec3& r) {
   // Flip about x so the printed face (+z_o) looks at the camera, then apply r in the camera frame.
-  return make_pose(p, Vec3::Zero()) * Pose(rotation_from_vector(r)) *
-         Pose(rotation_from_vector(Vec3(M_PI, 0, 0)));
+  return make_pose(p, Vec3::Zero()) * Pose(exp_so3(r)) * Pose(exp_so3(Vec3(M_PI, 0, 0)));
 }
 
 }  // namespace netvmo::render::testing

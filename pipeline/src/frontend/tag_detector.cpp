@@ -1,14 +1,6 @@
 #include "netvmo/pipeline/frontend/tag_detector.hpp"
 
 #include <apriltag/apriltag.h>
-#include <apriltag/tag16h5.h>
-#include <apriltag/tag25h9.h>
-#include <apriltag/tag36h11.h>
-#include <apriltag/tagCircle21h7.h>
-#include <apriltag/tagCircle49h12.h>
-#include <apriltag/tagCustom48h12.h>
-#include <apriltag/tagStandard41h12.h>
-#include <apriltag/tagStandard52h13.h>
 
 #include <algorithm>
 #include <cmath>
@@ -16,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "netvmo/pipeline/error.hpp"
+#include "netvmo/render/tag_family.hpp"
 
 namespace netvmo::frontend {
 
@@ -24,33 +17,11 @@ namespace {
 /// libapriltag reports pixel centres at +0.5 (measured, see tests/pipeline/test_detector.cpp).
 constexpr double kApriltagPixelOffset = 0.5;
 
-struct FamilyEntry {
-  const char* name;
-  apriltag_family_t* (*create)();
-  void (*destroy)(apriltag_family_t*);
-};
-
-const FamilyEntry kFamilies[] = {
-    {"tag36h11", tag36h11_create, tag36h11_destroy},
-    {"tag25h9", tag25h9_create, tag25h9_destroy},
-    {"tag16h5", tag16h5_create, tag16h5_destroy},
-    {"tagCircle21h7", tagCircle21h7_create, tagCircle21h7_destroy},
-    {"tagCircle49h12", tagCircle49h12_create, tagCircle49h12_destroy},
-    {"tagCustom48h12", tagCustom48h12_create, tagCustom48h12_destroy},
-    {"tagStandard41h12", tagStandard41h12_create, tagStandard41h12_destroy},
-    {"tagStandard52h13", tagStandard52h13_create, tagStandard52h13_destroy},
-};
-
-const FamilyEntry* find_family(const std::string& name) {
-  for (const auto& f : kFamilies)
-    if (name == f.name) return &f;
-  return nullptr;
-}
-
 void validate(const DetectorSettings& s) {
   auto bad = [](const std::string& what) { throw InputError("detector settings: " + what); };
-  if (!find_family(s.family))
-    bad("unsupported tag family '" + s.family + "' (supported: " + supported_families() + ")");
+  if (!render::find_tag_family(s.family))
+    bad("unsupported tag family '" + s.family + "' (supported: " + render::tag_family_names() +
+        ")");
   if (!(s.quad_decimate >= 1.0)) bad("quad_decimate must be >= 1");
   if (!(s.quad_sigma >= 0.0)) bad("quad_sigma must be >= 0");
   if (s.nthreads < 1) bad("nthreads must be >= 1");
@@ -133,10 +104,9 @@ bool refine_edge_lines(const cv::Mat& g, std::array<cv::Point2d, 4>& c, int bord
     if (pts.size() < 4) return false;
     if (undistort) {
       std::vector<cv::Point2d> u;
-      cv::undistortPoints(pts, u, cv::Mat(calib->K), cv::Mat(calib->dist), cv::noArray(),
-                          cv::Mat(calib->K),
-                          cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 50,
-                                           1e-10));
+      cv::undistortPoints(
+          pts, u, cv::Mat(calib->K), cv::Mat(calib->dist), cv::noArray(), cv::Mat(calib->K),
+          cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 50, 1e-10));
       pts.swap(u);
     }
     // Total least squares line through the points.
@@ -188,8 +158,7 @@ void refine_subpix(const cv::Mat& g, std::array<cv::Point2d, 4>& c, int border_c
   std::vector<cv::Point2f> pts;
   for (const auto& p : c) pts.emplace_back(static_cast<float>(p.x), static_cast<float>(p.y));
   for (const auto& p : pts)  // cornerSubPix needs the window inside the image
-    if (p.x < win + 1 || p.y < win + 1 || p.x > g.cols - win - 2 || p.y > g.rows - win - 2)
-      return;
+    if (p.x < win + 1 || p.y < win + 1 || p.x > g.cols - win - 2 || p.y > g.rows - win - 2) return;
   cv::cornerSubPix(g, pts, cv::Size(win, win), cv::Size(-1, -1),
                    cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 40, 0.001));
   const double max_move = std::max(1.5, 0.5 * cell);
@@ -205,9 +174,12 @@ void refine_subpix(const cv::Mat& g, std::array<cv::Point2d, 4>& c, int border_c
 
 const char* to_string(Refinement r) {
   switch (r) {
-    case Refinement::none: return "none";
-    case Refinement::corner_subpix: return "subpix";
-    case Refinement::edge_lines: return "edges";
+    case Refinement::none:
+      return "none";
+    case Refinement::corner_subpix:
+      return "subpix";
+    case Refinement::edge_lines:
+      return "edges";
   }
   return "?";
 }
@@ -221,50 +193,47 @@ Refinement parse_refinement(const std::string& name) {
 
 const char* to_string(TargetStatus s) {
   switch (s) {
-    case TargetStatus::detected: return "detected";
-    case TargetStatus::not_found: return "not found";
-    case TargetStatus::duplicate_id: return "duplicate id";
-    case TargetStatus::low_margin: return "low decision margin";
-    case TargetStatus::high_hamming: return "too many corrected bits";
+    case TargetStatus::detected:
+      return "detected";
+    case TargetStatus::not_found:
+      return "not found";
+    case TargetStatus::duplicate_id:
+      return "duplicate id";
+    case TargetStatus::low_margin:
+      return "low decision margin";
+    case TargetStatus::high_hamming:
+      return "too many corrected bits";
   }
   return "?";
-}
-
-bool is_supported_family(const std::string& name) { return find_family(name) != nullptr; }
-
-std::string supported_families() {
-  std::string out;
-  for (const auto& f : kFamilies) out += (out.empty() ? "" : ", ") + std::string(f.name);
-  return out;
 }
 
 void refine_corners(const cv::Mat& gray, std::array<cv::Point2d, 4>& corners, Refinement mode,
                     int border_cells, const io::Calibration* calib) {
   CV_Assert(gray.type() == CV_8UC1);
   switch (mode) {
-    case Refinement::none: return;
-    case Refinement::corner_subpix: refine_subpix(gray, corners, border_cells); return;
-    case Refinement::edge_lines: refine_edge_lines(gray, corners, border_cells, calib); return;
+    case Refinement::none:
+      return;
+    case Refinement::corner_subpix:
+      refine_subpix(gray, corners, border_cells);
+      return;
+    case Refinement::edge_lines:
+      refine_edge_lines(gray, corners, border_cells, calib);
+      return;
   }
 }
 
 struct TagDetector::Impl {
   DetectorSettings s;
-  const FamilyEntry* fam_entry = nullptr;
-  apriltag_family_t* family = nullptr;
+  render::TagFamilyPtr family{nullptr, nullptr};
   apriltag_detector_t* td = nullptr;
   cv::Mat gray;  // conversion buffer for non-gray input
 
   explicit Impl(DetectorSettings settings) : s(std::move(settings)) {
     validate(s);
-    fam_entry = find_family(s.family);
-    family = fam_entry->create();
+    family = render::create_tag_family(s.family);
     td = apriltag_detector_create();
-    if (!family || !td) {
-      cleanup();
-      throw std::runtime_error("libapriltag: cannot create the detector");
-    }
-    apriltag_detector_add_family_bits(td, family, s.bits_corrected);
+    if (!td) throw std::runtime_error("libapriltag: cannot create the detector");
+    apriltag_detector_add_family_bits(td, family.get(), s.bits_corrected);
     td->quad_decimate = static_cast<float>(s.quad_decimate);
     td->quad_sigma = static_cast<float>(s.quad_sigma);
     td->nthreads = s.nthreads;
@@ -273,13 +242,9 @@ struct TagDetector::Impl {
     td->qtp.min_white_black_diff = s.min_white_black_diff;
     td->debug = false;
   }
-  void cleanup() {
-    if (td) apriltag_detector_destroy(td);
-    if (family) fam_entry->destroy(family);
-    td = nullptr;
-    family = nullptr;
+  ~Impl() {
+    if (td) apriltag_detector_destroy(td);  // before the family it holds
   }
-  ~Impl() { cleanup(); }
 };
 
 TagDetector::TagDetector(DetectorSettings settings)
@@ -288,8 +253,12 @@ TagDetector::~TagDetector() = default;
 TagDetector::TagDetector(TagDetector&&) noexcept = default;
 TagDetector& TagDetector::operator=(TagDetector&&) noexcept = default;
 
-const DetectorSettings& TagDetector::settings() const { return impl_->s; }
-int TagDetector::border_cells() const { return impl_->family->width_at_border; }
+const DetectorSettings& TagDetector::settings() const {
+  return impl_->s;
+}
+int TagDetector::border_cells() const {
+  return impl_->family->width_at_border;
+}
 
 FrameDetections TagDetector::detect(const cv::Mat& image, const io::Calibration* calib) {
   return detect(image, cv::Rect(0, 0, image.cols, image.rows), calib);
@@ -333,9 +302,8 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
     d.hamming = det->hamming;
     d.margin = det->decision_margin;
     for (int k = 0; k < 4; ++k)
-      d.corners[static_cast<size_t>(k)] =
-          cv::Point2d(det->p[k][0] - kApriltagPixelOffset + roi.x,
-                      det->p[k][1] - kApriltagPixelOffset + roi.y);
+      d.corners[static_cast<size_t>(k)] = cv::Point2d(det->p[k][0] - kApriltagPixelOffset + roi.x,
+                                                      det->p[k][1] - kApriltagPixelOffset + roi.y);
     d.center = cv::Point2d(det->c[0] - kApriltagPixelOffset + roi.x,
                            det->c[1] - kApriltagPixelOffset + roi.y);
     out.all.push_back(d);
@@ -361,8 +329,8 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
   } else if (n_accepted == 1) {
     out.status = TargetStatus::detected;
     out.target_index = accepted;
-    refine_corners(*g, out.all[static_cast<size_t>(accepted)].corners, s.refinement,
-                   border_cells(), calib);
+    refine_corners(*g, out.all[static_cast<size_t>(accepted)].corners, s.refinement, border_cells(),
+                   calib);
   } else if (!any_id) {
     out.status = TargetStatus::not_found;
   } else {

@@ -47,11 +47,13 @@ std::string network_yaml(const render::SceneDescription& scene, int frames) {
   y << YAML::Key << "cameras" << YAML::Value << YAML::BeginSeq;
   for (const auto& c : scene.cameras) {
     const render::Vec3 p = c.g_wi_believed.translation();
-    const render::Vec3 r = render::rotation_to_vector(c.g_wi_believed.linear());
+    const render::Vec3 r = obs::log_so3(c.g_wi_believed.linear());
     y << YAML::BeginMap;
     y << YAML::Key << "id" << YAML::Value << c.id;
-    y << YAML::Key << "p_wi" << YAML::Value << YAML::Flow << std::vector<double>{p.x(), p.y(), p.z()};
-    y << YAML::Key << "r_wi" << YAML::Value << YAML::Flow << std::vector<double>{r.x(), r.y(), r.z()};
+    y << YAML::Key << "p_wi" << YAML::Value << YAML::Flow
+      << std::vector<double>{p.x(), p.y(), p.z()};
+    y << YAML::Key << "r_wi" << YAML::Value << YAML::Flow
+      << std::vector<double>{r.x(), r.y(), r.z()};
     y << YAML::EndMap;
   }
   y << YAML::EndSeq;
@@ -62,11 +64,14 @@ std::string network_yaml(const render::SceneDescription& scene, int frames) {
   return std::string(y.c_str()) + "\n";
 }
 
-std::string truth_csv_header() { return "frame,t,camera,in_fov,visible_fraction,u0,v0,u1,v1,u2,v2,u3,v3"; }
+std::string truth_csv_header() {
+  return "frame,t,camera,in_fov,visible_fraction,u0,v0,u1,v1,u2,v2,u3,v3";
+}
 
 std::string truth_csv_row(const render::FrameTruth& t) {
-  std::string row = std::to_string(t.frame) + "," + fmt("%.6f", t.t) + "," + std::to_string(t.camera_id) +
-                    "," + (t.in_fov ? "1" : "0") + "," + fmt("%.6f", t.visible_fraction);
+  std::string row = std::to_string(t.frame) + "," + fmt("%.6f", t.t) + "," +
+                    std::to_string(t.camera_id) + "," + (t.in_fov ? "1" : "0") + "," +
+                    fmt("%.6f", t.visible_fraction);
   for (const auto& c : t.corners) {
     if (c)
       row += "," + fmt("%.4f", c->x()) + "," + fmt("%.4f", c->y());
@@ -91,7 +96,7 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
     io::AtomicFile cams(out / "truth_cameras.csv");
     cams << "camera,px,py,pz,rx,ry,rz\n";
     for (const auto& c : scene.cameras) {
-      const render::Vec3 p = c.g_wi_true.translation(), rv = render::rotation_to_vector(c.g_wi_true.linear());
+      const render::Vec3 p = c.g_wi_true.translation(), rv = obs::log_so3(c.g_wi_true.linear());
       cams << c.id;
       for (int i = 0; i < 3; ++i) cams << "," << fmt("%.9g", p[i]);
       for (int i = 0; i < 3; ++i) cams << "," << fmt("%.9g", rv[i]);
@@ -113,7 +118,7 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
   for (int f = 0; f < frames; ++f) {
     r.set_frame(f);
     const render::Pose g_wo = r.target_pose(f);
-    const render::Vec3 p = g_wo.translation(), rv = render::rotation_to_vector(g_wo.linear());
+    const render::Vec3 p = g_wo.translation(), rv = obs::log_so3(g_wo.linear());
     target << f << "," << fmt("%.6f", r.time_of(f));
     for (int i = 0; i < 3; ++i) target << "," << fmt("%.9g", p[i]);
     for (int i = 0; i < 3; ++i) target << "," << fmt("%.9g", rv[i]);
@@ -121,7 +126,8 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
     for (int ci = 0; ci < r.camera_count(); ++ci) {
       const int id = scene.cameras[size_t(ci)].id;
       const cv::Mat img = r.render(ci, f);
-      if (!cv::imencode(".png", img, png)) throw InputError("cannot encode PNG for camera " + std::to_string(id));
+      if (!cv::imencode(".png", img, png))
+        throw InputError("cannot encode PNG for camera " + std::to_string(id));
       char name[32];
       std::snprintf(name, sizeof name, "%06d.png", f);
       io::write_file_atomic(out / ("cam_" + std::to_string(id)) / name,

@@ -3,8 +3,8 @@
 #include <set>
 
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/frontend/tag_detector.hpp"
 #include "netvmo/pipeline/io/yaml_reader.hpp"
+#include "netvmo/render/tag_family.hpp"
 
 namespace netvmo::io {
 
@@ -31,9 +31,9 @@ NetworkConfig load_network_config(const std::filesystem::path& file) {
     auto t = root.get("target").map();
     const auto fam = t.get("family");
     net.target.family = fam.string();
-    if (!frontend::is_supported_family(net.target.family))
-      fam.fail("unsupported tag family '" + net.target.family + "' (supported: " +
-               frontend::supported_families() + ")");
+    if (!render::find_tag_family(net.target.family))
+      fam.fail("unsupported tag family '" + net.target.family +
+               "' (supported: " + render::tag_family_names() + ")");
     const auto id = t.get("id");
     net.target.id = id.integer();
     if (net.target.id < 0) id.fail("must not be negative");

@@ -34,7 +34,7 @@ Pose read_pose(const Value& v) {
     const auto p = m.find("p");
     const auto r = m.find("r");
     if (!p && !r) m.fail("expected p: [x, y, z] and r: [rx, ry, rz], or eye/look_at/up");
-    g = render::make_pose(p ? p->vec<3>() : Vec3::Zero(), r ? r->vec<3>() : Vec3::Zero());
+    g = obs::make_pose(p ? p->vec<3>() : Vec3::Zero(), r ? r->vec<3>() : Vec3::Zero());
   }
   m.finish();
   return g;
@@ -131,7 +131,8 @@ std::vector<render::Shape> read_shapes(const Value& v, const std::filesystem::pa
   return out;
 }
 
-// motion: {type: static, pose}, {type: twist, pose, v, w}, {type: keyframes, keyframes: [{t, pose}]}
+// motion: {type: static, pose}, {type: twist, pose, v, w}, {type: keyframes, keyframes: [{t,
+// pose}]}
 render::Trajectory read_motion(const Value& v) {
   MapReader m = v.map();
   render::Trajectory tr;
@@ -331,7 +332,7 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
       const auto dr = om.find("dr");
       // Believed = true pose moved by dp (world) and turned by dr (world rotation vector).
       if (dp) cam.g_wi_believed.translation() += dp->vec<3>();
-      if (dr) cam.g_wi_believed.linear() = render::rotation_from_vector(dr->vec<3>()) * cam.g_wi_true.linear();
+      if (dr) cam.g_wi_believed.linear() = obs::exp_so3(dr->vec<3>()) * cam.g_wi_true.linear();
       om.finish();
     }
     cm.finish();
@@ -353,7 +354,8 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
   if (const auto edges = root.find("edges"))
     for (const auto& e : edges->sequence()) {
       const auto ij = e.vec<2>();
-      if (ij[0] != std::floor(ij[0]) || ij[1] != std::floor(ij[1])) e.fail("expected two camera ids");
+      if (ij[0] != std::floor(ij[0]) || ij[1] != std::floor(ij[1]))
+        e.fail("expected two camera ids");
       const int i = int(ij[0]), j = int(ij[1]);
       auto known = [&](int id) {
         for (const auto& c : s.cameras)

@@ -1,7 +1,9 @@
-// Geometry for the renderer: rigid poses, small SE(3) helpers (render/ must not depend on
-// observer/), triangle meshes for boxes, planes and cylinders, and Wavefront OBJ parsing.
+// Geometry for the renderer: rigid poses, the camera look-at pose, triangle meshes for boxes,
+// planes and cylinders, and Wavefront OBJ parsing. The SO(3) / SE(3) maths (rotation vectors,
+// exp and log) are observer/'s, the project's one Lie-group implementation, used here under
+// render's names.
 //
-// Conventions (../../../../../shared/DESIGN.md): g_ab maps frame-b coordinates to frame a;
+// Conventions (README.md, "Layout and conventions"): g_ab maps frame-b coordinates to frame a;
 // rotations are rotation vectors (axis * angle); twists are ordered [v; w].
 #pragma once
 
@@ -12,24 +14,25 @@
 #include <string>
 #include <vector>
 
+#include "netvmo/observer/lie.hpp"
+
 namespace netvmo::render {
 
-using Pose = Eigen::Isometry3d;
+using Pose = obs::SE3;
 using Vec2 = Eigen::Vector2d;
-using Vec3 = Eigen::Vector3d;
-using Vec6 = Eigen::Matrix<double, 6, 1>;
-using Mat3 = Eigen::Matrix3d;
+using Vec3 = obs::Vec3;
+using Vec6 = obs::Vec6;
+using Mat3 = obs::Mat3;
 
-/// Rotation matrix of a rotation vector (axis * angle).
-Mat3 rotation_from_vector(const Vec3& r);
-/// Rotation vector (angle in [0, pi]) of a rotation matrix.
-Vec3 rotation_to_vector(const Mat3& R);
-/// Pose from a position and a rotation vector.
-Pose make_pose(const Vec3& p, const Vec3& r);
-/// exp of the twist [v; w] (closed form).
-Pose exp_se3(const Vec6& V);
-/// log of a pose as a twist [v; w], rotation angle in [0, pi].
-Vec6 log_se3(const Pose& g);
+/// Rotation matrix of a rotation vector (axis * angle): exp_so3; rotation vector (angle in
+/// [0, pi]) of a rotation matrix: log_so3; pose from a position and a rotation vector:
+/// make_pose; exp and log of a twist [v; w]: exp_se3, log_se3.
+using obs::exp_se3;
+using obs::exp_so3;
+using obs::log_se3;
+using obs::log_so3;
+using obs::make_pose;
+
 /// Camera pose g_wi (camera: x right, y down, z forward) of a camera at `eye` looking at
 /// `target` with `up` pointing up in the image. Throws std::invalid_argument if degenerate.
 Pose look_at(const Vec3& eye, const Vec3& target, const Vec3& up);

@@ -14,13 +14,13 @@ namespace netvmo::render {
 
 /// One printed AprilTag. Defaults: tag36h11 id 0, 0.2 m.
 struct TagSpec {
-  std::string family = "tag36h11";  ///< tag36h11, tag25h9, tag16h5, tagStandard41h12
+  std::string family = "tag36h11";  ///< one of tag_families() (tag_family.hpp)
   int id = 0;
-  double size = 0.2;          ///< side of the black border square [m] (libapriltag's definition)
-  int quiet_cells = 1;        ///< extra white cells printed around libapriltag's bitmap, whose
-                              ///< own outer ring is already white (so 1 gives a 2-cell margin)
-  double white_albedo = 0.85; ///< reflectance of the paper
-  double black_albedo = 0.05; ///< reflectance of the ink
+  double size = 0.2;           ///< side of the black border square [m] (libapriltag's definition)
+  int quiet_cells = 1;         ///< extra white cells printed around libapriltag's bitmap, whose
+                               ///< own outer ring is already white (so 1 gives a 2-cell margin)
+  double white_albedo = 0.85;  ///< reflectance of the paper
+  double black_albedo = 0.05;  ///< reflectance of the ink
 };
 
 /// The tag bitmap and its geometry in the tag frame (origin at the tag centre, x right, y up
@@ -43,7 +43,8 @@ class TagTexture {
     if (fc < 0 || fr < 0) return spec_.white_albedo;
     const int c = static_cast<int>(fc), r = static_cast<int>(fr);
     if (c >= total_width_ || r >= total_width_) return spec_.white_albedo;
-    return dark_[static_cast<size_t>(r * total_width_ + c)] ? spec_.black_albedo : spec_.white_albedo;
+    return dark_[static_cast<size_t>(r * total_width_ + c)] ? spec_.black_albedo
+                                                            : spec_.white_albedo;
   }
   int total_width() const { return total_width_; }
   int width_at_border() const { return width_at_border_; }
@@ -61,9 +62,9 @@ class TagTexture {
 struct Material {
   enum class Pattern { Solid, Checker, Noise };
   Pattern pattern = Pattern::Solid;
-  double albedo = 0.6;   ///< solid albedo; checker colour 1; noise mean
-  double albedo2 = 0.3;  ///< checker colour 2; noise amplitude (peak deviation)
-  double scale = 0.25;   ///< checker square side / noise feature size [m]
+  double albedo = 0.6;     ///< solid albedo; checker colour 1; noise mean
+  double albedo2 = 0.3;    ///< checker colour 2; noise amplitude (peak deviation)
+  double scale = 0.25;     ///< checker square side / noise feature size [m]
   std::uint32_t seed = 0;  ///< noise pattern seed
 
   /// Albedo at point p with unit normal n, both in the shape frame. The checker ignores the

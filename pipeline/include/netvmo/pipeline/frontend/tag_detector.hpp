@@ -11,9 +11,9 @@
 // i.e. obs::FeatureModel::square(s).points_o[k] (verified index by index in the tests).
 #pragma once
 
-#include <opencv2/core.hpp>
 #include <array>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
@@ -35,7 +35,7 @@ Refinement parse_refinement(const std::string& name);
 /// Detector settings. Defaults documented next to each field.
 struct DetectorSettings {
   // libapriltag (apriltag_detector_t) settings
-  std::string family = "tag36h11";  ///< tag family (see supported_families())
+  std::string family = "tag36h11";  ///< tag family (see render::tag_families())
   double quad_decimate = 2.0;       ///< decimation of the image for quad search (>= 1)
   double quad_sigma = 0.0;          ///< Gaussian blur sigma applied before quad search
   int nthreads = 2;                 ///< worker threads of libapriltag
@@ -44,13 +44,13 @@ struct DetectorSettings {
   int bits_corrected = 2;           ///< error bits the decoder may correct (libapriltag default)
   /// libapriltag qtp.min_white_black_diff: local contrast (gray levels) below which a region is
   /// not thresholded. libapriltag's default is 5; 20 skips the quad fitting of sensor-noise
-  /// clusters (about 5x faster on 640x480 frames with noise sigma 2, see the README's front-end benchmark)
-  /// and still finds tags whose black/white contrast is 40 gray levels or more (tested).
+  /// clusters (about 5x faster on 640x480 frames with noise sigma 2, see the README's front-end
+  /// benchmark) and still finds tags whose black/white contrast is 40 gray levels or more (tested).
   int min_white_black_diff = 20;
   // Acceptance of the target tag
-  int target_id = 0;                 ///< the target's tag id
-  double min_decision_margin = 20.0; ///< reject target detections with a lower decision margin
-  int max_hamming = 1;               ///< reject target detections with more corrected bits
+  int target_id = 0;                  ///< the target's tag id
+  double min_decision_margin = 20.0;  ///< reject target detections with a lower decision margin
+  int max_hamming = 1;                ///< reject target detections with more corrected bits
   // Refinement of the accepted target's corners
   Refinement refinement = Refinement::edge_lines;
 };
@@ -59,9 +59,9 @@ struct DetectorSettings {
 struct TagDetection {
   int id = -1;
   int hamming = 0;
-  double margin = 0.0;                      ///< libapriltag's decision margin
-  std::array<cv::Point2d, 4> corners{};     ///< OpenCV pixels, libapriltag order
-  cv::Point2d center;                       ///< OpenCV pixels
+  double margin = 0.0;                   ///< libapriltag's decision margin
+  std::array<cv::Point2d, 4> corners{};  ///< OpenCV pixels, libapriltag order
+  cv::Point2d center;                    ///< OpenCV pixels
 };
 
 enum class TargetStatus { detected, not_found, duplicate_id, low_margin, high_hamming };
@@ -69,17 +69,14 @@ const char* to_string(TargetStatus s);
 
 /// All tags decoded in a frame and the decision about the target.
 struct FrameDetections {
-  std::vector<TagDetection> all;   ///< every decoded tag (other ids are reported, not used)
+  std::vector<TagDetection> all;  ///< every decoded tag (other ids are reported, not used)
   TargetStatus status = TargetStatus::not_found;
-  int target_index = -1;           ///< index into `all` of the accepted target, or -1
+  int target_index = -1;  ///< index into `all` of the accepted target, or -1
   /// The accepted target detection (refined corners), or nullptr.
   const TagDetection* target() const {
     return target_index >= 0 ? &all[static_cast<size_t>(target_index)] : nullptr;
   }
 };
-
-bool is_supported_family(const std::string& name);
-std::string supported_families();  ///< comma-separated list
 
 /// libapriltag detector, created once and reused across frames (not thread-safe: one
 /// detect() at a time; it uses `nthreads` workers internally).

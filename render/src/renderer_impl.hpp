@@ -1,0 +1,168 @@
+// Private to render/src: the renderer's state (Renderer::Impl) and what its source files share.
+//
+//   renderer.cpp        Renderer's construction and frame state (set_frame, acquire)
+//   scene_validate.cpp  SceneDescription::validate
+//   scene_build.cpp     the Embree device, meshes, instances and commits
+//   camera_rays.cpp     sample offsets, per-camera inverse-distortion ray tables, FOV bounds
+//   shading.cpp         the shading kernel: radiance of a traced packet (textures, lights, shadows)
+//   sensor.cpp          radiance -> 8-bit pixels with seeded read and shot noise
+//   render_loop.cpp     Renderer::render: frame -> tiles -> packets
+//   ground_truth.cpp    Renderer::truth: corners, field of view, visible fraction
+//   intersect_bare.cpp  Renderer::intersect_bare, the benchmark baseline
+#pragma once
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <shared_mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "netvmo/render/renderer.hpp"
+
+namespace netvmo::render {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+// Packet width of the primary and shadow ray queries (Embree ray packets). 16 is native on
+// AVX-512 and emulated with two 8-wide traversals on AVX2 (README.md, "Benchmarks").
+constexpr int kPacket = 16;
+using RayHitK = RTCRayHit16;
+using RayK = RTCRay16;
+inline void intersectK(const int* valid, RTCScene s, RTCIntersectContext* c, RayHitK* r) {
+  rtcIntersect16(valid, s, c, r);
+}
+inline void occludedK(const int* valid, RTCScene s, RTCIntersectContext* c, RayK* r) {
+  rtcOccluded16(valid, s, c, r);
+}
+
+struct GeomInfo {
+  Material material;
+  const TagTexture* tag = nullptr;   // non-null: tag quad, `to_local` maps to the tag frame
+  Pose to_local = Pose::Identity();  // parent (instance) frame -> shape frame
+};
+
+struct Instance {
+  std::string name;
+  RTCScene scene = nullptr;
+  RTCGeometry geom = nullptr;
+  unsigned top_id = RTC_INVALID_GEOMETRY_ID;
+  std::vector<GeomInfo> geoms;
+  const Trajectory* motion = nullptr;  // null: static (identity)
+  Pose g_wb = Pose::Identity();        // current pose
+  Pose g_bw = Pose::Identity();
+};
+
+// The noise-free radiance of a camera's last image and the poses of every instance it was
+// rendered with: when nothing has moved, the next frame reuses it and only draws new noise.
+struct RadianceCache {
+  std::mutex mutex;
+  std::vector<Eigen::Matrix4d> key;  // g_wb of every instance
+  std::vector<float> acc;            // per pixel, summed over samples (before the sensor)
+  bool valid = false;
+};
+
+struct CameraCache {
+  // Undistorted normalized coordinates per (pixel, sample) when the camera has distortion.
+  std::vector<float> table;
+  // Bounding box of the undistorted normalized coordinates of the image border.
+  double xmin = 0, xmax = 0, ymin = 0, ymax = 0;
+};
+
+struct Renderer::Impl {
+  RTCDevice device = nullptr;
+  RTCScene top = nullptr;
+  std::vector<Instance> instances;  // [0] static (if any), then target, moving bodies
+  std::vector<int> instance_of_top_id;
+  std::vector<std::unique_ptr<TagTexture>> tags;
+  std::vector<Eigen::Vector2f> offsets;
+  std::vector<CameraCache> cams;
+  std::vector<std::unique_ptr<RadianceCache>> radiance;  // per camera
+  std::shared_mutex mutex;
+  int current_frame = -1;
+  int target_instance = -1;
+
+  ~Impl();
+
+  // Scene building (scene_build.cpp). build() creates the device and commits every instance:
+  // the static geometry in one scene built once, the target and the moving occluders.
+  void build(const SceneDescription& scene);
+  void check(const char* what) const;
+  void set_transform(Instance& in, const Pose& g);
+
+ private:
+  void create_device();
+  void add_mesh(Instance& in, const Mesh& mesh, GeomInfo info);
+  void add_shape(Instance& in, const Shape& s);
+  void add_tag(Instance& in, const TagSpec& spec, const Pose& g_ot);
+  Instance& new_instance(const std::string& name);
+  void attach_instance(Instance& in, int index);
+};
+
+// Camera rays (camera_rays.cpp).
+/// Sample offsets relative to the pixel centre, in [-0.5, 0.5)^2.
+std::vector<Eigen::Vector2f> sample_offsets(int spp);
+/// FOV bounds and, with distortion, the undistorted ray of every (pixel, sample).
+CameraCache make_camera_cache(const Intrinsics& Kc, const std::vector<Eigen::Vector2f>& offsets);
+/// Index of (row, col, sample) in CameraCache::table.
+inline size_t ray_table_index(int row, int col, int sample, int width, int spp) {
+  return ((size_t(row) * size_t(width) + size_t(col)) * size_t(spp) + size_t(sample)) * 2;
+}
+
+// The shading kernel (shading.cpp).
+/// A light in the kernel's single precision.
+struct LightF {
+  bool directional, shadows;
+  Eigen::Vector3f v;  // directional: unit vector towards the light; point: position
+  float intensity;
+};
+
+/// What the kernel needs of the current frame.
+struct Shading {
+  const Renderer::Impl* impl = nullptr;
+  std::vector<LightF> lights;
+  std::vector<Eigen::Matrix3f> inst_R;                 // per top-level id: object -> world normals
+  std::vector<std::vector<Eigen::Affine3f>> to_local;  // per (top id, geometry): world -> shape
+  float ambient = 0, background = 0;
+};
+Shading make_shading(const Renderer::Impl& impl, const SceneDescription& scene);
+
+/// One packet of kPacket samples and its per-lane shading state.
+struct Packet {
+  alignas(64) RayHitK rh;
+  alignas(64) RayK sr;
+  alignas(64) int valid[kPacket];
+  alignas(64) int svalid[kPacket];
+  int pix[kPacket];  // pixel of the lane in its tile, -1: none
+  float rad[kPacket], alb[kPacket], contrib[kPacket];
+  Eigen::Vector3f p[kPacket], n[kPacket];
+};
+
+/// Radiance of every lane of a traced primary packet from origin O: background, textured
+/// albedo times ambient plus each light, one shadow-ray packet per light (context `sctx`).
+void shade_packet(const Shading& sh, const Eigen::Vector3f& O, Packet& pk,
+                  RTCIntersectContext* sctx);
+
+// The sensor (sensor.cpp).
+/// Seed of a tile's noise generator, from (seed, camera id, frame, tile).
+std::uint64_t tile_seed(std::uint64_t seed, int camera_id, int frame, int tile);
+/// Writes a tile's pixels at (x0, y0) of `out`: DN = scale * acc, plus read and shot noise
+/// drawn from the generator seeded with `seed` when im.noise, rounded and clamped to [0, 255].
+void expose_tile(const Imaging& im, double scale, std::uint64_t seed, const std::vector<float>& acc,
+                 int x0, int y0, int w, int h, cv::Mat& out);
+
+/// Runs `worker` on `nthreads` threads (the calling one included) and joins them.
+template <class Worker>
+void run_threads(int nthreads, Worker&& worker) {
+  std::vector<std::thread> pool;
+  for (int t = 1; t < nthreads; ++t) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+}
+
+}  // namespace netvmo::render
