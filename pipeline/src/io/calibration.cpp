@@ -1,11 +1,12 @@
 #include "netvmo/pipeline/io/calibration.hpp"
 
-#include <opencv2/calib3d.hpp>
 #include <visp3/core/vpCameraParameters.h>
 #include <visp3/core/vpException.h>
 #include <visp3/core/vpXmlParserCamera.h>
+#include <opencv2/calib3d.hpp>
 
 #include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/io/atomic_file.hpp"
 
 namespace netvmo::io {
 namespace fs = std::filesystem;
@@ -22,8 +23,7 @@ void validate(const Calibration& c, const std::string& file) {
   if (K(1, 0) != 0 || K(2, 0) != 0 || K(2, 1) != 0 || K(2, 2) != 1)
     throw InputError(file + ": camera_matrix: expected [fx s cx; 0 fy cy; 0 0 1]");
   for (int i = 0; i < 5; ++i)
-    if (!std::isfinite(c.dist[i]))
-      throw InputError(file + ": distortion_coefficients: not finite");
+    if (!std::isfinite(c.dist[i])) throw InputError(file + ": distortion_coefficients: not finite");
 }
 
 }  // namespace
@@ -62,10 +62,12 @@ Calibration load_calibration_opencv(const fs::path& path) {
                        std::to_string(n));
     for (int i = 0; i < n; ++i) {
       const double v = D.at<double>(0, i);
-      if (i < 5) c.dist[i] = v;
+      if (i < 5)
+        c.dist[i] = v;
       else if (v != 0.0)
-        throw InputError(file + ": distortion_coefficients: only the 5-coefficient model "
-                                "(k1 k2 p1 p2 k3) is supported; coefficient " +
+        throw InputError(file +
+                         ": distortion_coefficients: only the 5-coefficient model "
+                         "(k1 k2 p1 p2 k3) is supported; coefficient " +
                          std::to_string(i) + " is non-zero");
     }
   } catch (const cv::Exception& e) {
@@ -102,25 +104,26 @@ Calibration load_calibration_visp_xml(const fs::path& path, const std::string& c
 }
 
 void save_calibration_opencv(const fs::path& path, const Calibration& c) {
+  std::string text;
   try {
-    cv::FileStorage fsw(path.string(), cv::FileStorage::WRITE);
-    if (!fsw.isOpened()) throw InputError(path.string() + ": cannot open for writing");
+    cv::FileStorage fsw(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY);
     fsw << "image_width" << c.width << "image_height" << c.height;
     fsw << "camera_matrix" << cv::Mat(c.K);
     fsw << "distortion_coefficients" << cv::Mat(cv::Matx<double, 1, 5>(c.dist.val));
+    text = fsw.releaseAndGetString();
   } catch (const cv::Exception& e) {
     throw InputError(path.string() + ": cannot write calibration: " + e.err);
   }
+  write_file_atomic(path, text);  // appears only when complete
 }
 
 std::vector<cv::Point2d> normalize_points(const std::vector<cv::Point2d>& px,
                                           const Calibration& calib) {
   std::vector<cv::Point2d> out;
   if (px.empty()) return out;
-  cv::undistortPoints(px, out, cv::Mat(calib.K), cv::Mat(calib.dist), cv::noArray(),
-                      cv::noArray(),
-                      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100,
-                                       1e-12));
+  cv::undistortPoints(
+      px, out, cv::Mat(calib.K), cv::Mat(calib.dist), cv::noArray(), cv::noArray(),
+      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12));
   return out;
 }
 

@@ -2,11 +2,39 @@
 
 #include <set>
 
+#include <yaml-cpp/yaml.h>
+
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/yaml_reader.hpp"
 #include "netvmo/render/tag_family.hpp"
 
 namespace netvmo::io {
+
+int read_camera_id(const Value& id, std::set<int>& seen) {
+  const int v = id.integer();
+  if (v <= 0) id.fail("camera ids must be positive integers");
+  if (!seen.insert(v).second) id.fail("duplicate camera id " + std::to_string(v));
+  return v;
+}
+
+std::vector<std::pair<int, int>> read_edges(const Value& edges, const std::set<int>& ids) {
+  std::vector<std::pair<int, int>> out;
+  std::set<std::pair<int, int>> seen;
+  for (const auto& ev : edges.sequence()) {
+    const auto e = ev.numbers();
+    if (e.size() != 2 || e[0] != static_cast<int>(e[0]) || e[1] != static_cast<int>(e[1]))
+      ev.fail("expected a pair of camera ids [i, j]");
+    const int i = static_cast<int>(e[0]), j = static_cast<int>(e[1]);
+    for (int k : {i, j})
+      if (!ids.count(k))
+        ev.fail("unknown camera id " + std::to_string(k) + " (not listed under cameras)");
+    if (i == j) ev.fail("self-loop on camera " + std::to_string(i));
+    if (!seen.insert({std::min(i, j), std::max(i, j)}).second)
+      ev.fail("duplicate edge between cameras " + std::to_string(i) + " and " + std::to_string(j));
+    out.emplace_back(i, j);
+  }
+  return out;
+}
 
 int NetworkConfig::index_of(int camera_id) const {
   for (size_t i = 0; i < cameras.size(); ++i)
@@ -46,31 +74,46 @@ NetworkConfig load_network_config(const std::filesystem::path& file) {
   for (const auto& cv : root.get("cameras").sequence()) {
     auto c = cv.map();
     CameraConfig cam;
-    const auto id = c.get("id");
-    cam.id = id.integer();
-    if (cam.id <= 0) id.fail("camera ids must be positive integers");
-    if (!ids.insert(cam.id).second) id.fail("duplicate camera id " + std::to_string(cam.id));
+    cam.id = read_camera_id(c.get("id"), ids);
     cam.g_wi = obs::make_pose(c.get("p_wi").vec<3>(), c.get("r_wi").vec<3>());
     c.finish();
     net.cameras.push_back(cam);
   }
   if (net.cameras.empty()) root.get("cameras").fail("at least one camera is required");
-  std::set<std::pair<int, int>> seen;
-  for (const auto& ev : root.get("edges").sequence()) {
-    const auto e = ev.numbers();
-    if (e.size() != 2 || e[0] != static_cast<int>(e[0]) || e[1] != static_cast<int>(e[1]))
-      ev.fail("expected a pair of camera ids [i, j]");
-    const int i = static_cast<int>(e[0]), j = static_cast<int>(e[1]);
-    for (int k : {i, j})
-      if (!ids.count(k))
-        ev.fail("unknown camera id " + std::to_string(k) + " (not listed under cameras)");
-    if (i == j) ev.fail("self-loop on camera " + std::to_string(i));
-    if (!seen.insert({std::min(i, j), std::max(i, j)}).second)
-      ev.fail("duplicate edge between cameras " + std::to_string(i) + " and " + std::to_string(j));
-    net.edges.emplace_back(i, j);
-  }
+  net.edges = read_edges(root.get("edges"), ids);
   root.finish();
   return net;
+}
+
+std::string network_yaml(const NetworkConfig& net) {
+  YAML::Emitter y;
+  y.SetDoublePrecision(12);
+  y << YAML::BeginMap;
+  y << YAML::Key << "fps" << YAML::Value << net.fps;
+  if (net.frames) y << YAML::Key << "frames" << YAML::Value << *net.frames;
+  y << YAML::Key << "target" << YAML::Value << YAML::BeginMap;
+  y << YAML::Key << "family" << YAML::Value << net.target.family;
+  y << YAML::Key << "id" << YAML::Value << net.target.id;
+  y << YAML::Key << "size" << YAML::Value << net.target.size;
+  y << YAML::EndMap;
+  y << YAML::Key << "cameras" << YAML::Value << YAML::BeginSeq;
+  for (const auto& c : net.cameras) {
+    const obs::Vec3 p = c.g_wi.translation();
+    const obs::Vec3 r = obs::log_so3(c.g_wi.linear());
+    y << YAML::BeginMap;
+    y << YAML::Key << "id" << YAML::Value << c.id;
+    y << YAML::Key << "p_wi" << YAML::Value << YAML::Flow
+      << std::vector<double>{p.x(), p.y(), p.z()};
+    y << YAML::Key << "r_wi" << YAML::Value << YAML::Flow
+      << std::vector<double>{r.x(), r.y(), r.z()};
+    y << YAML::EndMap;
+  }
+  y << YAML::EndSeq;
+  y << YAML::Key << "edges" << YAML::Value << YAML::BeginSeq;
+  for (const auto& e : net.edges) y << YAML::Flow << std::vector<int>{e.first, e.second};
+  y << YAML::EndSeq;
+  y << YAML::EndMap;
+  return std::string(y.c_str()) + "\n";
 }
 
 }  // namespace netvmo::io

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "netvmo/pipeline/error.hpp"
@@ -11,10 +12,10 @@
 namespace netvmo::io {
 namespace {
 
-using render::Pose;
-using render::Vec3;
 using io::MapReader;
 using io::Value;
+using render::Pose;
+using render::Vec3;
 
 // pose: {p: [x,y,z], r: [rx,ry,rz]} or {eye: [..], look_at: [..], up: [..]} (camera poses).
 Pose read_pose(const Value& v) {
@@ -311,14 +312,11 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
   }
 
   const Value cams = root.get("cameras");
+  std::set<int> ids;
   for (const auto& c : cams.sequence()) {
     MapReader cm = c.map();
     render::CameraSpec cam;
-    const Value id = cm.get("id");
-    cam.id = id.integer();
-    if (cam.id <= 0) id.fail("camera ids must be positive integers");
-    for (const auto& other : s.cameras)
-      if (other.id == cam.id) id.fail("duplicate camera id " + std::to_string(cam.id));
+    cam.id = read_camera_id(cm.get("id"), ids);
     cam.intrinsics = read_intrinsics(cm.get("intrinsics"));
     cam.g_wi_true = read_pose(cm.get("pose"));
     const auto believed = cm.find("believed");
@@ -351,21 +349,7 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
       s.occluders.push_back(std::move(b));
     }
 
-  if (const auto edges = root.find("edges"))
-    for (const auto& e : edges->sequence()) {
-      const auto ij = e.vec<2>();
-      if (ij[0] != std::floor(ij[0]) || ij[1] != std::floor(ij[1]))
-        e.fail("expected two camera ids");
-      const int i = int(ij[0]), j = int(ij[1]);
-      auto known = [&](int id) {
-        for (const auto& c : s.cameras)
-          if (c.id == id) return true;
-        return false;
-      };
-      if (!known(i) || !known(j)) e.fail("edge refers to an unknown camera id");
-      if (i == j) e.fail("an edge must join two different cameras");
-      s.edges.emplace_back(i, j);
-    }
+  if (const auto edges = root.find("edges")) s.edges = read_edges(*edges, ids);
   root.finish();
 
   try {
@@ -374,6 +358,30 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
     throw InputError(file.string() + ": " + e.what());
   }
   return s;
+}
+
+NetworkConfig scene_network_config(const render::SceneDescription& scene, int frames) {
+  NetworkConfig net;
+  net.fps = scene.fps;
+  net.frames = frames;
+  net.target.family = scene.target.tag.family;
+  net.target.id = scene.target.tag.id;
+  net.target.size = scene.target.tag.size;
+  for (const auto& c : scene.cameras) net.cameras.push_back({c.id, c.g_wi_believed});
+  net.edges = scene.edges;
+  net.source = "the scene";
+  return net;
+}
+
+Calibration scene_calibration(const render::CameraSpec& c) {
+  Calibration k;
+  k.width = c.intrinsics.width;
+  k.height = c.intrinsics.height;
+  k.K = cv::Matx33d(c.intrinsics.fx, 0, c.intrinsics.cx, 0, c.intrinsics.fy, c.intrinsics.cy, 0, 0,
+                    1);
+  for (int j = 0; j < 5; ++j) k.dist[j] = c.intrinsics.dist[static_cast<size_t>(j)];
+  k.source = "camera " + std::to_string(c.id) + " of the scene";
+  return k;
 }
 
 }  // namespace netvmo::io

@@ -141,6 +141,42 @@ std::vector<DetectionRow> read_detections_csv(const fs::path& file) {
   return rows;
 }
 
+namespace {
+std::string fmt(const char* f, double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, x);
+  return buf;
+}
+std::string pose_fields(const obs::SE3& g) {
+  const obs::Vec3 p = g.translation(), r = obs::log_so3(g.linear());
+  std::string s;
+  for (int i = 0; i < 3; ++i) s += "," + fmt("%.9g", p[i]);
+  for (int i = 0; i < 3; ++i) s += "," + fmt("%.9g", r[i]);
+  return s;
+}
+}  // namespace
+
+std::string format_truth_row(const render::FrameTruth& t) {
+  std::string row = std::to_string(t.frame) + "," + fmt("%.6f", t.t) + "," +
+                    std::to_string(t.camera_id) + "," + (t.in_fov ? "1" : "0") + "," +
+                    fmt("%.6f", t.visible_fraction);
+  for (const auto& c : t.corners) {
+    if (c)
+      row += "," + fmt("%.4f", c->x()) + "," + fmt("%.4f", c->y());
+    else
+      row += ",,";
+  }
+  return row;
+}
+
+std::string format_target_row(int frame, double t, const obs::SE3& g_wo) {
+  return std::to_string(frame) + "," + fmt("%.6f", t) + pose_fields(g_wo);
+}
+
+std::string format_truth_camera_row(int camera, const obs::SE3& g_wi) {
+  return std::to_string(camera) + pose_fields(g_wi);
+}
+
 std::string format_detection_row(const DetectionRow& r) {
   char buf[512];
   int n = std::snprintf(buf, sizeof buf, "%d,%d,", r.frame, r.camera);

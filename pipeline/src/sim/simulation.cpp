@@ -7,6 +7,7 @@
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/io/network_config.hpp"
 #include "netvmo/pipeline/io/yaml_reader.hpp"
 
 namespace netvmo::sim {
@@ -69,13 +70,12 @@ SimScenario load_scenario(const fs::path& file) {
   if (!(s.square_side > 0)) root.get("square_side").fail("must be positive");
   s.initial = read_pose(root.get("initial_estimate").map(), "p", "r");
 
+  std::set<int> ids;
   std::map<int, int> index_of;
   for (const auto& cv : root.get("cameras").sequence()) {
     auto c = cv.map();
     SimCamera cam;
-    cam.id = c.get("id").integer();
-    if (cam.id <= 0) c.get("id").fail("camera ids must be positive integers");
-    if (index_of.count(cam.id)) c.get("id").fail("duplicated camera id " + std::to_string(cam.id));
+    cam.id = io::read_camera_id(c.get("id"), ids);
     cam.g_wi = obs::make_pose(c.get("p_wi").vec<3>(), c.get("r_wi").vec<3>());
     if (auto t = c.find("target")) cam.g_wo = read_pose(t->map(), "p", "r");
     c.finish();
@@ -83,19 +83,8 @@ SimScenario load_scenario(const fs::path& file) {
     s.cameras.push_back(cam);
   }
   if (s.cameras.empty()) root.get("cameras").fail("no cameras");
-  for (const auto& ev : root.get("edges").sequence()) {
-    const auto ids = ev.numbers();
-    if (ids.size() != 2) ev.fail("an edge is a pair of camera ids [i, j]");
-    int idx[2];
-    for (int k = 0; k < 2; ++k) {
-      const int id = static_cast<int>(ids[static_cast<size_t>(k)]);
-      if (id != ids[static_cast<size_t>(k)] || !index_of.count(id))
-        ev.fail("unknown camera id " + io::format_number(ids[static_cast<size_t>(k)]));
-      idx[k] = index_of[id];
-    }
-    if (idx[0] == idx[1]) ev.fail("an edge must join two different cameras");
-    s.edges.emplace_back(idx[0], idx[1]);
-  }
+  for (const auto& [i, j] : io::read_edges(root.get("edges"), ids))
+    s.edges.emplace_back(index_of[i], index_of[j]);
   root.finish();
 
   std::vector<int> labels;
@@ -122,7 +111,9 @@ SimScenario load_scenario(const fs::path& file) {
       } catch (const std::domain_error&) {
         throw InputError(file.string() + ": camera " + std::to_string(c.id) +
                          ": the target or the initial estimate is behind the camera, so image "
-                         "features are undefined for 'error: " + s.error_model + "' (turn the cameras to "
+                         "features are undefined for 'error: " +
+                         s.error_model +
+                         "' (turn the cameras to "
                          "face it, as datasets/paper5_jacobian.yaml does)");
       }
     }
@@ -238,14 +229,14 @@ void write_outputs(const SimScenario& s, const SimResult& r, const fs::path& dir
   nlohmann::json cams = nlohmann::json::array();
   for (size_t i = 0; i < s.cameras.size(); ++i) {
     const SE3& g = r.estimates_world.back()[i];
-    cams.push_back({{"id", s.cameras[i].id},
-                    {"sees_target", s.cameras[i].g_wo.has_value()},
-                    {"p_final", vec(g.translation())},
-                    {"xitheta_final", vec(obs::rotvec(g))},
-                    {"position_error", (g.translation() - r.g_star.translation()).norm()},
-                    {"orientation_error_deg",
-                     obs::log_so3(r.g_star.linear().transpose() * g.linear()).norm() * 180.0 /
-                         M_PI}});
+    cams.push_back(
+        {{"id", s.cameras[i].id},
+         {"sees_target", s.cameras[i].g_wo.has_value()},
+         {"p_final", vec(g.translation())},
+         {"xitheta_final", vec(obs::rotvec(g))},
+         {"position_error", (g.translation() - r.g_star.translation()).norm()},
+         {"orientation_error_deg",
+          obs::log_so3(r.g_star.linear().transpose() * g.linear()).norm() * 180.0 / M_PI}});
   }
   j["cameras"] = cams;
   io::write_file_atomic(dir / "summary.json", j.dump(2) + "\n");

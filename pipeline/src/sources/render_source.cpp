@@ -1,5 +1,6 @@
 #include "netvmo/pipeline/sources/render_source.hpp"
 
+#include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/render/renderer.hpp"
 
 namespace netvmo::sources {
@@ -9,31 +10,17 @@ namespace {
 class RenderProvider final : public NetworkSource {
  public:
   RenderProvider(render::SceneDescription scene, int frames)
-      : renderer_(std::move(scene)),
-        frames_(frames > 0 ? frames : renderer_.frame_count()) {
-    const auto& s = renderer_.scene();
-    net_.fps = s.fps;
-    net_.frames = frames_;
-    net_.target.family = s.target.tag.family;
-    net_.target.id = s.target.tag.id;
-    net_.target.size = s.target.tag.size;
-    net_.edges = s.edges;
+      : renderer_(std::move(scene)), frames_(frames > 0 ? frames : renderer_.frame_count()) {
+    net_ = io::scene_network_config(renderer_.scene(), frames_);
     net_.source = "live rendering";
-    for (const auto& c : s.cameras) {
-      net_.cameras.push_back({c.id, c.g_wi_believed});
-      io::Calibration k;
-      k.width = c.intrinsics.width;
-      k.height = c.intrinsics.height;
-      k.K = cv::Matx33d(c.intrinsics.fx, 0, c.intrinsics.cx, 0, c.intrinsics.fy, c.intrinsics.cy, 0, 0, 1);
-      for (int j = 0; j < 5; ++j) k.dist[j] = c.intrinsics.dist[static_cast<size_t>(j)];
-      k.source = "camera " + std::to_string(c.id) + " of the scene";
-      calib_.push_back(k);
-    }
+    for (const auto& c : renderer_.scene().cameras) calib_.push_back(io::scene_calibration(c));
   }
   const io::NetworkConfig& network() const override { return net_; }
   const io::Calibration& calibration(size_t i) const override { return calib_.at(i); }
   int frame_count() const override { return frames_; }
-  cv::Mat read(size_t i, int frame) override { return renderer_.render(static_cast<int>(i), frame); }
+  cv::Mat read(size_t i, int frame) override {
+    return renderer_.render(static_cast<int>(i), frame);
+  }
   std::optional<obs::SE3> target_truth(int frame) const override {
     return renderer_.target_pose(frame);
   }

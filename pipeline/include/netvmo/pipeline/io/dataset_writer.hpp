@@ -19,8 +19,8 @@
 namespace netvmo::io {
 
 struct DatasetOptions {
-  int frames = 0;         ///< frames to write; 0 = the scene's frame count
-  bool progress = true;   ///< progress bar on stderr
+  int frames = 0;        ///< frames to write; 0 = the scene's frame count
+  bool progress = true;  ///< progress bar on stderr
 };
 
 struct CameraDatasetStats {
@@ -38,13 +38,5 @@ struct DatasetSummary {
 /// needed; existing files of the same names are replaced).
 DatasetSummary write_dataset(render::Renderer& renderer, const std::filesystem::path& out,
                              const DatasetOptions& options = {});
-
-/// calib/cam_<id>.yaml content (OpenCV FileStorage YAML).
-void write_calibration(const std::filesystem::path& file, const render::Intrinsics& k);
-/// network.yaml content.
-std::string network_yaml(const render::SceneDescription& scene, int frames);
-/// One truth.csv row (without newline) and the header.
-std::string truth_csv_header();
-std::string truth_csv_row(const render::FrameTruth& t);
 
 }  // namespace netvmo::io

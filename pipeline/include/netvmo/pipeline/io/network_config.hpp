@@ -15,11 +15,13 @@
 
 #include <filesystem>
 #include <optional>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "netvmo/observer/lie.hpp"
+#include "netvmo/pipeline/io/yaml_reader.hpp"
 
 namespace netvmo::io {
 
@@ -30,8 +32,8 @@ struct TargetSpec {
 };
 
 struct CameraConfig {
-  int id = 0;                                ///< positive, unique
-  obs::SE3 g_wi = obs::SE3::Identity();      ///< believed pose of camera i in the world
+  int id = 0;                            ///< positive, unique
+  obs::SE3 g_wi = obs::SE3::Identity();  ///< believed pose of camera i in the world
 };
 
 struct NetworkConfig {
@@ -47,5 +49,14 @@ struct NetworkConfig {
 };
 
 NetworkConfig load_network_config(const std::filesystem::path& file);
+/// The `id` of a `cameras:` entry, in every file that lists cameras (network.yaml, render and
+/// simulation scenarios): a positive integer not in `seen` (added to it). Fails naming the key.
+int read_camera_id(const Value& id, std::set<int>& seen);
+/// An `edges:` list, in every file that has one: pairs [i, j] of camera ids in `ids`, no
+/// self-loop, no edge twice. Fails naming the entry.
+std::vector<std::pair<int, int>> read_edges(const Value& edges, const std::set<int>& ids);
+
+/// network.yaml text of a configuration (what load_network_config reads back).
+std::string network_yaml(const NetworkConfig& net);
 
 }  // namespace netvmo::io

@@ -1,4 +1,5 @@
-// Readers for a rendered dataset's ground truth and the front end's detections.csv.
+// The dataset folder's CSV files, read and written here and nowhere else: a rendered dataset's
+// ground truth and the front end's detections.csv.
 //
 //   truth.csv   frame,t,camera,in_fov,visible_fraction,u0,v0,u1,v1,u2,v2,u3,v3
 //               corners in OpenCV pixels (libapriltag corner order), empty when the tag is
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "netvmo/observer/lie.hpp"
+#include "netvmo/render/renderer.hpp"
 
 namespace netvmo::io {
 
@@ -64,6 +66,13 @@ struct CameraTruthRow {
 };
 std::vector<CameraTruthRow> read_truth_cameras_csv(const std::filesystem::path& file);
 
+/// One truth.csv line (without newline): times with 6 decimals, corners with 4 (a corner behind
+/// the camera is written empty).
+std::string format_truth_row(const render::FrameTruth& t);
+/// One target.csv line (without newline): position and rotation vector with 9 digits.
+std::string format_target_row(int frame, double t, const obs::SE3& g_wo);
+/// One truth_cameras.csv line (without newline).
+std::string format_truth_camera_row(int camera, const obs::SE3& g_wi);
 /// One detections.csv line (without newline). Corners with 4 decimals, margin with 2.
 std::string format_detection_row(const DetectionRow& row);
 
