@@ -1,16 +1,16 @@
 // netvmo bench: network frames per second of the whole pipeline, on recorded data (decode +
 // detection + observer) and on live rendering (render + detection + observer).
+#include <unistd.h>
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-#include <unistd.h>
 
 #include "commands.hpp"
 #include "netvmo/pipeline/io/dataset_writer.hpp"
+#include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/pipeline/run/image_run.hpp"
 #include "netvmo/pipeline/sources/render_source.hpp"
-#include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/render/renderer.hpp"
 #include "scenario_path.hpp"
 
@@ -20,10 +20,12 @@ namespace fs = std::filesystem;
 namespace {
 void report(const char* what, const run::ImageRunResult& r, size_t cameras) {
   const double frames = static_cast<double>(r.history.size());
-  std::printf("%-36s %6.1f network frames/s  (%zu cameras; per network frame: %.1f ms front end%s, %.2f ms observer)\n",
-              what, frames / r.seconds, cameras, 1000.0 * r.seconds_front_end / frames,
-              std::string(what).find("live") != std::string::npos ? " incl. rendering" : " incl. decoding",
-              1000.0 * r.seconds_observer / frames);
+  std::printf(
+      "%-36s %6.1f network frames/s  (%zu cameras; per network frame: %.1f ms front end%s, %.2f ms "
+      "observer)\n",
+      what, frames / r.seconds, cameras, 1000.0 * r.seconds_front_end / frames,
+      std::string(what).find("live") != std::string::npos ? " incl. rendering" : " incl. decoding",
+      1000.0 * r.seconds_observer / frames);
 }
 }  // namespace
 
@@ -37,12 +39,15 @@ void add_bench(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<Options>();
   auto* cmd = app.add_subcommand(
       "bench", "Network frames per second of the whole pipeline, recorded and live");
-  cmd->add_option("--scenario", o->scenario, "Render scenario (static: live frames reuse the radiance)")
+  cmd->add_option("--scenario", o->scenario,
+                  "Render scenario (static: live frames reuse the radiance)")
       ->capture_default_str();
   cmd->add_option("--moving-scenario", o->moving,
                   "Scenario with moving bodies, rendered live in full every frame")
       ->capture_default_str();
-  cmd->add_option("--frames", o->frames, "Frames per measurement")->capture_default_str()->check(CLI::PositiveNumber);
+  cmd->add_option("--frames", o->frames, "Frames per measurement")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--live-spp", o->live_spp, "Samples per pixel for live rendering")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
@@ -54,7 +59,8 @@ void add_bench(CLI::App& app, int& exit_code) {
       run.progress = false;
       run.max_frames = o->frames;
       // Recorded: render a dataset first (not timed), then decode + detect + observe.
-      const fs::path tmp = fs::temp_directory_path() / ("netvmo_bench_" + std::to_string(::getpid()));
+      const fs::path tmp =
+          fs::temp_directory_path() / ("netvmo_bench_" + std::to_string(::getpid()));
       {
         render::Renderer renderer(scene);
         io::DatasetOptions d;
@@ -77,7 +83,8 @@ void add_bench(CLI::App& app, int& exit_code) {
       report(label, r2, scene.cameras.size());
       auto moving_scene = io::load_render_scenario(find_scenario(o->moving));
       moving_scene.imaging.spp = o->live_spp;
-      auto live_moving = sources::make_render_source(moving_scene, std::min(o->frames, moving_scene.frames));
+      auto live_moving =
+          sources::make_render_source(moving_scene, std::min(o->frames, moving_scene.frames));
       const auto r3 = run::run_images(*live_moving, run);
       std::snprintf(label, sizeof label, "live, moving scene (%d spp)", o->live_spp);
       report(label, r3, moving_scene.cameras.size());

@@ -22,9 +22,9 @@ void add_demo(CLI::App& app, int& exit_code) {
     RunCliOptions run;
   };
   auto o = std::make_shared<Options>();
-  auto* cmd = app.add_subcommand(
-      "demo", "Render the default scenario, run the networked observer on it, evaluate and plot");
-  cmd->footer(
+  CLI::App* cmd = add_command(
+      app, "demo",
+      "Render the default scenario, run the networked observer on it, evaluate and plot",
       "Writes OUT/dataset/ (the rendered images, calibration, network.yaml and ground truth) and\n"
       "the results of `netvmo run` on it in OUT/ (estimates.csv, energies.csv, errors.csv,\n"
       "summary.json, energies.png, errors.png, overlays/).");

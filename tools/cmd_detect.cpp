@@ -13,11 +13,11 @@
 
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/sources/dataset.hpp"
 #include "netvmo/pipeline/frontend/front_end.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
-#include "netvmo/pipeline/progress.hpp"
 #include "netvmo/pipeline/io/truth_io.hpp"
+#include "netvmo/pipeline/progress.hpp"
+#include "netvmo/pipeline/sources/dataset.hpp"
 
 namespace netvmo::tools {
 namespace fs = std::filesystem;
@@ -68,7 +68,8 @@ int run_detect(DetectOptions o) {
       } catch (const InputError& e) {
         ++st.unreadable;
         unreadable.push_back(e.what());
-        if (o.keep_going) std::fprintf(stderr, "netvmo detect: warning: %s (camera blind there)\n", e.what());
+        if (o.keep_going)
+          std::fprintf(stderr, "netvmo detect: warning: %s (camera blind there)\n", e.what());
       }
       if (!img.empty()) ++st.images;
       FrameDetections all;
@@ -76,10 +77,17 @@ int run_detect(DetectOptions o) {
       for (const auto& d : all.all)
         if (d.id != o.det.target_id) st.other_ids.insert(d.id);
       switch (obs.status) {
-        case TargetStatus::low_margin: ++st.low_margin; break;
-        case TargetStatus::high_hamming: ++st.high_hamming; break;
-        case TargetStatus::duplicate_id: ++st.duplicate; break;
-        default: break;
+        case TargetStatus::low_margin:
+          ++st.low_margin;
+          break;
+        case TargetStatus::high_hamming:
+          ++st.high_hamming;
+          break;
+        case TargetStatus::duplicate_id:
+          ++st.duplicate;
+          break;
+        default:
+          break;
       }
       DetectionRow row;
       row.frame = f;
@@ -111,8 +119,7 @@ int run_detect(DetectOptions o) {
     const double mm = st.detected ? st.margin_sum / st.detected : 0.0;
     std::printf("%-8d %-28s %7d %7d %9d %5.1f%% %11.1f %9d %10zu %10d\n", ds.cameras[c].id,
                 src.c_str(), st.frames, st.images, st.detected, rate, mm,
-                st.low_margin + st.high_hamming + st.duplicate, st.other_ids.size(),
-                st.unreadable);
+                st.low_margin + st.high_hamming + st.duplicate, st.other_ids.size(), st.unreadable);
   }
   if (!unreadable.empty() && !o.keep_going)
     throw InputError(unreadable.front() + " (" + std::to_string(unreadable.size()) +
@@ -125,12 +132,13 @@ int run_detect(DetectOptions o) {
 
 void add_detect(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<DetectOptions>();
-  CLI::App* cmd = app.add_subcommand("detect", "Run the AprilTag front end on a dataset folder");
-  cmd->footer(
+  CLI::App* cmd = add_command(
+      app, "detect", "Run the AprilTag front end on a dataset folder",
       "Writes OUT/detections.csv: frame,camera,tag_id,detected,margin,u0,v0,...,u3,v3 (OpenCV\n"
       "pixels, corners in libapriltag order; empty when not detected) and prints a per-camera\n"
       "summary. The tag family and target id come from network.yaml.");
-  cmd->add_option("dataset", o->dataset, "Dataset folder (network.yaml, calib/, cam_<id>/ or cam_<id>.<ext>)")
+  cmd->add_option("dataset", o->dataset,
+                  "Dataset folder (network.yaml, calib/, cam_<id>/ or cam_<id>.<ext>)")
       ->required();
   cmd->add_option("--out,-o", o->out, "Output folder (created)")->required();
   cmd->add_option("--decimate", o->det.quad_decimate, "libapriltag quad_decimate (>= 1)")
@@ -142,8 +150,9 @@ void add_detect(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   cmd->add_option("--sharpening", o->det.decode_sharpening, "libapriltag decode_sharpening")
       ->capture_default_str();
-  cmd->add_option("--min-contrast", o->det.min_white_black_diff,
-                  "libapriltag qtp.min_white_black_diff (gray levels; libapriltag's own default is 5)")
+  cmd->add_option(
+         "--min-contrast", o->det.min_white_black_diff,
+         "libapriltag qtp.min_white_black_diff (gray levels; libapriltag's own default is 5)")
       ->capture_default_str();
   cmd->add_option("--min-margin", o->det.min_decision_margin,
                   "Minimum decision margin to accept the target")

@@ -4,8 +4,8 @@
 #include <memory>
 
 #include "commands.hpp"
-#include "netvmo/pipeline/io/dataset_writer.hpp"
 #include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/io/dataset_writer.hpp"
 #include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/render/renderer.hpp"
 
@@ -20,8 +20,8 @@ void add_render(CLI::App& app, int& exit_code) {
     bool quiet = false;
   };
   auto o = std::make_shared<Options>();
-  CLI::App* cmd = app.add_subcommand("render", "Render a scenario into a dataset folder (Embree)");
-  cmd->footer(
+  CLI::App* cmd = add_command(
+      app, "render", "Render a scenario into a dataset folder (Embree)",
       "Writes DATASET/cam_<id>/<frame>.png, calib/cam_<id>.yaml, network.yaml, truth.csv,\n"
       "target.csv and truth_cameras.csv (layout: datasets/README.md).");
   cmd->add_option("SCENARIO", o->scenario, "render scenario YAML, e.g. datasets/paper5_render.yaml")

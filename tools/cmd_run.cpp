@@ -19,8 +19,8 @@ void add_run(CLI::App& app, int& exit_code) {
     RunCliOptions run;
   };
   auto o = std::make_shared<Options>();
-  auto* cmd = app.add_subcommand("run", "Run the networked observer on a dataset's images");
-  cmd->footer(
+  CLI::App* cmd = add_command(
+      app, "run", "Run the networked observer on a dataset's images",
       "Writes OUT/estimates.csv, OUT/energies.csv, OUT/errors.csv, OUT/summary.json,\n"
       "OUT/energies.png, OUT/errors.png and OUT/overlays/ (per-camera MP4s, mosaic.mp4,\n"
       "mosaic.png). delta_i(t) is the front end's detection success.");

@@ -38,7 +38,8 @@ void make_plots(const sim::SimScenario& s, const sim::SimResult& r, const fs::pa
                 const std::optional<std::pair<double, fs::path>>& compare) {
   plot::Panel up{"position error energy U_p", "U_p [m^2]", true, {}, std::nullopt};
   plot::Panel ur{"orientation error energy U_R", "U_R", true, {}, std::nullopt};
-  const std::string solid = "lines lw 2 lc rgb '#d62728'", dashed = "lines lw 2 dt 2 lc rgb '#1f77b4'";
+  const std::string solid = "lines lw 2 lc rgb '#d62728'",
+                    dashed = "lines lw 2 dt 2 lc rgb '#1f77b4'";
   up.series.push_back({dir / "energies.csv", "k_s = " + short_number(s.k_s), 2, 1, solid});
   ur.series.push_back({dir / "energies.csv", "k_s = " + short_number(s.k_s), 3, 1, solid});
   if (compare) {
@@ -46,10 +47,13 @@ void make_plots(const sim::SimScenario& s, const sim::SimResult& r, const fs::pa
     up.series.push_back({c, "k_s = " + short_number(compare->first), 2, 1, dashed});
     ur.series.push_back({c, "k_s = " + short_number(compare->first), 3, 1, dashed});
   }
-  plot::panels_figure({up, ur}, dir / "energies.png",
-                      "Estimation error energies (" + s.error_model +
-                          " error, k_e = " + short_number(s.k_e) + ")");
-  plot::Panel ori{"first element of ξ̄ sin θ̄ (world frame)", "(ξ̄ sin θ̄)_x", false, {},
+  plot::panels_figure(
+      {up, ur}, dir / "energies.png",
+      "Estimation error energies (" + s.error_model + " error, k_e = " + short_number(s.k_e) + ")");
+  plot::Panel ori{"first element of ξ̄ sin θ̄ (world frame)",
+                  "(ξ̄ sin θ̄)_x",
+                  false,
+                  {},
                   std::make_pair(std::string("average g*"), obs::e_R(r.g_star.linear()).x())};
   for (size_t i = 0; i < s.cameras.size(); ++i)
     ori.series.push_back({dir / "orientation_x.csv", "camera " + std::to_string(s.cameras[i].id),
@@ -61,9 +65,8 @@ void make_plots(const sim::SimScenario& s, const sim::SimResult& r, const fs::pa
 
 void add_simulate(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<SimulateOptions>();
-  auto* cmd = app.add_subcommand(
-      "simulate", "Run the observer on a simulation scenario (the paper's Section 5)");
-  cmd->footer(
+  CLI::App* cmd = add_command(
+      app, "simulate", "Run the observer on a simulation scenario (the paper's Section 5)",
       "Writes OUT/energies.csv (t,U_p,U_R), OUT/estimates.csv (t,camera,px,py,pz,rx,ry,rz),\n"
       "OUT/orientation_x.csv, OUT/summary.json, OUT/energies.png (Fig. 5) and\n"
       "OUT/orientation_x.png (Fig. 6).");
@@ -74,8 +77,9 @@ void add_simulate(CLI::App& app, int& exit_code) {
   cmd->add_option("--ks", o->k_s, "Mutual feedback gain k_s")->default_str("from scenario");
   cmd->add_option("--duration", o->duration, "Simulated time [s]")->default_str("from scenario");
   add_error_model_option(*cmd, o->error, ErrorModelUse::simulation)->default_str("from scenario");
-  cmd->add_option("--compare-ks", o->compare_ks,
-                  "Also run with this k_s (into OUT/compare_ks) and draw it dashed in energies.png");
+  cmd->add_option(
+      "--compare-ks", o->compare_ks,
+      "Also run with this k_s (into OUT/compare_ks) and draw it dashed in energies.png");
   cmd->add_flag("--no-plots", o->no_plots, "Skip the PNG plots");
   cmd->callback([o, &exit_code] {
     exit_code = guarded("simulate", [&] {

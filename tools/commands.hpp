@@ -20,6 +20,15 @@ inline int guarded(const std::string& command, const std::function<int()>& body)
   }
 }
 
+/// Registers subcommand `name` with its one-line summary (the command list) and the footer of
+/// its --help (what it writes).
+inline CLI::App* add_command(CLI::App& app, const char* name, const char* summary,
+                             const char* footer) {
+  CLI::App* cmd = app.add_subcommand(name, summary);
+  cmd->footer(footer);
+  return cmd;
+}
+
 void add_simulate(CLI::App& app, int& exit_code);
 void add_render(CLI::App& app, int& exit_code);
 void add_detect(CLI::App& app, int& exit_code);

@@ -38,6 +38,12 @@ struct CliResult {
   std::string out, err;
 };
 
+/// The whole text of a file (empty if it cannot be read).
+inline std::string read_text(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
 /// Runs `netvmo ARGS` from the build folder, capturing stdout and stderr in files under `scratch`.
 inline CliResult run_netvmo(const std::string& args, const std::filesystem::path& scratch) {
   const auto out = scratch / "stdout.txt", err = scratch / "stderr.txt";
@@ -55,7 +61,8 @@ void expect_input_error(F f, std::initializer_list<std::string> needles) {
     ADD_FAILURE() << "no InputError thrown";
   } catch (const InputError& e) {
     const std::string msg = e.what();
-    for (const auto& n : needles) EXPECT_NE(msg.find(n), std::string::npos) << msg << " lacks " << n;
+    for (const auto& n : needles)
+      EXPECT_NE(msg.find(n), std::string::npos) << msg << " lacks " << n;
     EXPECT_EQ(msg.find('\n'), std::string::npos) << "one line: " << msg;
   }
 }

@@ -11,29 +11,15 @@
 
 #include "netvmo/pipeline/io/dataset_writer.hpp"
 #include "netvmo/pipeline/io/render_scenario.hpp"
+#include "test_util.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-const char* kScenario = R"(fps: 15
-frames: 3
-imaging: {spp: 1, seed: 3}
-lights:
-  - {type: directional, direction: [0, 1, -1], intensity: 0.7}
-target:
-  tag: {family: tag36h11, id: 1, size: 0.2}
-  motion: {type: twist, pose: {p: [0, 0, 1], r: [1.5707963, 0, 0]}, v: [0.3, 0, 0]}
-cameras:
-  - id: 3
-    intrinsics: {width: 80, height: 60, fx: 70, fy: 71, cx: 39, cy: 29}
-    pose: {eye: [0, -1.5, 1.0], look_at: [0, 0, 1.0]}
-    believed_offset: {dp: [0.01, 0.02, 0.03]}
-  - id: 7
-    intrinsics: {width: 80, height: 60, fx: 70, fy: 70, distortion: [-0.05, 0.01, 0.001, 0.002, 0.0]}
-    pose: {eye: [0, 1.5, 1.0], look_at: [0, 0, 1.0]}
-edges: [[3, 7]]
-)";
+// The scenario, kept as a data file next to this test.
+const std::string kScenario = netvmo::test::read_text(fs::path(NETVMO_SOURCE_DIR) /
+                                                      "tests/pipeline/data/writer_scenario.yaml");
 
 std::vector<std::string> lines(const fs::path& f) {
   std::ifstream in(f);
@@ -42,7 +28,9 @@ std::vector<std::string> lines(const fs::path& f) {
   return out;
 }
 
-int fields(const std::string& line) { return int(std::count(line.begin(), line.end(), ',')) + 1; }
+int fields(const std::string& line) {
+  return int(std::count(line.begin(), line.end(), ',')) + 1;
+}
 
 TEST(DatasetWriter, WritesDocumentedLayout) {
   const fs::path dir = fs::path(NETVMO_BINARY_DIR) / "test_tmp" / "dataset_writer";
@@ -57,14 +45,15 @@ TEST(DatasetWriter, WritesDocumentedLayout) {
   const auto summary = netvmo::io::write_dataset(r, out, opt);
   EXPECT_EQ(summary.frames, 3);
   ASSERT_EQ(summary.cameras.size(), 2u);
-  EXPECT_EQ(summary.cameras[0].frames_in_fov, 3);  // camera 3 faces the tag
+  EXPECT_EQ(summary.cameras[0].frames_in_fov, 3);   // camera 3 faces the tag
   EXPECT_EQ(summary.cameras[1].frames_visible, 0);  // camera 7 sees its back
 
   for (int id : {3, 7})
     for (int f = 0; f < 3; ++f) {
       char name[16];
       std::snprintf(name, sizeof name, "%06d.png", f);
-      const cv::Mat img = cv::imread((out / ("cam_" + std::to_string(id)) / name).string(), cv::IMREAD_UNCHANGED);
+      const cv::Mat img =
+          cv::imread((out / ("cam_" + std::to_string(id)) / name).string(), cv::IMREAD_UNCHANGED);
       ASSERT_FALSE(img.empty()) << id << " " << name;
       EXPECT_EQ(img.type(), CV_8UC1);
       EXPECT_EQ(img.cols, 80);

@@ -7,36 +7,15 @@
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/render_scenario.hpp"
+#include "test_util.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-const char* kMinimal = R"(fps: 30
-frames: 3
-imaging: {spp: 1, seed: 5}
-lights:
-  - {type: directional, direction: [0, 1, -1], intensity: 0.7}
-target:
-  tag: {family: tag36h11, id: 2, size: 0.15}
-  shapes:
-    - {type: box, size: [0.2, 0.2, 0.2], pose: {p: [0, 0, -0.101]}}
-  motion: {type: twist, pose: {p: [0, 0, 1], r: [1.5707963, 0, 0]}, v: [0.1, 0, 0]}
-cameras:
-  - id: 4
-    intrinsics: {width: 80, height: 60, fx: 70, fy: 70}
-    pose: {eye: [0, -1.5, 1.0], look_at: [0, 0, 1.0]}
-    believed_offset: {dp: [0.01, 0, 0], dr: [0, 0, 0.02]}
-  - id: 9
-    intrinsics: {width: 80, height: 60, fx: 70, fy: 70, cx: 40, cy: 30, distortion: [-0.05, 0, 0, 0, 0]}
-    pose: {eye: [0.8, -1.4, 1.2], look_at: [0, 0, 1.0], up: [0, 0, 1]}
-    believed: {p: [0.8, -1.4, 1.2], r: [0, 0, 0]}
-edges: [[4, 9]]
-occluders:
-  - name: floor
-    shapes:
-      - {type: plane, size: [6, 6], material: {pattern: checker, albedo: 0.6, albedo2: 0.3, scale: 0.5}}
-)";
+// The scenario, kept as a data file next to this test.
+const std::string kMinimal = netvmo::test::read_text(fs::path(NETVMO_SOURCE_DIR) /
+                                                     "tests/pipeline/data/minimal_scenario.yaml");
 
 fs::path write_scenario(const std::string& name, const std::string& text) {
   const fs::path dir = fs::path(NETVMO_BINARY_DIR) / "test_tmp" / "scenario_yaml";
@@ -70,7 +49,8 @@ TEST(RenderScenario, MinimalLoads) {
   EXPECT_EQ(s.cameras[1].id, 9);
   EXPECT_DOUBLE_EQ(s.cameras[0].intrinsics.cx, 39.5);  // default: image centre
   EXPECT_DOUBLE_EQ(s.cameras[1].intrinsics.dist[0], -0.05);
-  EXPECT_NEAR((s.cameras[0].g_wi_believed.translation() - s.cameras[0].g_wi_true.translation()).x(), 0.01, 1e-12);
+  EXPECT_NEAR((s.cameras[0].g_wi_believed.translation() - s.cameras[0].g_wi_true.translation()).x(),
+              0.01, 1e-12);
   EXPECT_EQ(s.target.tag.id, 2);
   EXPECT_EQ(s.frames, 3);
   EXPECT_EQ(s.imaging.spp, 1);
@@ -81,14 +61,16 @@ TEST(RenderScenario, MinimalLoads) {
 
 TEST(RenderScenario, ShippedScenariosLoad) {
   for (const char* name : {"paper5_render.yaml", "moving_target.yaml"}) {
-    const auto s = netvmo::io::load_render_scenario(fs::path(NETVMO_SOURCE_DIR) / "datasets" / name);
+    const auto s =
+        netvmo::io::load_render_scenario(fs::path(NETVMO_SOURCE_DIR) / "datasets" / name);
     EXPECT_EQ(s.cameras.size(), 5u) << name;
     EXPECT_EQ(s.edges.size(), 6u) << name;
   }
 }
 
 TEST(RenderScenario, UnknownKeyNamesFileAndPath) {
-  const auto f = write_scenario("unknown.yaml", replaced(kMinimal, "fx: 70, fy: 70}", "fx: 70, fy: 70, fz: 1}"));
+  const auto f = write_scenario("unknown.yaml",
+                                replaced(kMinimal, "fx: 70, fy: 70}", "fx: 70, fy: 70, fz: 1}"));
   const std::string msg = load_error(f);
   EXPECT_NE(msg.find(f.string()), std::string::npos) << msg;
   EXPECT_NE(msg.find("cameras[0].intrinsics.fz"), std::string::npos) << msg;
@@ -96,7 +78,7 @@ TEST(RenderScenario, UnknownKeyNamesFileAndPath) {
 }
 
 TEST(RenderScenario, UnknownTopLevelKey) {
-  const auto f = write_scenario("unknown_top.yaml", std::string(kMinimal) + "lightz: []\n");
+  const auto f = write_scenario("unknown_top.yaml", kMinimal + "lightz: []\n");
   const std::string msg = load_error(f);
   EXPECT_NE(msg.find("lightz: unknown key"), std::string::npos) << msg;
 }
@@ -116,28 +98,38 @@ TEST(RenderScenario, MissingValueNamesPath) {
 }
 
 TEST(RenderScenario, ObjShapeIsReadRelativeToTheScenario) {
-  const auto dir = write_scenario("mesh.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n").parent_path();
-  const std::string with_obj = replaced(kMinimal, "{type: plane, size: [6, 6],", "{type: obj, file: mesh.obj, scale: 2.0,");
+  const auto dir =
+      write_scenario("mesh.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n").parent_path();
+  const std::string with_obj =
+      replaced(kMinimal, "{type: plane, size: [6, 6],", "{type: obj, file: mesh.obj, scale: 2.0,");
   const auto s = netvmo::io::load_render_scenario(write_scenario("obj.yaml", with_obj));
   ASSERT_EQ(s.occluders.size(), 1u);
   const auto& m = s.occluders[0].shapes[0].mesh;
   EXPECT_EQ(m.triangles.size(), 2u);
   EXPECT_FLOAT_EQ(m.vertices[2].x(), 2.0f);
-  const std::string msg = load_error(write_scenario("obj_missing.yaml", replaced(with_obj, "mesh.obj", "nope.obj")));
-  EXPECT_NE(msg.find("occluders[0].shapes[0].file: cannot read OBJ file"), std::string::npos) << msg;
+  const std::string msg =
+      load_error(write_scenario("obj_missing.yaml", replaced(with_obj, "mesh.obj", "nope.obj")));
+  EXPECT_NE(msg.find("occluders[0].shapes[0].file: cannot read OBJ file"), std::string::npos)
+      << msg;
   (void)dir;
 }
 
 TEST(RenderScenario, BadValuesAreRejected) {
-  EXPECT_NE(load_error(write_scenario("edge.yaml", replaced(kMinimal, "[[4, 9]]", "[[4, 5]]"))).find("edges[0]"),
+  EXPECT_NE(load_error(write_scenario("edge.yaml", replaced(kMinimal, "[[4, 9]]", "[[4, 5]]")))
+                .find("edges[0]"),
             std::string::npos);
-  EXPECT_NE(load_error(write_scenario("fam.yaml", replaced(kMinimal, "tag36h11", "tag99h1"))).find("unknown tag family"),
+  EXPECT_NE(load_error(write_scenario("fam.yaml", replaced(kMinimal, "tag36h11", "tag99h1")))
+                .find("unknown tag family"),
             std::string::npos);
-  EXPECT_NE(load_error(write_scenario("id.yaml", replaced(kMinimal, "id: 9", "id: 4"))).find("duplicate camera id"),
+  EXPECT_NE(load_error(write_scenario("id.yaml", replaced(kMinimal, "id: 9", "id: 4")))
+                .find("duplicate camera id"),
             std::string::npos);
-  EXPECT_NE(load_error(write_scenario("shape.yaml", replaced(kMinimal, "type: box", "type: sphere"))).find("target.shapes[0].type"),
+  EXPECT_NE(
+      load_error(write_scenario("shape.yaml", replaced(kMinimal, "type: box", "type: sphere")))
+          .find("target.shapes[0].type"),
+      std::string::npos);
+  EXPECT_NE(load_error(fs::path(NETVMO_BINARY_DIR) / "no_such_file.yaml").find("file not found"),
             std::string::npos);
-  EXPECT_NE(load_error(fs::path(NETVMO_BINARY_DIR) / "no_such_file.yaml").find("file not found"), std::string::npos);
 }
 
 }  // namespace

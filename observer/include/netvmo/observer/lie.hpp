@@ -29,6 +29,13 @@ Mat3 exp_so3(const Vec3& w);
 /// Rotation vector xi*theta with theta in [0, pi]; robust near 0 and near pi.
 Vec3 log_so3(const Mat3& R);
 
+/// Pose from a position and a rotation vector xi*theta.
+SE3 make_pose(const Vec3& p, const Vec3& xitheta);
+/// Rotation vector of a pose's rotation.
+inline Vec3 rotvec(const SE3& g) {
+  return log_so3(g.linear());
+}
+
 /// 4x4 twist matrix hat(V) = [hat(w) v; 0 0] for V = [v; w].
 Mat4 hat_se3(const Vec6& V);
 /// e^{hat(V)} for V = [v; w] (closed form with the left Jacobian of SO(3)).
@@ -47,11 +54,6 @@ Vec6 E_R(const SE3& g);
 double phi(const Mat3& R);
 /// psi(g) = 1/2 ||I - g||_F^2 = 1/2 ||p||^2 + phi(R) (eq:psi).
 double psi(const SE3& g);
-
-/// Pose from a position and a rotation vector xi*theta.
-SE3 make_pose(const Vec3& p, const Vec3& xitheta);
-/// Rotation vector of a pose's rotation.
-inline Vec3 rotvec(const SE3& g) { return log_so3(g.linear()); }
 
 /// Closest rotation (Frobenius norm) to an arbitrary 3x3 matrix, via SVD with det = +1.
 Mat3 project_to_so3(const Mat3& M);
