@@ -26,5 +26,7 @@ void add_detect(CLI::App& app, int& exit_code);
 void add_run(CLI::App& app, int& exit_code);
 void add_demo(CLI::App& app, int& exit_code);
 void add_bench(CLI::App& app, int& exit_code);
+void add_node(CLI::App& app, int& exit_code);
+void add_launch(CLI::App& app, int& exit_code);
 
 }  // namespace netvmo::tools

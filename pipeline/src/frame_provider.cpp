@@ -12,7 +12,8 @@ namespace {
 
 class DatasetProvider final : public FrameProvider {
  public:
-  explicit DatasetProvider(const fs::path& dir) : ds_(open_dataset(dir)) {
+  DatasetProvider(const fs::path& dir, std::optional<int> only_camera)
+      : ds_(open_dataset(dir, only_camera)) {
     const fs::path target = dir / "target.csv", cams = dir / "truth_cameras.csv";
     if (fs::exists(target) && fs::exists(cams)) {
       for (const auto& r : read_target_csv(target)) target_[r.frame] = r.g_wo;
@@ -51,8 +52,9 @@ class DatasetProvider final : public FrameProvider {
 
 }  // namespace
 
-std::unique_ptr<FrameProvider> open_dataset_provider(const fs::path& dir) {
-  return std::make_unique<DatasetProvider>(dir);
+std::unique_ptr<FrameProvider> open_dataset_provider(const fs::path& dir,
+                                                     std::optional<int> only_camera) {
+  return std::make_unique<DatasetProvider>(dir, only_camera);
 }
 
 }  // namespace netvmo::pipeline
