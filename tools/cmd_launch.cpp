@@ -3,6 +3,7 @@
 // outputs of `netvmo run`.
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -24,6 +25,9 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
+
+// Async: the common start is this many seconds after the launch, time for every node to start.
+constexpr double kStartMargin = 2.5;
 
 std::string num(double v) {
   char b[40];
@@ -55,8 +59,11 @@ std::string last_line(const fs::path& log) {
 void add_launch(CLI::App& app, int& exit_code) {
   struct Options {
     std::string dataset, out = "results/launch";
-    int domain = -1, seed = 0;
+    int domain = -1;
+    std::uint64_t seed = 0;
     double timeout = 600.0, node_timeout = 20.0;
+    std::string mode = "lockstep", kill;
+    double speed = 1.0, stale = 0.25, drop = 0.0, delay = 0.0, restart_after = -1.0;
     RunCliOptions run;
   };
   auto o = std::make_shared<Options>();
@@ -64,7 +71,7 @@ void add_launch(CLI::App& app, int& exit_code) {
       "launch", "Run every camera as its own process over Cyclone DDS (this machine only)");
   cmd->footer(
       "Writes OUT/cyclonedds.xml (loopback only), starts one `netvmo node` per camera\n"
-      "(lock-step), and merges their outputs into exactly those of `netvmo run`:\n"
+      "(lock-step by default), and merges their outputs into exactly those of `netvmo run`:\n"
       "OUT/estimates.csv, energies.csv, errors.csv, summary.json, plots and overlays/, plus\n"
       "OUT/nodes/ (per-node CSV, statistics and log) and OUT/messages.json.");
   cmd->add_option("DATASET", o->dataset, "Dataset folder")->required();
@@ -72,8 +79,18 @@ void add_launch(CLI::App& app, int& exit_code) {
   cmd->add_option("--domain", o->domain,
                   "DDS domain id (default: derived from this process's id, printed)")
       ->check(CLI::Range(0, 230));
-  cmd->add_option("--seed", o->seed, "Seed of injected faults (none in lock-step)")
+  cmd->add_option("--mode", o->mode,
+                  "lockstep (the in-process algorithm, outputs equal to `netvmo run`) or async "
+                  "(each node paced on its camera's timestamps from a common start)")
+      ->check(CLI::IsMember({"lockstep", "async"}))
       ->capture_default_str();
+  add_async_options(*cmd, o->speed, o->stale, o->drop, o->delay, o->seed);
+  cmd->add_option("--kill", o->kill,
+                  "async: ID@T kills camera ID's node T seconds (wall) after the start");
+  cmd->add_option("--restart-after", o->restart_after,
+                  "async: restart the killed node this many seconds later (it joins at the "
+                  "current frame, with a new incarnation)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--timeout", o->timeout, "Stop every node and fail after this many seconds")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
@@ -100,6 +117,46 @@ void add_launch(CLI::App& app, int& exit_code) {
                   netcfg.cameras.size(), domain, (dir / "cyclonedds.xml").string().c_str());
       std::fflush(stdout);
 
+      const bool async = o->mode == "async";
+      if (!async && (o->drop > 0 || o->delay > 0 || !o->kill.empty() || o->restart_after >= 0))
+        throw InputError("--drop, --delay, --kill and --restart-after need --mode async");
+      net::KillPlan plan;
+      bool have_plan = false;
+      double start_at = 0.0;
+      if (async) {
+        // A common start, late enough for every node to be up; printed for the record.
+        start_at =
+            std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
+                .count() +
+            kStartMargin;
+        std::printf(
+            "netvmo launch: async, speed %g, staleness %g s, drop %g, delay %g ms, seed %llu, "
+            "start at %.3f (epoch)\n",
+            o->speed, o->stale, o->drop, o->delay, static_cast<unsigned long long>(o->seed),
+            start_at);
+      }
+      if (!o->kill.empty()) {
+        const auto at = o->kill.find('@');
+        int id = -1;
+        double t = -1;
+        try {
+          if (at != std::string::npos) {
+            id = std::stoi(o->kill.substr(0, at));
+            t = std::stod(o->kill.substr(at + 1));
+          }
+        } catch (const std::exception&) {
+        }
+        if (at == std::string::npos || netcfg.index_of(id) < 0 || !(t >= 0))
+          throw InputError("--kill " + o->kill + ": expected ID@SECONDS with a camera id of " +
+                           netcfg.source);
+        plan.index = static_cast<size_t>(netcfg.index_of(id));
+        plan.kill_at = t + kStartMargin;  // after the common start
+        plan.restart_after = o->restart_after;
+        have_plan = true;
+      } else if (o->restart_after >= 0) {
+        throw InputError("--restart-after needs --kill ID@T");
+      }
+
       const std::string exe = net::self_exe().string();
       std::vector<pid_t> pids;
       for (const auto& c : netcfg.cameras) {
@@ -117,35 +174,57 @@ void add_launch(CLI::App& app, int& exit_code) {
                                          "--timeout",
                                          num(o->node_timeout)};
         for (auto& a : forwarded(o->run)) argv.push_back(std::move(a));
+        if (async)
+          for (auto a :
+               {std::string("--mode"), std::string("async"), std::string("--speed"), num(o->speed),
+                std::string("--stale"), num(o->stale), std::string("--drop"), num(o->drop),
+                std::string("--delay"), num(o->delay), std::string("--seed"),
+                std::to_string(o->seed), std::string("--start-at"), num(start_at)})
+            argv.push_back(a);
         const fs::path log = nodes / ("node_" + std::to_string(c.id) + ".log");
         fs::remove(log);
+        fs::remove(nodes / ("node_" + std::to_string(c.id) + ".csv"));
+        if (have_plan && pids.size() == plan.index) {
+          plan.argv = argv;
+          plan.log = log;
+        }
         pids.push_back(net::spawn(argv, log));
       }
-      const auto res = net::supervise(pids, o->timeout, true);
+      const auto res = net::supervise(pids, o->timeout, true, have_plan ? &plan : nullptr);
+      // Report the nodes that failed on their own first; the others were stopped because of
+      // them, or by the timeout.
+      std::vector<int> stopped;
       bool failed = false;
       for (size_t i = 0; i < res.size(); ++i) {
-        const bool ok = res[i].finished && res[i].exit_code == 0;
-        if (ok || (res[i].killed && failed)) continue;
-        const fs::path log = nodes / ("node_" + std::to_string(netcfg.cameras[i].id) + ".log");
-        std::fprintf(stderr, "netvmo launch: node of camera %d failed (%s): %s [%s]\n",
-                     netcfg.cameras[i].id, net::describe(res[i]).c_str(), last_line(log).c_str(),
-                     log.string().c_str());
+        const int id = netcfg.cameras[i].id;
+        if ((res[i].finished && res[i].exit_code == 0) || res[i].planned_kill) continue;
+        if (res[i].killed) {
+          stopped.push_back(id);
+          continue;
+        }
+        const fs::path log = nodes / ("node_" + std::to_string(id) + ".log");
+        std::fprintf(stderr, "netvmo launch: node of camera %d failed (%s): %s [%s]\n", id,
+                     net::describe(res[i]).c_str(), last_line(log).c_str(), log.string().c_str());
         failed = true;
       }
-      if (failed) {
-        bool timed_out = false;
-        for (const auto& r : res) timed_out |= r.killed;
-        throw std::runtime_error(timed_out && o->timeout > 0
-                                     ? "nodes failed or were stopped (timeout " + num(o->timeout) +
-                                           " s); see " + nodes.string()
-                                     : "a node failed; see " + nodes.string());
+      if (failed) throw std::runtime_error("a node failed; see " + nodes.string());
+      if (!stopped.empty()) {
+        std::string ids;
+        for (int id : stopped) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
+        throw std::runtime_error("timeout after " + num(o->timeout) +
+                                 " s: stopped the nodes of cameras " + ids + "; see " +
+                                 nodes.string());
       }
 
       // Merge: the same result structure as run_images, then the same writers as `netvmo run`.
-      auto result = net::merge_nodes(*provider, options, nodes, frames);
+      auto result = net::merge_nodes(*provider, options, nodes, frames, async);
       json messages = json::object();
       for (const auto& c : netcfg.cameras) {
         const fs::path f = nodes / ("node_" + std::to_string(c.id) + ".json");
+        if (async && !fs::exists(f)) {  // killed and not restarted: it never finished
+          messages[std::to_string(c.id)] = nullptr;
+          continue;
+        }
         std::ifstream in(f);
         json j;
         try {
@@ -185,6 +264,10 @@ void add_launch(CLI::App& app, int& exit_code) {
       std::printf("messages: camera    sent  received  dropped  late  non-neighbour  rejected\n");
       for (const auto& c : netcfg.cameras) {
         const auto& m = messages[std::to_string(c.id)];
+        if (m.is_null()) {
+          std::printf("          %6d  (killed, no statistics)\n", c.id);
+          continue;
+        }
         unsigned long long rejected = 0, foreign = 0;
         for (const auto& [k, v] : m["rejected"].items())
           (k == obs::to_string(obs::MessageVerdict::not_a_neighbour) ? foreign : rejected) +=

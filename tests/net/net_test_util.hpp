@@ -3,14 +3,19 @@
 #pragma once
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "netvmo/pipeline/net/cyclone_config.hpp"
 #include "netvmo/pipeline/net/process.hpp"
+#include "test_util.hpp"
 
 namespace netvmo::net_test {
 
@@ -31,6 +36,22 @@ inline std::vector<net::ChildResult> run_all(const std::vector<std::vector<std::
   for (size_t k = 0; k < cmds.size(); ++k)
     pids.push_back(net::spawn(cmds[k], dir / ("child_" + std::to_string(k) + ".log")));
   return net::supervise(pids, timeout_s, true);
+}
+
+/// `netvmo ARGS` from the build folder, killed after `seconds` (and 5 s later for good).
+inline test::CliResult netvmo_bounded(const std::string& args, const std::filesystem::path& scratch,
+                                      int seconds) {
+  const auto out = scratch / "stdout.txt", err = scratch / "stderr.txt";
+  const std::string cmd = "timeout -k 5 " + std::to_string(seconds) + " " +
+                          std::string(NETVMO_BINARY_DIR) + "/netvmo " + args + " > " +
+                          out.string() + " 2> " + err.string();
+  const int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, test::slurp(out), test::slurp(err)};
+}
+
+inline nlohmann::json read_json(const std::filesystem::path& f) {
+  std::ifstream in(f);
+  return nlohmann::json::parse(in);
 }
 
 }  // namespace netvmo::net_test

@@ -17,16 +17,6 @@ namespace {
 
 constexpr int kFrames = 8;
 
-// `netvmo ARGS`, killed after `seconds`.
-test::CliResult netvmo_bounded(const std::string& args, const fs::path& scratch, int seconds) {
-  const auto out = scratch / "stdout.txt", err = scratch / "stderr.txt";
-  const std::string cmd = "timeout -k 5 " + std::to_string(seconds) + " " +
-                          std::string(NETVMO_BINARY_DIR) + "/netvmo " + args + " > " +
-                          out.string() + " 2> " + err.string();
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, test::slurp(out), test::slurp(err)};
-}
-
 std::vector<std::vector<std::string>> read_csv(const fs::path& f) {
   std::ifstream in(f);
   std::vector<std::vector<std::string>> rows;
@@ -81,11 +71,6 @@ double json_difference(const nlohmann::json& a, const nlohmann::json& b) {
   return a == b ? 0.0 : INFINITY;
 }
 
-nlohmann::json read_json(const fs::path& f) {
-  std::ifstream in(f);
-  return nlohmann::json::parse(in);
-}
-
 obs::SE3 pose_at(const std::vector<std::string>& row, size_t first) {
   obs::SE3 g = obs::SE3::Identity();
   for (int r = 0; r < 3; ++r) g.translation()(r) = std::stod(row[first + r]);
@@ -98,10 +83,10 @@ class Launch : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new fs::path(test::scratch_dir("launch"));
-    const auto r = netvmo_bounded("render " + std::string(NETVMO_SOURCE_DIR) +
-                                      "/datasets/paper5_render.yaml --frames " +
-                                      std::to_string(kFrames) + " --out " + (*dir_ / "ds").string(),
-                                  *dir_, 120);
+    const auto r = net_test::netvmo_bounded(
+        "render " + std::string(NETVMO_SOURCE_DIR) + "/datasets/paper5_render.yaml --frames " +
+            std::to_string(kFrames) + " --out " + (*dir_ / "ds").string(),
+        *dir_, 120);
     ASSERT_EQ(r.code, 0) << r.err;
   }
   static void TearDownTestSuite() {
@@ -117,11 +102,13 @@ fs::path* Launch::dir_ = nullptr;
 TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
   const fs::path ds = *dir_ / "ds", run = *dir_ / "run", launch = *dir_ / "launch";
   const int domain = net_test::loopback_domain(*dir_);
-  const auto r1 = netvmo_bounded("run " + ds.string() + " --out " + run.string(), *dir_, 120);
+  const auto r1 =
+      net_test::netvmo_bounded("run " + ds.string() + " --out " + run.string(), *dir_, 120);
   ASSERT_EQ(r1.code, 0) << r1.err;
-  const auto r2 = netvmo_bounded("launch " + ds.string() + " --out " + launch.string() +
-                                     " --domain " + std::to_string(domain) + " --timeout 90",
-                                 *dir_, 120);
+  const auto r2 =
+      net_test::netvmo_bounded("launch " + ds.string() + " --out " + launch.string() +
+                                   " --domain " + std::to_string(domain) + " --timeout 90",
+                               *dir_, 120);
   ASSERT_EQ(r2.code, 0) << r2.out << r2.err;
   EXPECT_NE(r2.out.find("DDS domain " + std::to_string(domain) + ", loopback only"),
             std::string::npos)
@@ -133,7 +120,8 @@ TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
     std::printf("%s: largest difference %.3g\n", f, d);
     EXPECT_LE(d, 1e-9) << f;
   }
-  auto s_run = read_json(run / "summary.json"), s_launch = read_json(launch / "summary.json");
+  auto s_run = net_test::read_json(run / "summary.json"),
+       s_launch = net_test::read_json(launch / "summary.json");
   s_run.erase("timing");
   s_launch.erase("timing");
   s_run.erase("warnings");
@@ -176,7 +164,7 @@ TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
   for (const auto& c : res.history[0].cameras) EXPECT_TRUE(c.initialized);
 
   // Message statistics: every round's estimate sent, nothing malformed or out of order.
-  const auto messages = read_json(launch / "messages.json");
+  const auto messages = net_test::read_json(launch / "messages.json");
   for (const auto& c : cams) {
     const auto& m = messages[std::to_string(c.id)];
     EXPECT_EQ(m["sent"].get<int>(), kFrames * res.substeps);
@@ -194,10 +182,10 @@ TEST_F(Launch, AFailingNodeFailsTheLaunchWithOneClearLine) {
   fs::copy(*dir_ / "ds", ds, fs::copy_options::recursive);
   std::ofstream(ds / "cam_3" / "000002.png") << "not a png";
   const int domain = net_test::loopback_domain(*dir_);
-  const auto r =
-      netvmo_bounded("launch " + ds.string() + " --out " + (*dir_ / "bad").string() + " --domain " +
-                         std::to_string(domain) + " --timeout 60 --node-timeout 5",
-                     *dir_, 90);
+  const auto r = net_test::netvmo_bounded(
+      "launch " + ds.string() + " --out " + (*dir_ / "bad").string() + " --domain " +
+          std::to_string(domain) + " --timeout 60 --node-timeout 5",
+      *dir_, 90);
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.err.find("node of camera 3 failed (exit 1)"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("000002.png"), std::string::npos) << r.err;
@@ -206,10 +194,10 @@ TEST_F(Launch, AFailingNodeFailsTheLaunchWithOneClearLine) {
 TEST_F(Launch, ANodeNamesItsSilentNeighbour) {
   // Camera 4 alone: its neighbours (cameras 3 and 5) never speak.
   const int domain = net_test::loopback_domain(*dir_);
-  const auto r = netvmo_bounded("node " + (*dir_ / "ds").string() + " --camera 4 --out " +
-                                    (*dir_ / "alone").string() + " --domain " +
-                                    std::to_string(domain) + " --timeout 1",
-                                *dir_, 60);
+  const auto r = net_test::netvmo_bounded("node " + (*dir_ / "ds").string() + " --camera 4 --out " +
+                                              (*dir_ / "alone").string() + " --domain " +
+                                              std::to_string(domain) + " --timeout 1",
+                                          *dir_, 60);
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("netvmo node: error: camera 4: no message of round 1 from neighbour camera"),
             std::string::npos)

@@ -54,8 +54,9 @@ class Fields {
   int line_no_;
 };
 
-std::vector<Row> read_node_csv(const fs::path& file, int frames) {
+std::vector<Row> read_node_csv(const fs::path& file, int frames, bool allow_gaps) {
   std::ifstream in(file);
+  if (!in && allow_gaps) return std::vector<Row>(static_cast<size_t>(frames));  // never finished
   if (!in) throw InputError(file.string() + ": node output not found");
   std::string line;
   std::getline(in, line);  // header
@@ -67,6 +68,8 @@ std::vector<Row> read_node_csv(const fs::path& file, int frames) {
     Fields f(line, file, line_no);
     Row r;
     const int k = f.integer();
+    if (allow_gaps && k > static_cast<int>(rows.size()) && k < frames)
+      rows.resize(static_cast<size_t>(k));  // frames the node was not running: blind
     if (k != static_cast<int>(rows.size())) f.fail("frame " + std::to_string(k) + " out of order");
     f.num();  // t
     r.cam.obs.delta = f.integer() != 0;
@@ -89,6 +92,8 @@ std::vector<Row> read_node_csv(const fs::path& file, int frames) {
     r.indep_w = f.pose();
     rows.push_back(std::move(r));
   }
+  if (allow_gaps && static_cast<int>(rows.size()) < frames)
+    rows.resize(static_cast<size_t>(frames));
   if (static_cast<int>(rows.size()) != frames)
     throw InputError(file.string() + ": " + std::to_string(rows.size()) + " frames, expected " +
                      std::to_string(frames));
@@ -99,13 +104,14 @@ std::vector<Row> read_node_csv(const fs::path& file, int frames) {
 
 pipeline::ImageRunResult merge_nodes(const pipeline::FrameProvider& provider,
                                      const pipeline::ImageRunOptions& options,
-                                     const fs::path& nodes_dir, int frames) {
+                                     const fs::path& nodes_dir, int frames, bool allow_gaps) {
   const pipeline::NetworkConfig& net = provider.network();
   const size_t n = net.cameras.size();
   const obs::Graph graph = pipeline::network_graph(net);
   std::vector<std::vector<Row>> rows;
   for (const auto& c : net.cameras)
-    rows.push_back(read_node_csv(nodes_dir / ("node_" + std::to_string(c.id) + ".csv"), frames));
+    rows.push_back(
+        read_node_csv(nodes_dir / ("node_" + std::to_string(c.id) + ".csv"), frames, allow_gaps));
 
   run::RunnerSettings rs = options.runner;
   rs.tag_size = net.target.size;

@@ -1,10 +1,14 @@
 #include "netvmo/pipeline/net/node.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <deque>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <random>
 #include <sstream>
+#include <thread>
 
 #include "netvmo/observer/camera_observer.hpp"
 #include "netvmo/pipeline/error.hpp"
@@ -62,11 +66,21 @@ std::string frame_row(int k, double t, const pipeline::CameraFrame& cam,
   return s + "\n";
 }
 
+double now_epoch() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+void sleep_until_epoch(double t) {
+  const double wait = t - now_epoch();
+  if (wait > 0) std::this_thread::sleep_for(std::chrono::duration<double>(wait));
+}
+
 }  // namespace
 
 NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const NodeOptions& o) {
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
+  const double started = now_epoch();  // a node started after the common start joins late
   auto provider = pipeline::open_dataset_provider(dataset, o.camera_id);
   const pipeline::NetworkConfig& netcfg = provider->network();
   const int self = netcfg.index_of(o.camera_id);
@@ -124,7 +138,18 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   NodeSummary summary;
   summary.substeps = N;
   std::vector<obs::EstimateMessage> inbox;
-  for (int k = 0; k < frames; ++k) {
+  const bool async = o.dds.mode == Mode::async;
+  const double start = o.start_epoch ? *o.start_epoch : now_epoch();
+  if (async && !(o.speed > 0)) throw InputError("--speed must be > 0");
+  // A node started after the common start (a restart) joins at the current frame.
+  int first = 0;
+  if (async && o.start_epoch)
+    first = std::max(0, static_cast<int>(std::floor((started - start) * o.speed / dt)));
+  summary.first_frame = first;
+  std::mt19937_64 rng(o.seed * 1000003ULL + static_cast<std::uint64_t>(o.camera_id));
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  std::deque<std::pair<double, obs::EstimateMessage>> delayed;  // (due, message)
+  for (int k = first; k < frames; ++k) {
     pipeline::CameraFrame cam;
     cv::Mat image;
     try {
@@ -156,9 +181,33 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
     const double t = k * dt;
     for (int r = 0; r < N; ++r) {
       // One exchange round, as NetworkedObserver::step: publish, take in the neighbours', step.
-      transport.send(net.publish(t + r * h));
+      const double tr = t + r * h;
+      if (async) sleep_until_epoch(start + tr / o.speed);
+      transport.send(net.publish(tr));
       transport.receive(self, inbox);
-      for (const auto& m : inbox) net.receive(m);
+      if (!async) {
+        for (const auto& m : inbox) net.receive(m);
+      } else {
+        // Faults injected on this side, then the latest value of each neighbour, forgotten
+        // once older than the staleness bound.
+        const double now = now_epoch();
+        for (const auto& m : inbox) {
+          if (o.drop > 0 && uniform(rng) < o.drop)
+            ++summary.stats.dropped;
+          else
+            delayed.emplace_back(now + o.delay_ms / 1000.0, m);
+        }
+        while (!delayed.empty() && delayed.front().first <= now) {
+          net.receive(delayed.front().second);
+          delayed.pop_front();
+        }
+        const auto& latest = net.latest();
+        for (size_t a = 0; a < latest.size(); ++a)
+          if (latest[a] && tr - latest[a]->stamp > o.stale_s) {
+            net.forget(net.neighbours()[a]);
+            ++summary.forgotten;
+          }
+      }
       net.step(h);
     }
     for (int r = 0; r < N_ind; ++r) ind.step(h_ind);
@@ -166,10 +215,14 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
     if (o.publish_ros_pose && net.initialized())
       transport.publish_average_pose(net.estimate_world(), t);
   }
-  transport.flush(5.0);
+  // Lock-step neighbours still wait for our last round; async ones take what has arrived (and a
+  // killed neighbour would never acknowledge).
+  transport.flush(async ? 0.2 : 5.0);
   csv.commit();
   summary.frames = frames;
+  const auto dropped = summary.stats.dropped;
   summary.stats = transport.stats();
+  summary.stats.dropped = dropped;
   summary.refused = net.refused();
   summary.seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
 
@@ -189,6 +242,8 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   for (size_t v = 1; v < summary.refused.size(); ++v)
     rej[obs::to_string(static_cast<obs::MessageVerdict>(v))] = summary.refused[v];
   j["messages"]["rejected"] = rej;
+  j["messages"]["forgotten_stale"] = summary.forgotten;
+  j["first_frame"] = summary.first_frame;
   j["warnings"] = summary.warnings;
   io::write_file_atomic(out_dir / (stem + ".json"), j.dump(2) + "\n");
   return summary;

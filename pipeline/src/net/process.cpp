@@ -39,8 +39,11 @@ pid_t spawn(const std::vector<std::string>& argv, const fs::path& log) {
   return pid;
 }
 
-std::vector<ChildResult> supervise(const std::vector<pid_t>& pids, double timeout_s,
-                                   bool kill_on_failure) {
+std::vector<ChildResult> supervise(const std::vector<pid_t>& pids_in, double timeout_s,
+                                   bool kill_on_failure, const KillPlan* plan) {
+  std::vector<pid_t> pids = pids_in;
+  enum class Plan { waiting, killed, restarted } plan_state = Plan::waiting;
+  bool awaiting = false;  // the planned victim is dead (reaped) and waits for its restart
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   const auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
@@ -52,7 +55,7 @@ std::vector<ChildResult> supervise(const std::vector<pid_t>& pids, double timeou
   for (size_t i = 0; i < pids.size(); ++i) res[i].pid = pids[i];
   while (left > 0) {
     for (size_t i = 0; i < pids.size(); ++i) {
-      if (done[i]) continue;
+      if (done[i] || (awaiting && i == plan->index)) continue;
       int status = 0;
       const pid_t r = ::waitpid(pids[i], &status, WNOHANG);
       if (r != pids[i]) continue;
@@ -65,10 +68,24 @@ std::vector<ChildResult> supervise(const std::vector<pid_t>& pids, double timeou
       } else if (WIFSIGNALED(status)) {
         res[i].signal = WTERMSIG(status);
       }
+      if (plan && i == plan->index && plan_state == Plan::killed && !res[i].finished) {
+        res[i].planned_kill = true;  // our own SIGKILL: not a failure
+        if (plan->restart_after >= 0) {
+          done[i] = false;  // it comes back
+          ++left;
+          awaiting = true;
+        }
+        continue;
+      }
       const bool failed = !res[i].finished || res[i].exit_code != 0;
       if (failed && kill_on_failure && !killing) {
         killing = true;
         kill_time = elapsed();
+        if (awaiting) {  // never restarted: nothing to kill there
+          done[plan->index] = true;
+          --left;
+          awaiting = false;
+        }
         for (size_t k = 0; k < pids.size(); ++k)
           if (!done[k]) {
             res[k].killed = true;
@@ -77,9 +94,29 @@ std::vector<ChildResult> supervise(const std::vector<pid_t>& pids, double timeou
       }
     }
     if (left == 0) break;
+    if (plan && !killing && plan->index < pids.size()) {
+      const size_t i = plan->index;
+      if (plan_state == Plan::waiting && elapsed() >= plan->kill_at && !done[i]) {
+        ::kill(pids[i], SIGKILL);
+        plan_state = Plan::killed;
+      } else if (plan_state == Plan::killed && plan->restart_after >= 0 && res[i].planned_kill &&
+                 elapsed() >= plan->kill_at + plan->restart_after) {
+        pids[i] = spawn(plan->argv, plan->log);
+        res[i] = ChildResult{};
+        res[i].pid = pids[i];
+        res[i].restarted = true;
+        plan_state = Plan::restarted;
+        awaiting = false;
+      }
+    }
     if (!killing && elapsed() > timeout_s) {
       killing = true;
       kill_time = elapsed();
+      if (awaiting) {
+        done[plan->index] = true;
+        --left;
+        awaiting = false;
+      }
       for (size_t k = 0; k < pids.size(); ++k)
         if (!done[k]) {
           res[k].killed = true;
@@ -97,6 +134,8 @@ std::vector<ChildResult> supervise(const std::vector<pid_t>& pids, double timeou
 std::string describe(const ChildResult& r) {
   std::string s = r.finished ? "exit " + std::to_string(r.exit_code)
                              : "killed by signal " + std::to_string(r.signal);
+  if (r.planned_kill) s += " (planned)";
+  if (r.restarted) s += " (restarted)";
   if (r.killed) s += " (stopped by the supervisor)";
   return s;
 }

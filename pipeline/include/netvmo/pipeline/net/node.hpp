@@ -29,6 +29,20 @@ struct NodeOptions {
   /// own camera's, or network.yaml's `frames`).
   std::optional<int> frames;
   bool publish_ros_pose = true;  ///< also publish rt/netvmo/camera_<id>/average_pose
+
+  // Async mode only (dds.mode == Mode::async).
+  /// Camera time runs at `speed` x wall time: frame k's round r is due at
+  /// start + (k dt + r h) / speed. A node behind schedule runs its rounds back to back.
+  double speed = 1.0;
+  /// The common start (seconds since the epoch, wall clock); default: the node's own start. A
+  /// node started after it (a restart) joins at the current frame.
+  std::optional<double> start_epoch;
+  /// Staleness bound [s of camera time]: a neighbour whose latest accepted estimate is older
+  /// than this (by its stamp) is forgotten (CameraObserver::forget) until heard again.
+  double stale_s = 0.25;
+  double drop = 0.0;       ///< probability that a received message is dropped (seeded)
+  double delay_ms = 0.0;   ///< every received message is handed to the observer this late
+  std::uint64_t seed = 0;  ///< seed of the drops (with the camera id)
 };
 
 struct NodeSummary {
@@ -36,6 +50,8 @@ struct NodeSummary {
   int substeps = 0;
   MessageStats stats;
   std::vector<std::uint64_t> refused;  ///< by obs::MessageVerdict
+  std::uint64_t forgotten = 0;         ///< async: neighbours dropped past the staleness bound
+  int first_frame = 0;                 ///< async: the frame a (re)started node joined at
   std::vector<std::string> warnings;
   double seconds = 0.0;
 };
@@ -47,9 +63,12 @@ NodeSummary run_node(const std::filesystem::path& dataset, const std::filesystem
 
 /// Reads every camera's node_<id>.csv from nodes_dir and rebuilds the in-process run's result
 /// (history with the same evaluation, front-end frames, substeps, step factor) for `frames`
-/// frames. Throws InputError naming the file on a missing or malformed one.
+/// frames. With `allow_gaps` (async runs with restarts) a frame a node has no row for counts as
+/// blind and uninitialised there; otherwise every frame must be present. Throws InputError naming
+/// the file on a missing or malformed one.
 pipeline::ImageRunResult merge_nodes(const pipeline::FrameProvider& provider,
                                      const pipeline::ImageRunOptions& options,
-                                     const std::filesystem::path& nodes_dir, int frames);
+                                     const std::filesystem::path& nodes_dir, int frames,
+                                     bool allow_gaps = false);
 
 }  // namespace netvmo::net
