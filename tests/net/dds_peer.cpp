@@ -1,6 +1,8 @@
 // A test participant of the estimates topic, in its own process.
 //   dds_peer peer  DOMAIN SELF NEIGHBOUR ROUNDS WRITERS OUT   one camera of a two-camera network
 //   dds_peer rogue DOMAIN ROUNDS SECONDS                       garbage on the topic
+//   dds_peer ros   DOMAIN CAMERA COUNT SECONDS OUT             reads a camera's PoseStamped topic
+//     until COUNT samples or SECONDS; OUT: "sec nanosec frame_id px py pz qw qx qy qz" per sample
 // A peer runs its CameraObserver (pnp error model, a fixed measurement, k_s = 50) for ROUNDS
 // lock-step rounds over DdsTransport after WRITERS writers match (and 0.3 s more for their
 // history to arrive), and writes to OUT: one line
@@ -8,6 +10,7 @@
 // then "refused n0 n1 n2 n3 n4" and "stats sent received late foreign".
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
@@ -85,6 +88,25 @@ int rogue(int domain, int rounds, double seconds) {
   ::usleep(static_cast<useconds_t>(seconds * 1e6));
   return 0;
 }
+int ros(int domain, int camera, int count, double seconds, const char* out) {
+  net::PoseStampedReader reader(domain, camera);
+  std::vector<net::PoseStampedSample> all;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (;;) {
+    const double left =
+        seconds - std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (left <= 0 || static_cast<int>(all.size()) >= count) break;
+    for (auto& p : reader.take(std::min(left, 0.5))) all.push_back(p);
+  }
+  std::FILE* f = std::fopen(out, "w");
+  if (!f) return 3;
+  for (const auto& p : all)
+    std::fprintf(f, "%d %u %s %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", p.sec, p.nanosec,
+                 p.frame_id.c_str(), p.position.x(), p.position.y(), p.position.z(),
+                 p.orientation.w(), p.orientation.x(), p.orientation.y(), p.orientation.z());
+  std::fclose(f);
+  return 0;
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -93,6 +115,9 @@ int main(int argc, char** argv) {
     if (what == "peer" && argc == 8)
       return peer(std::atoi(argv[2]), std::atoi(argv[3]), std::atoi(argv[4]), std::atoi(argv[5]),
                   std::atoi(argv[6]), argv[7]);
+    if (what == "ros" && argc == 7)
+      return ros(std::atoi(argv[2]), std::atoi(argv[3]), std::atoi(argv[4]), std::atof(argv[5]),
+                 argv[6]);
     if (what == "rogue" && argc == 5)
       return rogue(std::atoi(argv[2]), std::atoi(argv[3]), std::atof(argv[4]));
   } catch (const std::exception& e) {

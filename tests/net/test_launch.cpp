@@ -105,6 +105,10 @@ TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
   const auto r1 =
       net_test::netvmo_bounded("run " + ds.string() + " --out " + run.string(), *dir_, 120);
   ASSERT_EQ(r1.code, 0) << r1.err;
+  // A ROS 2-style subscriber of camera 1's average pose, started first.
+  const pid_t ros = net::spawn({NETVMO_DDS_PEER, "ros", std::to_string(domain), "1",
+                                std::to_string(kFrames), "60", (*dir_ / "ros.txt").string()},
+                               *dir_ / "ros.log");
   const auto r2 =
       net_test::netvmo_bounded("launch " + ds.string() + " --out " + launch.string() +
                                    " --domain " + std::to_string(domain) + " --timeout 90",
@@ -113,6 +117,10 @@ TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
   EXPECT_NE(r2.out.find("DDS domain " + std::to_string(domain) + ", loopback only"),
             std::string::npos)
       << r2.out;
+
+  const auto ros_result = net::supervise({ros}, 10.0, false);
+  EXPECT_TRUE(ros_result[0].finished && ros_result[0].exit_code == 0)
+      << net::describe(ros_result[0]) << test::slurp(*dir_ / "ros.log");
 
   // The merged outputs are those of `netvmo run`.
   for (const char* f : {"estimates.csv", "energies.csv", "errors.csv"}) {
@@ -159,6 +167,31 @@ TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
     }
   }
   std::printf("node estimates vs in-process run: largest difference %.3g\n", worst);
+
+  // Camera 1's geometry_msgs/msg/PoseStamped messages carry its estimate of each frame (the
+  // first ones may go out before the subscriber is discovered).
+  {
+    std::ifstream in(*dir_ / "ros.txt");
+    const auto rows = read_csv(launch / "nodes" / "node_1.csv");
+    int count = 0;
+    std::string frame_id;
+    long sec = 0;
+    unsigned long nsec = 0;
+    double p[3], q[4];
+    while (in >> sec >> nsec >> frame_id >> p[0] >> p[1] >> p[2] >> q[0] >> q[1] >> q[2] >> q[3]) {
+      ++count;
+      EXPECT_EQ(frame_id, "world");
+      const int k = static_cast<int>(std::lround((sec + nsec * 1e-9) * provider->network().fps));
+      ASSERT_GE(k, 0);
+      ASSERT_LT(k, kFrames);
+      const obs::SE3 est = pose_at(rows[static_cast<size_t>(k + 1)], 38);
+      EXPECT_EQ((obs::Vec3(p[0], p[1], p[2]) - est.translation()).cwiseAbs().maxCoeff(), 0.0);
+      const Eigen::Quaterniond qq(q[0], q[1], q[2], q[3]);
+      EXPECT_LT((qq.toRotationMatrix() - est.linear()).cwiseAbs().maxCoeff(), 1e-12);
+    }
+    EXPECT_GE(count, 1) << "no PoseStamped received";
+    std::printf("PoseStamped samples of camera 1: %d of %d frames\n", count, kFrames);
+  }
   EXPECT_LE(worst, 1e-9);
   // Blind cameras 4 and 5 are initialised within the first frame (through their neighbours).
   for (const auto& c : res.history[0].cameras) EXPECT_TRUE(c.initialized);

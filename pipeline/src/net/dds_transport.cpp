@@ -285,4 +285,63 @@ int RawEstimateWriter::matched_readers() const {
   return static_cast<int>(st.current_count);
 }
 
+PoseStampedReader::PoseStampedReader(int domain, int camera_id) {
+  participant_ = dds_create_participant(static_cast<dds_domainid_t>(domain), nullptr, nullptr);
+  check(participant_, "create participant (check CYCLONEDDS_URI)");
+  try {
+    const std::string name = "rt/netvmo/camera_" + std::to_string(camera_id) + "/average_pose";
+    topic_ = dds_create_topic(participant_, &geometry_msgs_msg_dds__PoseStamped__desc, name.c_str(),
+                              nullptr, nullptr);
+    check(topic_, "create pose topic");
+    dds_qos_t* q = dds_create_qos();
+    dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+    dds_qset_history(q, DDS_HISTORY_KEEP_ALL, 0);
+    reader_ = dds_create_reader(participant_, topic_, q, nullptr);
+    dds_delete_qos(q);
+    check(reader_, "create pose reader");
+    readcond_ = dds_create_readcondition(reader_, DDS_ANY_STATE);
+    check(readcond_, "create read condition");
+    waitset_ = dds_create_waitset(participant_);
+    check(waitset_, "create waitset");
+    check(dds_waitset_attach(waitset_, readcond_, 0), "attach read condition");
+  } catch (...) {
+    dds_delete(participant_);
+    throw;
+  }
+}
+
+PoseStampedReader::~PoseStampedReader() {
+  dds_delete(participant_);
+}
+
+std::vector<PoseStampedSample> PoseStampedReader::take(double timeout_s) {
+  std::vector<PoseStampedSample> out;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (;;) {
+    void* samples[kMaxTake] = {nullptr};
+    dds_sample_info_t infos[kMaxTake];
+    const dds_return_t n = dds_take(reader_, samples, infos, kMaxTake, kMaxTake);
+    check(n, "take poses");
+    for (dds_return_t k = 0; k < n; ++k) {
+      if (!infos[k].valid_data) continue;
+      const auto& p = *static_cast<const geometry_msgs_msg_dds__PoseStamped_*>(samples[k]);
+      PoseStampedSample s;
+      s.sec = p.header.stamp.sec;
+      s.nanosec = p.header.stamp.nanosec;
+      s.frame_id = p.header.frame_id ? p.header.frame_id : "";
+      s.position = obs::Vec3(p.pose.position.x, p.pose.position.y, p.pose.position.z);
+      s.orientation = Eigen::Quaterniond(p.pose.orientation.w, p.pose.orientation.x,
+                                         p.pose.orientation.y, p.pose.orientation.z);
+      out.push_back(s);
+    }
+    if (n > 0) dds_return_loan(reader_, samples, n);
+    if (n == kMaxTake) continue;
+    const double left =
+        timeout_s - std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (!out.empty() || left <= 0) return out;
+    check(dds_waitset_wait(waitset_, nullptr, 0, static_cast<dds_duration_t>(left * 1e9)),
+          "wait for poses");
+  }
+}
+
 }  // namespace netvmo::net
