@@ -108,33 +108,11 @@ void add_launch(CLI::App& app, int& exit_code) {
       int frames = provider->frame_count();
       if (options.max_frames) frames = std::min(frames, *options.max_frames);
 
-      const fs::path dir = o->out, nodes = dir / "nodes";
-      io::ensure_directory(nodes);
-      const int domain = o->domain >= 0 ? o->domain : net::domain_from_pid(::getpid());
-      net::write_loopback_config(dir / "cyclonedds.xml");
-      net::use_config(dir / "cyclonedds.xml");
-      std::printf("netvmo launch: %zu nodes, DDS domain %d, loopback only (%s)\n",
-                  netcfg.cameras.size(), domain, (dir / "cyclonedds.xml").string().c_str());
-      std::fflush(stdout);
-
       const bool async = o->mode == "async";
       if (!async && (o->drop > 0 || o->delay > 0 || !o->kill.empty() || o->restart_after >= 0))
         throw InputError("--drop, --delay, --kill and --restart-after need --mode async");
       net::KillPlan plan;
       bool have_plan = false;
-      double start_at = 0.0;
-      if (async) {
-        // A common start, late enough for every node to be up; printed for the record.
-        start_at =
-            std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
-                .count() +
-            kStartMargin;
-        std::printf(
-            "netvmo launch: async, speed %g, staleness %g s, drop %g, delay %g ms, seed %llu, "
-            "start at %.3f (epoch)\n",
-            o->speed, o->stale, o->drop, o->delay, static_cast<unsigned long long>(o->seed),
-            start_at);
-      }
       if (!o->kill.empty()) {
         const auto at = o->kill.find('@');
         int id = -1;
@@ -157,6 +135,29 @@ void add_launch(CLI::App& app, int& exit_code) {
         throw InputError("--restart-after needs --kill ID@T");
       }
 
+      const fs::path dir = o->out, nodes = dir / "nodes";
+      io::ensure_directory(nodes);
+      const int domain = o->domain >= 0 ? o->domain : net::domain_from_pid(::getpid());
+      net::write_loopback_config(dir / "cyclonedds.xml");
+      net::use_config(dir / "cyclonedds.xml");
+      std::printf("netvmo launch: %zu nodes, DDS domain %d, loopback only (%s)\n",
+                  netcfg.cameras.size(), domain, (dir / "cyclonedds.xml").string().c_str());
+      std::fflush(stdout);
+
+      double start_at = 0.0;
+      if (async) {
+        // A common start, late enough for every node to be up; printed for the record.
+        start_at =
+            std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
+                .count() +
+            kStartMargin;
+        std::printf(
+            "netvmo launch: async, speed %g, staleness %g s, drop %g, delay %g ms, seed %llu, "
+            "start at %.3f (epoch)\n",
+            o->speed, o->stale, o->drop, o->delay, static_cast<unsigned long long>(o->seed),
+            start_at);
+      }
+      std::fflush(stdout);  // before the children inherit the buffer
       const std::string exe = net::self_exe().string();
       std::vector<pid_t> pids;
       for (const auto& c : netcfg.cameras) {
