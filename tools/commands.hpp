@@ -3,6 +3,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <cstdint>
 #include <cstdio>
 #include <exception>
 #include <functional>
@@ -35,5 +36,10 @@ void add_detect(CLI::App& app, int& exit_code);
 void add_run(CLI::App& app, int& exit_code);
 void add_demo(CLI::App& app, int& exit_code);
 void add_bench(CLI::App& app, int& exit_code);
+void add_node(CLI::App& app, int& exit_code);
+void add_launch(CLI::App& app, int& exit_code);
+/// The async options shared by `node` and `launch` (cmd_node.cpp).
+void add_async_options(CLI::App& cmd, double& speed, double& stale, double& drop, double& delay,
+                       std::uint64_t& seed);
 
 }  // namespace netvmo::tools

@@ -7,7 +7,7 @@ packages=(
   build-essential cmake pkg-config
   libeigen3-dev libembree-dev libapriltag-dev libvisp-dev libopencv-dev
   libgtest-dev libbenchmark-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
-  gnuplot-nox clang-format
+  gnuplot-nox clang-format cyclonedds-dev cyclonedds-tools
 )
 
 missing=()

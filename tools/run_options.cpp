@@ -12,7 +12,7 @@ namespace netvmo::tools {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-void add_run_options(CLI::App& cmd, RunCliOptions& o) {
+void add_run_options(CLI::App& cmd, RunCliOptions& o, bool in_process_transport) {
   cmd.add_option("--ke", o.k_e, "Visual feedback gain k_e")->capture_default_str();
   cmd.add_option("--ks", o.k_s, "Mutual feedback gain k_s (0: independent observers)")
       ->capture_default_str();
@@ -40,7 +40,7 @@ void add_run_options(CLI::App& cmd, RunCliOptions& o) {
   cmd.add_flag("--no-track", o.no_track,
                "Always search the whole image (default: search a window around the last "
                "detection first, the whole image when that fails and every 30 frames)");
-  add_transport_options(cmd, o.transport);
+  if (in_process_transport) add_transport_options(cmd, o.transport);
   cmd.add_option("--refine", o.refine, "Corner refinement: none, subpix or edges")
       ->check(CLI::IsMember({"none", "subpix", "edges"}))
       ->capture_default_str();

@@ -28,7 +28,9 @@ struct RunCliOptions {
   run::TransportSettings transport;
 };
 
-void add_run_options(CLI::App& cmd, RunCliOptions& o);
+/// Adds the options of `netvmo run`; `in_process_transport`: also --transport, --drop, --seed
+/// (not for node and launch, whose transport is DDS with faults of their own).
+void add_run_options(CLI::App& cmd, RunCliOptions& o, bool in_process_transport = true);
 run::ImageRunOptions to_image_run_options(const RunCliOptions& o);
 
 /// Runs the provider, writes the outputs, overlays and plots into dir; returns the summary.

@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "netvmo/observer/metrics.hpp"
+
 namespace netvmo::obs {
 
 const char* to_string(MessageVerdict v) {
@@ -72,11 +74,11 @@ EstimateMessage CameraObserver::publish(double stamp) {
   m.round = ++round_;
   m.stamp = stamp;
   m.initialized = initialized_;
+  m.incarnation = incarnation_;
   m.g_w = g_wi_ * g_bar_;
   return m;
 }
 
-namespace {
 MessageVerdict check_pose(const SE3& g) {
   if (!g.matrix().allFinite()) return MessageVerdict::not_finite;
   const Mat3 R = g.linear();
@@ -85,7 +87,6 @@ MessageVerdict check_pose(const SE3& g) {
     return MessageVerdict::not_a_rotation;
   return MessageVerdict::accepted;
 }
-}  // namespace
 
 MessageVerdict CameraObserver::receive(const EstimateMessage& m) {
   const auto it = std::find(neighbours_.begin(), neighbours_.end(), m.sender);
@@ -93,7 +94,10 @@ MessageVerdict CameraObserver::receive(const EstimateMessage& m) {
   auto* slot = v == MessageVerdict::accepted
                    ? &latest_[static_cast<size_t>(it - neighbours_.begin())]
                    : nullptr;
-  if (slot && *slot && m.round <= (*slot)->round) v = MessageVerdict::out_of_order;
+  if (slot && *slot &&
+      (m.incarnation < (*slot)->incarnation ||
+       (m.incarnation == (*slot)->incarnation && m.round <= (*slot)->round)))
+    v = MessageVerdict::out_of_order;
   if (v != MessageVerdict::accepted) {
     ++refused_[static_cast<size_t>(v)];
     return v;
@@ -107,7 +111,37 @@ void CameraObserver::forget(int j) {
   if (it != neighbours_.end()) latest_[static_cast<size_t>(it - neighbours_.begin())].reset();
 }
 
+namespace {
+// Smallest depth of the target's feature points under an estimate (camera frame).
+double min_depth(const SE3& g_bar, const FeatureModel& m) {
+  double z = 1e300;
+  for (const auto& p : m.points_o) z = std::min(z, (g_bar * p).z());
+  return z;
+}
+}  // namespace
+
+void CameraObserver::set_measurement(const Measurement& z) {
+  z_ = z;
+  if (!settings_.init_from_measurement || !z.delta || !z.g_io_pnp) return;
+  // An estimate of the image-feature model must keep the tag in front of the camera.
+  const bool unusable = initialized_ && model_->input() == MeasurementInput::features &&
+                        min_depth(g_bar_, settings_.features) < settings_.min_feature_depth;
+  if (!initialized_ || unusable) {
+    g_bar_ = *z.g_io_pnp;
+    initialized_ = true;
+  }
+}
+
 void CameraObserver::step(double h) {
+  if (!initialized_ && settings_.init_from_neighbours) {
+    std::vector<SE3> nb;
+    for (const auto& m : latest_)
+      if (m && m->initialized) nb.push_back(m->g_w);
+    if (!nb.empty()) {
+      g_bar_ = g_wi_.inverse() * average_pose(nb);
+      initialized_ = true;
+    }
+  }
   if (!initialized_) return;
   const SE3 own_w = g_wi_ * g_bar_;
   Vec6 mutual = Vec6::Zero();

@@ -16,6 +16,7 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
+}  // namespace
 
 obs::Graph network_graph(const io::NetworkConfig& net) {
   std::vector<obs::Graph::Edge> edges;
@@ -30,7 +31,6 @@ obs::Graph network_graph(const io::NetworkConfig& net) {
   }
   return g;
 }
-}  // namespace
 
 ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOptions& options,
                           const FrameHook& hook) {

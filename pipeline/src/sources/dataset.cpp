@@ -31,6 +31,8 @@ std::string list_frames(const std::vector<int>& v) {
 
 cv::Mat Dataset::read(size_t camera_index, int frame) {
   DatasetCamera& cam = cameras.at(camera_index);
+  if (!cam.source)
+    throw InputError(dir.string() + ": camera " + std::to_string(cam.id) + " was not opened");
   if (frame >= frame_count) return {};
   cv::Mat m = cam.source->read(frame);
   if (!m.empty() && (m.cols != cam.calib.width || m.rows != cam.calib.height))
@@ -40,7 +42,7 @@ cv::Mat Dataset::read(size_t camera_index, int frame) {
   return m;
 }
 
-Dataset open_dataset(const fs::path& dir) {
+Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera) {
   if (!fs::is_directory(dir)) throw InputError(dir.string() + ": dataset folder not found");
   Dataset ds;
   ds.dir = dir;
@@ -52,6 +54,10 @@ Dataset open_dataset(const fs::path& dir) {
     declared.insert(name);
     DatasetCamera cam;
     cam.id = cc.id;
+    if (only_camera && cc.id != *only_camera) {
+      ds.cameras.push_back(std::move(cam));
+      continue;
+    }
     // Calibration
     const fs::path cdir = dir / "calib";
     const fs::path yaml = cdir / (name + ".yaml"), yml = cdir / (name + ".yml"),
@@ -95,15 +101,18 @@ Dataset open_dataset(const fs::path& dir) {
   // Entries for cameras network.yaml does not declare are ignored, with a warning.
   for (const auto& e : fs::directory_iterator(dir)) {
     const std::string stem = e.path().stem().string();
-    if (stem.rfind("cam_", 0) == 0 && all_digits(stem.substr(4)) && !declared.count(stem))
+    if (!only_camera && stem.rfind("cam_", 0) == 0 && all_digits(stem.substr(4)) &&
+        !declared.count(stem))
       ds.warnings.push_back(e.path().string() + ": camera " + stem.substr(4) +
                             " is not in network.yaml; ignored");
   }
   // Frame count rule.
   int longest = 0;
-  for (const auto& c : ds.cameras) longest = std::max(longest, c.source->frame_count());
+  for (const auto& c : ds.cameras)
+    if (c.source) longest = std::max(longest, c.source->frame_count());
   ds.frame_count = ds.network.frames ? *ds.network.frames : longest;
   for (const auto& c : ds.cameras) {
+    if (!c.source) continue;
     const int n = c.source->frame_count();
     if (n < ds.frame_count)
       ds.warnings.push_back(c.source->path().string() + ": camera " + std::to_string(c.id) +

@@ -12,7 +12,8 @@ namespace {
 
 class DatasetProvider final : public NetworkSource {
  public:
-  explicit DatasetProvider(const fs::path& dir) : ds_(open_dataset(dir)) {
+  DatasetProvider(const fs::path& dir, std::optional<int> only_camera)
+      : ds_(open_dataset(dir, only_camera)) {
     const fs::path target = dir / "target.csv", cams = dir / "truth_cameras.csv";
     if (fs::exists(target) && fs::exists(cams)) {
       for (const auto& r : io::read_target_csv(target)) target_[r.frame] = r.g_wo;
@@ -51,8 +52,9 @@ class DatasetProvider final : public NetworkSource {
 
 }  // namespace
 
-std::unique_ptr<NetworkSource> open_dataset_source(const fs::path& dir) {
-  return std::make_unique<DatasetProvider>(dir);
+std::unique_ptr<NetworkSource> open_dataset_source(const fs::path& dir,
+                                                   std::optional<int> only_camera) {
+  return std::make_unique<DatasetProvider>(dir, only_camera);
 }
 
 }  // namespace netvmo::sources

@@ -33,14 +33,27 @@ struct ObserverSettings {
   FeatureModel features = FeatureModel::square(0.2);  ///< the target's feature points
   double step_factor = 1.0;  ///< c in h (k_e + 2 k_s d_max) <= c; c < 2 is required
   int substeps = 0;          ///< sub-steps (exchange rounds) per frame; 0 = from step_factor
+  /// Self-initialisation, the same in process and in a camera's own process. An uninitialised
+  /// camera that sees the target (delta and a PnP pose in set_measurement) starts from its own
+  /// PnP pose; with the image-feature model an initialised estimate whose tag corner comes
+  /// closer to the camera plane than min_feature_depth is re-initialised the same way.
+  bool init_from_measurement = false;
+  /// An uninitialised camera starts, at the beginning of a step (after the round's messages are
+  /// in), from the average of its initialised neighbours' latest estimates mapped into its frame:
+  /// g_bar_i = g_wi^-1 average_pose(g_wj g_bar_j).
+  bool init_from_neighbours = false;
+  double min_feature_depth = 0.05;  ///< [m], see init_from_measurement
 };
 
 /// What a camera publishes to its neighbours once per exchange round.
 struct EstimateMessage {
-  int sender = -1;            ///< the publishing camera's index in the network
-  std::uint64_t round = 0;    ///< the sender's exchange round (1, 2, ...)
-  double stamp = 0.0;         ///< the sender's time of this estimate [s]
-  bool initialized = false;   ///< false: the sender has no estimate yet (receivers ignore it)
+  int sender = -1;           ///< the publishing camera's index in the network
+  std::uint64_t round = 0;   ///< the sender's exchange round (1, 2, ...)
+  double stamp = 0.0;        ///< the sender's time of this estimate [s]
+  bool initialized = false;  ///< false: the sender has no estimate yet (receivers ignore it)
+  /// The sender's boot (incarnation): a restarted sender counts its rounds from 1 again, so a
+  /// message of a newer incarnation is accepted whatever its round, one of an older is not.
+  std::uint64_t incarnation = 0;
   SE3 g_w = SE3::Identity();  ///< g_wi g_bar_i: the sender's estimate in the world frame
 };
 
@@ -53,6 +66,10 @@ enum class MessageVerdict {
   out_of_order      ///< a round not newer than the last one accepted from that sender
 };
 const char* to_string(MessageVerdict v);
+
+/// The pose check of receive(): accepted, not_finite or not_a_rotation (|R^T R - I| <= 1e-6,
+/// det R > 0).
+MessageVerdict check_pose(const SE3& g);
 
 /// E_R(g_bar_i^-1 g_bar_{i,j}) with both poses expressed in the world frame through the believed
 /// camera poses: g_bar_i^-1 g_ij g_bar_j = (g_wi g_bar_i)^-1 (g_wj g_bar_j) (eq:input_f-).
@@ -75,6 +92,8 @@ class CameraObserver {
   const std::vector<int>& neighbours() const { return neighbours_; }
   const ObserverSettings& settings() const { return settings_; }
   const ErrorModel& error_model() const { return *model_; }
+  /// This camera's incarnation, carried by its messages (default 0).
+  void set_incarnation(std::uint64_t k) { incarnation_ = k; }
 
   /// Sets g_bar_i (in the camera's frame). Does not change initialized().
   void reset(const SE3& g_bar) { g_bar_ = g_bar; }
@@ -87,8 +106,9 @@ class CameraObserver {
   const SE3& camera_pose() const { return g_wi_; }
   /// Camera body velocity V_wi = [v; w]. Default: zero.
   void set_camera_velocity(const Vec6& V_wi) { V_wi_ = V_wi; }
-  /// The measurement used by step() until the next call (zero-order hold).
-  void set_measurement(const Measurement& z) { z_ = z; }
+  /// The measurement used by step() until the next call (zero-order hold); with
+  /// init_from_measurement it may (re-)initialise the estimate from the PnP pose.
+  void set_measurement(const Measurement& z);
   const Measurement& measurement() const { return z_; }
 
   /// This round's message: the estimate in the world frame, g_wi g_bar_i. Advances the round.
@@ -104,7 +124,9 @@ class CameraObserver {
   const std::vector<std::uint64_t>& refused() const { return refused_; }
 
   /// Advances g_bar_i by h with the held measurement and the latest neighbour estimates
-  /// (nothing happens while uninitialised). Throws std::domain_error from the error model.
+  /// (with init_from_neighbours an uninitialised camera first tries to start from its
+  /// neighbours; nothing happens while uninitialised). Throws std::domain_error from the error
+  /// model.
   void step(double h);
 
   const SE3& estimate() const { return g_bar_; }
@@ -125,6 +147,7 @@ class CameraObserver {
   bool initialized_ = true;
   Measurement z_;
   std::uint64_t round_ = 0;
+  std::uint64_t incarnation_ = 0;
   std::vector<std::optional<EstimateMessage>> latest_;
   std::vector<std::uint64_t> refused_;
 };

@@ -50,6 +50,10 @@ struct ImageRunResult {
   double seconds_observer = 0.0;    ///< of which the observer and baselines
 };
 
+/// The communication graph of network.yaml (camera indices in its order). Throws InputError
+/// naming network.yaml when it is disconnected (Assumption 1).
+obs::Graph network_graph(const io::NetworkConfig& net);
+
 /// Runs the whole network over the provider's frames. Throws InputError for bad input (an
 /// unreadable image without keep_going, a disconnected graph, an unknown camera id).
 ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOptions& options,

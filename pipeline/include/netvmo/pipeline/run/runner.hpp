@@ -24,14 +24,14 @@ InitMode parse_init_mode(const std::string& s);
 const char* to_string(InitMode m);
 
 struct RunnerSettings {
-  double k_e = 1.0;                     ///< visual feedback gain
-  double k_s = 50.0;                    ///< mutual feedback gain
+  double k_e = 1.0;   ///< visual feedback gain
+  double k_s = 50.0;  ///< mutual feedback gain
   /// Visual error model of (eq:input_f-), by its registry name (observer/error_model.hpp):
   /// pnp (the camera's own PnP pose), jacobian (the tag's corners), exact (ground truth).
   std::string error_model = "pnp";
-  InitMode init = InitMode::Pnp;        ///< initial estimates
-  int rounds = 0;                       ///< exchange rounds (sub-steps) per frame; 0 = stable
-  double tag_size = 0.2;                ///< side of the tag's black square [m]
+  InitMode init = InitMode::Pnp;  ///< initial estimates
+  int rounds = 0;                 ///< exchange rounds (sub-steps) per frame; 0 = stable
+  double tag_size = 0.2;          ///< side of the tag's black square [m]
   /// A feature-model estimate whose tag corner comes closer to the camera plane than this is
   /// re-initialised from PnP when the camera sees the target (its image features are undefined).
   double min_feature_depth = 0.05;
@@ -49,11 +49,11 @@ using CameraInput = obs::Measurement;
 /// One camera's state after a frame.
 struct CameraRecord {
   bool delta = false;
-  bool initialized = false;        ///< the networked estimate exists
-  SE3 est_w = SE3::Identity();     ///< networked estimate in the world, g_wi g_bar_i
-  std::optional<SE3> indep_w;      ///< independent observer (k_s = 0), once it has seen the tag
-  std::optional<SE3> pnp_w;        ///< g_wi g_io,PnP (when delta)
-  std::optional<SE3> fictitious_w; ///< g_wi g_io,true: the fictitious target o_i (with truth)
+  bool initialized = false;         ///< the networked estimate exists
+  SE3 est_w = SE3::Identity();      ///< networked estimate in the world, g_wi g_bar_i
+  std::optional<SE3> indep_w;       ///< independent observer (k_s = 0), once it has seen the tag
+  std::optional<SE3> pnp_w;         ///< g_wi g_io,PnP (when delta)
+  std::optional<SE3> fictitious_w;  ///< g_wi g_io,true: the fictitious target o_i (with truth)
 };
 
 struct FrameRecord {
@@ -67,6 +67,16 @@ struct FrameRecord {
   std::optional<obs::Energies> energies_indep;  ///< independent observers (initialised ones)
   std::optional<obs::EpsLevels> eps;            ///< networked, Definition 1 at this frame
 };
+
+/// Completes a frame's record from its cameras' records (delta, initialized, est_w, indep_w,
+/// pnp_w, fictitious_w) and g_wo_true: the centralized average, g*, the energies and the
+/// epsilon-levels. The in-process runner and the merge of per-camera processes both use it.
+void evaluate_frame(FrameRecord& r);
+
+/// The observer settings of one camera of a run: its networked observer (k_s = settings.k_s,
+/// initialised from PnP and from its neighbours under InitMode::Pnp) or its independent
+/// baseline (k_s = 0, initialised from PnP only).
+obs::ObserverSettings camera_observer_settings(const RunnerSettings& s, bool independent);
 
 class NetworkRunner {
  public:
@@ -94,14 +104,11 @@ class NetworkRunner {
   void set_transport(std::unique_ptr<obs::Transport> t) { net_.set_transport(std::move(t)); }
 
  private:
-  void initialise(const std::vector<CameraInput>& in);
-
   obs::Graph graph_;
   std::vector<SE3> g_wi_;
   RunnerSettings settings_;
   obs::NetworkedObserver net_;
   obs::NetworkedObserver indep_;
-  std::vector<bool> net_init_, indep_init_;
   std::vector<FrameRecord> history_;
 };
 

@@ -25,6 +25,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -58,7 +59,9 @@ struct Dataset {
 
 /// Opens a dataset folder: network.yaml, then for every camera its calibration and its image
 /// folder or video. Throws InputError naming the offending file (missing calibration, no
-/// images or video for a declared camera, both a folder and a video, ...).
-Dataset open_dataset(const std::filesystem::path& dir);
+/// images or video for a declared camera, both a folder and a video, ...). With `only_camera`
+/// (a camera id), the other cameras keep their network.yaml entry but neither their calibration
+/// nor their frames are opened (a camera's own process); reading them throws InputError.
+Dataset open_dataset(const std::filesystem::path& dir, std::optional<int> only_camera = {});
 
 }  // namespace netvmo::sources

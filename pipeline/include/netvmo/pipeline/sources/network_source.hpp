@@ -36,9 +36,10 @@ class NetworkSource {
   virtual std::string name() const = 0;
 };
 
-/// A dataset folder (frame_source.hpp documents the layout). Ground truth is read from
+/// A dataset folder (sources/dataset.hpp documents the layout). Ground truth is read from
 /// target.csv (true target poses) and truth_cameras.csv (true camera poses,
-/// header camera,px,py,pz,rx,ry,rz) when both are present.
-std::unique_ptr<NetworkSource> open_dataset_source(const std::filesystem::path& dir);
+/// header camera,px,py,pz,rx,ry,rz) when both are present. `only_camera`: see open_dataset.
+std::unique_ptr<NetworkSource> open_dataset_source(const std::filesystem::path& dir,
+                                                   std::optional<int> only_camera = {});
 
 }  // namespace netvmo::sources

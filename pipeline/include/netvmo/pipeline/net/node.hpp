@@ -1,0 +1,74 @@
+// One camera as its own process (`netvmo node`), and the merge of every camera's outputs into
+// the outputs of an in-process run (`netvmo launch`).
+//
+// A node reads network.yaml and its own camera's calibration and frames only, runs its front end,
+// its networked CameraObserver and its independent baseline (k_s = 0), and exchanges estimates
+// with its neighbours over DdsTransport: per frame, the run's number of rounds of
+// publish -> receive -> step, exactly as NetworkedObserver does in process. It writes
+//   node_<id>.csv   per frame: detection, PnP pose, networked and independent estimates (%.17g)
+//   node_<id>.json  message statistics (sent, received, dropped, late, foreign, refused by
+//                   verdict), rounds, warnings
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "netvmo/pipeline/run/image_run.hpp"
+#include "netvmo/pipeline/net/dds_transport.hpp"
+
+namespace netvmo::net {
+
+struct NodeOptions {
+  run::ImageRunOptions run;  ///< gains, error model, initialisation, rounds, front end
+  int camera_id = 0;              ///< this node's camera (network.yaml id)
+  DdsSettings dds;
+  /// The dataset's frame count (launch passes the whole dataset's; a node alone knows only its
+  /// own camera's, or network.yaml's `frames`).
+  std::optional<int> frames;
+  bool publish_ros_pose = true;  ///< also publish rt/netvmo/camera_<id>/average_pose
+
+  // Async mode only (dds.mode == Mode::async).
+  /// Camera time runs at `speed` x wall time: frame k's round r is due at
+  /// start + (k dt + r h) / speed. A node behind schedule runs its rounds back to back.
+  double speed = 1.0;
+  /// The common start (seconds since the epoch, wall clock); default: the node's own start. A
+  /// node started after it (a restart) joins at the current frame.
+  std::optional<double> start_epoch;
+  /// Staleness bound [s of camera time]: a neighbour whose latest accepted estimate is older
+  /// than this (by its stamp) is forgotten (CameraObserver::forget) until heard again.
+  double stale_s = 0.25;
+  double drop = 0.0;       ///< probability that a received message is dropped (seeded)
+  double delay_ms = 0.0;   ///< every received message is handed to the observer this late
+  std::uint64_t seed = 0;  ///< seed of the drops (with the camera id)
+};
+
+struct NodeSummary {
+  int frames = 0;
+  int substeps = 0;
+  MessageStats stats;
+  std::vector<std::uint64_t> refused;  ///< by obs::MessageVerdict
+  std::uint64_t forgotten = 0;         ///< async: neighbours dropped past the staleness bound
+  int first_frame = 0;                 ///< async: the frame a (re)started node joined at
+  std::vector<std::string> warnings;
+  double seconds = 0.0;
+};
+
+/// Runs camera `options.camera_id` of the dataset; writes node_<id>.csv and node_<id>.json into
+/// out_dir. Throws InputError on bad input, DdsTimeout when a neighbour stays silent.
+NodeSummary run_node(const std::filesystem::path& dataset, const std::filesystem::path& out_dir,
+                     const NodeOptions& options);
+
+/// Reads every camera's node_<id>.csv from nodes_dir and rebuilds the in-process run's result
+/// (history with the same evaluation, front-end frames, substeps, step factor) for `frames`
+/// frames. With `allow_gaps` (async runs with restarts) a frame a node has no row for counts as
+/// blind and uninitialised there; otherwise every frame must be present. Throws InputError naming
+/// the file on a missing or malformed one.
+run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
+                                     const run::ImageRunOptions& options,
+                                     const std::filesystem::path& nodes_dir, int frames,
+                                     bool allow_gaps = false);
+
+}  // namespace netvmo::net

@@ -1,0 +1,347 @@
+#include "netvmo/pipeline/net/dds_transport.hpp"
+
+#include <dds/dds.h>
+
+#include <unistd.h>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+
+#include "NetvmoEstimate.h"
+#include "PoseStamped.h"
+
+namespace netvmo::net {
+
+Mode parse_mode(const std::string& s) {
+  if (s == "lockstep") return Mode::lockstep;
+  if (s == "async") return Mode::async;
+  throw std::invalid_argument("unknown mode '" + s + "' (lockstep or async)");
+}
+
+const char* to_string(Mode m) {
+  return m == Mode::lockstep ? "lockstep" : "async";
+}
+
+namespace {
+
+constexpr int kMaxTake = 64;
+
+void check(dds_return_t rc, const char* what) {
+  if (rc < 0)
+    throw std::runtime_error(std::string("Cyclone DDS: ") + what + ": " + dds_strretcode(rc));
+}
+
+dds_qos_t* estimate_qos(Mode mode, bool writer) {
+  dds_qos_t* q = dds_create_qos();
+  dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(10));
+  if (mode == Mode::lockstep) {
+    // A reader that joins late still gets the first rounds; a lock-step writer is never many
+    // rounds ahead of any reader (at most the graph's diameter).
+    dds_qset_durability(q, DDS_DURABILITY_TRANSIENT_LOCAL);
+    if (writer) {
+      dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 256);
+      dds_qset_durability_service(q, 0, DDS_HISTORY_KEEP_LAST, 256, DDS_LENGTH_UNLIMITED,
+                                  DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
+    } else
+      dds_qset_history(q, DDS_HISTORY_KEEP_ALL, 0);
+  } else {
+    dds_qset_durability(q, DDS_DURABILITY_VOLATILE);
+    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 256);
+  }
+  return q;
+}
+
+obs::EstimateMessage from_sample(const netvmo_msg_Estimate& s) {
+  obs::EstimateMessage m;
+  m.sender = s.sender;
+  m.incarnation = s.incarnation;
+  m.round = s.round;
+  m.stamp = s.stamp;
+  m.initialized = s.initialized;
+  m.g_w = obs::SE3::Identity();
+  for (int r = 0; r < 3; ++r) {
+    m.g_w.translation()(r) = s.position[r];
+    for (int c = 0; c < 3; ++c) m.g_w.linear()(r, c) = s.rotation[3 * r + c];
+  }
+  return m;
+}
+
+netvmo_msg_Estimate to_sample(const obs::EstimateMessage& m) {
+  netvmo_msg_Estimate s{};
+  s.sender = m.sender;
+  s.incarnation = m.incarnation;
+  s.round = m.round;
+  s.stamp = m.stamp;
+  s.initialized = m.initialized;
+  for (int r = 0; r < 3; ++r) {
+    s.position[r] = m.g_w.translation()(r);
+    for (int c = 0; c < 3; ++c) s.rotation[3 * r + c] = m.g_w.linear()(r, c);
+  }
+  return s;
+}
+
+std::string label(const std::vector<int>& labels, int i) {
+  return i >= 0 && static_cast<size_t>(i) < labels.size()
+             ? std::to_string(labels[static_cast<size_t>(i)])
+             : "#" + std::to_string(i);
+}
+
+}  // namespace
+
+DdsTransport::DdsTransport(int self, std::vector<int> neighbours, std::vector<int> labels,
+                           DdsSettings settings)
+    : self_(self),
+      neighbours_(std::move(neighbours)),
+      labels_(std::move(labels)),
+      settings_(std::move(settings)) {
+  participant_ =
+      dds_create_participant(static_cast<dds_domainid_t>(settings_.domain), nullptr, nullptr);
+  check(participant_, "create participant (check CYCLONEDDS_URI)");
+  try {
+    topic_ = dds_create_topic(participant_, &netvmo_msg_Estimate_desc, settings_.topic.c_str(),
+                              nullptr, nullptr);
+    check(topic_, "create topic");
+    dds_qos_t* wq = estimate_qos(settings_.mode, true);
+    writer_ = dds_create_writer(participant_, topic_, wq, nullptr);
+    dds_delete_qos(wq);
+    check(writer_, "create writer");
+    check(dds_get_instance_handle(writer_, &own_writer_handle_), "writer handle");
+    dds_qos_t* rq = estimate_qos(settings_.mode, false);
+    reader_ = dds_create_reader(participant_, topic_, rq, nullptr);
+    dds_delete_qos(rq);
+    check(reader_, "create reader");
+    readcond_ = dds_create_readcondition(reader_, DDS_ANY_STATE);
+    check(readcond_, "create read condition");
+    waitset_ = dds_create_waitset(participant_);
+    check(waitset_, "create waitset");
+    check(dds_waitset_attach(waitset_, readcond_, 0), "attach read condition");
+    const std::string pose_topic = "rt/netvmo/camera_" + label(labels_, self_) + "/average_pose";
+    pose_topic_ = dds_create_topic(participant_, &geometry_msgs_msg_dds__PoseStamped__desc,
+                                   pose_topic.c_str(), nullptr, nullptr);
+    check(pose_topic_, "create pose topic");
+    dds_qos_t* pq = dds_create_qos();
+    dds_qset_reliability(pq, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+    dds_qset_history(pq, DDS_HISTORY_KEEP_LAST, 10);
+    pose_writer_ = dds_create_writer(participant_, pose_topic_, pq, nullptr);
+    dds_delete_qos(pq);
+    check(pose_writer_, "create pose writer");
+  } catch (...) {
+    dds_delete(participant_);
+    throw;
+  }
+}
+
+DdsTransport::~DdsTransport() {
+  dds_delete(participant_);
+}
+
+void DdsTransport::send(const obs::EstimateMessage& m) {
+  const netvmo_msg_Estimate s = to_sample(m);
+  check(dds_write(writer_, &s), "write estimate");
+  round_ = m.round;
+  ++stats_.sent;
+}
+
+void DdsTransport::take_all() {
+  void* samples[kMaxTake] = {nullptr};
+  dds_sample_info_t infos[kMaxTake];
+  for (;;) {
+    const dds_return_t n = dds_take(reader_, samples, infos, kMaxTake, kMaxTake);
+    check(n, "take estimates");
+    for (dds_return_t k = 0; k < n; ++k) {
+      if (!infos[k].valid_data) continue;
+      // Our own writer's samples come back (same topic): not counted. Anything else claiming
+      // our index goes to the observer, which refuses it.
+      if (infos[k].publication_handle == own_writer_handle_) continue;
+      const auto& s = *static_cast<const netvmo_msg_Estimate*>(samples[k]);
+      ++stats_.received;
+      pending_.push_back(from_sample(s));
+    }
+    if (n > 0) dds_return_loan(reader_, samples, n);
+    if (n < kMaxTake) return;
+  }
+}
+
+void DdsTransport::receive(int receiver, std::vector<obs::EstimateMessage>& out) {
+  out.clear();
+  if (receiver != self_)
+    throw std::invalid_argument("DdsTransport of camera " + label(labels_, self_) +
+                                " asked for camera " + label(labels_, receiver) + "'s messages");
+  take_all();
+  const auto is_neighbour = [&](int j) {
+    return std::find(neighbours_.begin(), neighbours_.end(), j) != neighbours_.end();
+  };
+  if (settings_.mode == Mode::async) {
+    for (const auto& m : pending_) {
+      if (!is_neighbour(m.sender)) ++stats_.foreign;
+      out.push_back(m);
+    }
+    pending_.clear();
+    return;
+  }
+  // Lock-step: this round's message of every neighbour (a well-formed one), everything else
+  // handed on for the observer to judge; later rounds wait.
+  std::vector<bool> have(neighbours_.size(), false);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (;;) {
+    for (auto it = pending_.begin(); it != pending_.end();) {
+      const auto& m = *it;
+      const auto a = std::find(neighbours_.begin(), neighbours_.end(), m.sender);
+      if (a == neighbours_.end()) {
+        ++stats_.foreign;
+      } else if (m.round > round_) {
+        ++it;  // a neighbour already in a later round: keep it for that round
+        continue;
+      } else if (m.round < round_) {
+        ++stats_.late;
+      } else if (obs::check_pose(m.g_w) == obs::MessageVerdict::accepted) {
+        have[static_cast<size_t>(a - neighbours_.begin())] = true;
+      }
+      out.push_back(m);
+      it = pending_.erase(it);
+    }
+    const auto missing = std::find(have.begin(), have.end(), false);
+    if (missing == have.end()) return;
+    const double waited =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (waited >= settings_.timeout_s) {
+      const int j = neighbours_[static_cast<size_t>(missing - have.begin())];
+      char b[64];
+      std::snprintf(b, sizeof b, "%.1f", settings_.timeout_s);
+      throw DdsTimeout("camera " + label(labels_, self_) + ": no message of round " +
+                       std::to_string(round_) + " from neighbour camera " + label(labels_, j) +
+                       " within " + b + " s (is its node running, on DDS domain " +
+                       std::to_string(settings_.domain) + "?)");
+    }
+    const double left = std::min(0.5, settings_.timeout_s - waited);
+    const dds_return_t rc =
+        dds_waitset_wait(waitset_, nullptr, 0, static_cast<dds_duration_t>(left * 1e9));
+    check(rc, "wait for estimates");
+    take_all();
+  }
+}
+
+void DdsTransport::publish_average_pose(const obs::SE3& g_w, double t) {
+  geometry_msgs_msg_dds__PoseStamped_ s{};
+  const double sec = std::floor(t);
+  s.header.stamp.sec = static_cast<int32_t>(sec);
+  s.header.stamp.nanosec = static_cast<uint32_t>(std::lround((t - sec) * 1e9) % 1000000000L);
+  static char world[] = "world";
+  s.header.frame_id = world;
+  s.pose.position.x = g_w.translation().x();
+  s.pose.position.y = g_w.translation().y();
+  s.pose.position.z = g_w.translation().z();
+  const Eigen::Quaterniond q(g_w.linear());
+  s.pose.orientation.x = q.x();
+  s.pose.orientation.y = q.y();
+  s.pose.orientation.z = q.z();
+  s.pose.orientation.w = q.w();
+  check(dds_write(pose_writer_, &s), "write average pose");
+}
+
+void DdsTransport::flush(double timeout_s) {
+  dds_wait_for_acks(writer_, static_cast<dds_duration_t>(timeout_s * 1e9));
+}
+
+bool DdsTransport::wait_for_writers(int count, double timeout_s) {
+  const auto t0 = std::chrono::steady_clock::now();
+  for (;;) {
+    dds_subscription_matched_status_t st;
+    check(dds_get_subscription_matched_status(reader_, &st), "matched status");
+    if (static_cast<int>(st.current_count) >= count) return true;
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeout_s)
+      return false;
+    dds_sleepfor(DDS_MSECS(10));
+  }
+}
+
+RawEstimateWriter::RawEstimateWriter(int domain, const std::string& topic) {
+  participant_ = dds_create_participant(static_cast<dds_domainid_t>(domain), nullptr, nullptr);
+  check(participant_, "create participant (check CYCLONEDDS_URI)");
+  topic_ =
+      dds_create_topic(participant_, &netvmo_msg_Estimate_desc, topic.c_str(), nullptr, nullptr);
+  if (topic_ < 0) dds_delete(participant_);
+  check(topic_, "create topic");
+  dds_qos_t* q = estimate_qos(Mode::lockstep, true);
+  writer_ = dds_create_writer(participant_, topic_, q, nullptr);
+  dds_delete_qos(q);
+  if (writer_ < 0) dds_delete(participant_);
+  check(writer_, "create writer");
+}
+
+RawEstimateWriter::~RawEstimateWriter() {
+  dds_delete(participant_);
+}
+
+void RawEstimateWriter::write(const obs::EstimateMessage& m) {
+  const netvmo_msg_Estimate s = to_sample(m);
+  check(dds_write(writer_, &s), "write estimate");
+}
+
+int RawEstimateWriter::matched_readers() const {
+  dds_publication_matched_status_t st;
+  check(dds_get_publication_matched_status(writer_, &st), "matched status");
+  return static_cast<int>(st.current_count);
+}
+
+PoseStampedReader::PoseStampedReader(int domain, int camera_id) {
+  participant_ = dds_create_participant(static_cast<dds_domainid_t>(domain), nullptr, nullptr);
+  check(participant_, "create participant (check CYCLONEDDS_URI)");
+  try {
+    const std::string name = "rt/netvmo/camera_" + std::to_string(camera_id) + "/average_pose";
+    topic_ = dds_create_topic(participant_, &geometry_msgs_msg_dds__PoseStamped__desc, name.c_str(),
+                              nullptr, nullptr);
+    check(topic_, "create pose topic");
+    dds_qos_t* q = dds_create_qos();
+    dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+    dds_qset_history(q, DDS_HISTORY_KEEP_ALL, 0);
+    reader_ = dds_create_reader(participant_, topic_, q, nullptr);
+    dds_delete_qos(q);
+    check(reader_, "create pose reader");
+    readcond_ = dds_create_readcondition(reader_, DDS_ANY_STATE);
+    check(readcond_, "create read condition");
+    waitset_ = dds_create_waitset(participant_);
+    check(waitset_, "create waitset");
+    check(dds_waitset_attach(waitset_, readcond_, 0), "attach read condition");
+  } catch (...) {
+    dds_delete(participant_);
+    throw;
+  }
+}
+
+PoseStampedReader::~PoseStampedReader() {
+  dds_delete(participant_);
+}
+
+std::vector<PoseStampedSample> PoseStampedReader::take(double timeout_s) {
+  std::vector<PoseStampedSample> out;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (;;) {
+    void* samples[kMaxTake] = {nullptr};
+    dds_sample_info_t infos[kMaxTake];
+    const dds_return_t n = dds_take(reader_, samples, infos, kMaxTake, kMaxTake);
+    check(n, "take poses");
+    for (dds_return_t k = 0; k < n; ++k) {
+      if (!infos[k].valid_data) continue;
+      const auto& p = *static_cast<const geometry_msgs_msg_dds__PoseStamped_*>(samples[k]);
+      PoseStampedSample s;
+      s.sec = p.header.stamp.sec;
+      s.nanosec = p.header.stamp.nanosec;
+      s.frame_id = p.header.frame_id ? p.header.frame_id : "";
+      s.position = obs::Vec3(p.pose.position.x, p.pose.position.y, p.pose.position.z);
+      s.orientation = Eigen::Quaterniond(p.pose.orientation.w, p.pose.orientation.x,
+                                         p.pose.orientation.y, p.pose.orientation.z);
+      out.push_back(s);
+    }
+    if (n > 0) dds_return_loan(reader_, samples, n);
+    if (n == kMaxTake) continue;
+    const double left =
+        timeout_s - std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (!out.empty() || left <= 0) return out;
+    check(dds_waitset_wait(waitset_, nullptr, 0, static_cast<dds_duration_t>(left * 1e9)),
+          "wait for poses");
+  }
+}
+
+}  // namespace netvmo::net

@@ -1,0 +1,252 @@
+#include "netvmo/pipeline/net/node.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <deque>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+#include <thread>
+
+#include "netvmo/observer/camera_observer.hpp"
+#include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/frontend/pnp.hpp"
+
+namespace netvmo::net {
+namespace fs = std::filesystem;
+using obs::SE3;
+
+namespace {
+
+constexpr const char* kHeader =
+    "frame,t,delta,read_failed,status,tag_id,hamming,margin,c0x,c0y,c1x,c1y,c2x,c2y,c3x,c3y,"
+    "f0,f1,f2,f3,f4,f5,f6,f7,pnp,pnp_pose[12],initialized,est_w[12],indep,indep_w[12]";
+
+void put_pose(std::string& s, const SE3& g) {
+  char b[40];
+  for (int r = 0; r < 3; ++r) {
+    std::snprintf(b, sizeof b, ",%.17g", g.translation()(r));
+    s += b;
+  }
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) {
+      std::snprintf(b, sizeof b, ",%.17g", g.linear()(r, c));
+      s += b;
+    }
+}
+
+void put(std::string& s, double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, ",%.17g", v);
+  s += b;
+}
+
+std::string frame_row(int k, double t, const run::CameraFrame& cam,
+                      const obs::CameraObserver& net, const obs::CameraObserver& ind) {
+  std::string s = std::to_string(k);
+  put(s, t);
+  s += "," + std::to_string(cam.obs.delta ? 1 : 0) + "," + std::to_string(cam.read_failed ? 1 : 0) +
+       "," + std::to_string(static_cast<int>(cam.obs.status)) + "," +
+       std::to_string(cam.obs.tag_id) + "," + std::to_string(cam.obs.hamming);
+  put(s, cam.obs.margin);
+  for (const auto& c : cam.obs.corners_px) {
+    put(s, c.x);
+    put(s, c.y);
+  }
+  for (int a = 0; a < 8; ++a) put(s, cam.obs.f_normalized(a));
+  s += cam.g_io_pnp ? ",1" : ",0";
+  put_pose(s, cam.g_io_pnp ? *cam.g_io_pnp : SE3::Identity());
+  s += net.initialized() ? ",1" : ",0";
+  put_pose(s, net.estimate_world());
+  s += ind.initialized() ? ",1" : ",0";
+  put_pose(s, ind.estimate_world());
+  return s + "\n";
+}
+
+double now_epoch() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+void sleep_until_epoch(double t) {
+  const double wait = t - now_epoch();
+  if (wait > 0) std::this_thread::sleep_for(std::chrono::duration<double>(wait));
+}
+
+}  // namespace
+
+NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const NodeOptions& o) {
+  using Clock = std::chrono::steady_clock;
+  const auto t_start = Clock::now();
+  const double started = now_epoch();  // a node started after the common start joins late
+  auto provider = sources::open_dataset_source(dataset, o.camera_id);
+  const io::NetworkConfig& netcfg = provider->network();
+  const int self = netcfg.index_of(o.camera_id);
+  if (self < 0)
+    throw InputError(netcfg.source + ": cameras: no camera " + std::to_string(o.camera_id));
+  const auto si = static_cast<size_t>(self);
+  const obs::Graph graph = run::network_graph(netcfg);
+  const size_t n = netcfg.cameras.size();
+  std::vector<int> labels;
+  for (const auto& c : netcfg.cameras) labels.push_back(c.id);
+
+  // The same settings, rounds and front end as the in-process run (run_images).
+  run::RunnerSettings rs = o.run.runner;
+  rs.tag_size = netcfg.target.size;
+  obs::CameraObserver net(self, graph.neighbors(self), run::camera_observer_settings(rs, false));
+  obs::CameraObserver ind(self, {}, run::camera_observer_settings(rs, true));
+  const SE3 g_wi = netcfg.cameras[si].g_wi;
+  for (auto* c : {&net, &ind}) {
+    c->set_camera_pose(g_wi);
+    c->reset(run::paper_initial_estimate());
+    c->set_initialized(rs.init == run::InitMode::Paper);
+  }
+  const auto incarnation = static_cast<std::uint64_t>(
+      std::chrono::system_clock::now().time_since_epoch() / std::chrono::nanoseconds(1));
+  net.set_incarnation(incarnation);
+  const double dt = 1.0 / netcfg.fps;
+  // Sub-steps as NetworkedObserver::substeps: the independent baseline (k_s = 0) needs fewer.
+  const auto substeps = [&](const obs::CameraObserver& c) {
+    return c.settings().substeps > 0 ? c.settings().substeps
+                                     : obs::stable_substeps(dt, c.settings(), graph.max_degree());
+  };
+  const int N = substeps(net), N_ind = substeps(ind);
+  const double h = dt / N, h_ind = dt / N_ind;
+
+  frontend::DetectorSettings ds = o.run.detector;
+  ds.family = netcfg.target.family;
+  ds.target_id = netcfg.target.id;
+  const int workers = std::max(1, std::min<int>(o.run.workers, static_cast<int>(n)));
+  ds.nthreads = std::max(1, ds.nthreads / workers);
+  frontend::FrontEnd front_end(ds, o.run.tracking);
+  frontend::TrackState track;
+  const auto model = obs::FeatureModel::square(netcfg.target.size);
+  const auto true_wi = provider->camera_truth(si);
+
+  int frames = o.frames ? *o.frames : provider->frame_count();
+  if (o.run.max_frames) frames = std::min(frames, *o.run.max_frames);
+
+  DdsTransport transport(self, graph.neighbors(self), labels, o.dds);
+  transport.wait_for_writers(1 + static_cast<int>(graph.neighbors(self).size()), o.dds.timeout_s);
+
+  io::ensure_directory(out_dir);
+  const std::string stem = "node_" + std::to_string(o.camera_id);
+  io::AtomicFile csv(out_dir / (stem + ".csv"));
+  csv << kHeader << "\n";
+  NodeSummary summary;
+  summary.substeps = N;
+  std::vector<obs::EstimateMessage> inbox;
+  const bool async = o.dds.mode == Mode::async;
+  const double start = o.start_epoch ? *o.start_epoch : now_epoch();
+  if (async && !(o.speed > 0)) throw InputError("--speed must be > 0");
+  // A node started after the common start (a restart) joins at the current frame.
+  int first = 0;
+  if (async && o.start_epoch)
+    first = std::max(0, static_cast<int>(std::floor((started - start) * o.speed / dt)));
+  summary.first_frame = first;
+  std::mt19937_64 rng(o.seed * 1000003ULL + static_cast<std::uint64_t>(o.camera_id));
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  std::deque<std::pair<double, obs::EstimateMessage>> delayed;  // (due, message)
+  for (int k = first; k < frames; ++k) {
+    run::CameraFrame cam;
+    cv::Mat image;
+    try {
+      image = provider->read(si, k);
+    } catch (const InputError& e) {
+      if (!o.run.keep_going) throw;
+      cam.read_failed = true;
+      summary.warnings.push_back(std::string(e.what()) + " (camera " + std::to_string(o.camera_id) +
+                                 " blind at frame " + std::to_string(k) + ")");
+    }
+    if (!cam.read_failed) {
+      cam.obs = front_end.observe(image, provider->calibration(si), nullptr, &track);
+      if (cam.obs.delta) {
+        const auto pose = frontend::pnp_pose(cam.obs.f_normalized, model);
+        if (pose) cam.g_io_pnp = pose->g_io;
+      }
+    }
+    obs::Measurement z;
+    z.delta = cam.obs.delta;
+    z.f = cam.obs.f_normalized;
+    z.g_io_pnp = cam.g_io_pnp;
+    const auto target = provider->target_truth(k);
+    if (target && true_wi) z.g_io_true = true_wi->inverse() * *target;
+    if (net.error_model().input() == obs::MeasurementInput::true_pose && z.delta && !z.g_io_true)
+      throw InputError("the " + std::string(net.error_model().name()) +
+                       " error model needs ground truth (rendered data)");
+    net.set_measurement(z);
+    ind.set_measurement(z);
+    const double t = k * dt;
+    for (int r = 0; r < N; ++r) {
+      // One exchange round, as NetworkedObserver::step: publish, take in the neighbours', step.
+      const double tr = t + r * h;
+      if (async) sleep_until_epoch(start + tr / o.speed);
+      transport.send(net.publish(tr));
+      transport.receive(self, inbox);
+      if (!async) {
+        for (const auto& m : inbox) net.receive(m);
+      } else {
+        // Faults injected on this side, then the latest value of each neighbour, forgotten
+        // once older than the staleness bound.
+        const double now = now_epoch();
+        for (const auto& m : inbox) {
+          if (o.drop > 0 && uniform(rng) < o.drop)
+            ++summary.stats.dropped;
+          else
+            delayed.emplace_back(now + o.delay_ms / 1000.0, m);
+        }
+        while (!delayed.empty() && delayed.front().first <= now) {
+          net.receive(delayed.front().second);
+          delayed.pop_front();
+        }
+        const auto& latest = net.latest();
+        for (size_t a = 0; a < latest.size(); ++a)
+          if (latest[a] && tr - latest[a]->stamp > o.stale_s) {
+            net.forget(net.neighbours()[a]);
+            ++summary.forgotten;
+          }
+      }
+      net.step(h);
+    }
+    for (int r = 0; r < N_ind; ++r) ind.step(h_ind);
+    csv << frame_row(k, t, cam, net, ind);
+    if (o.publish_ros_pose && net.initialized())
+      transport.publish_average_pose(net.estimate_world(), t);
+  }
+  // Lock-step neighbours still wait for our last round; async ones take what has arrived (and a
+  // killed neighbour would never acknowledge).
+  transport.flush(async ? 0.2 : 5.0);
+  csv.commit();
+  summary.frames = frames;
+  const auto dropped = summary.stats.dropped;
+  summary.stats = transport.stats();
+  summary.stats.dropped = dropped;
+  summary.refused = net.refused();
+  summary.seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
+
+  nlohmann::json j;
+  j["camera"] = o.camera_id;
+  j["mode"] = to_string(o.dds.mode);
+  j["domain"] = o.dds.domain;
+  j["frames"] = frames;
+  j["rounds_per_frame"] = N;
+  j["seconds"] = summary.seconds;
+  j["messages"] = {{"sent", summary.stats.sent},
+                   {"received", summary.stats.received},
+                   {"dropped", summary.stats.dropped},
+                   {"late", summary.stats.late},
+                   {"foreign", summary.stats.foreign}};
+  nlohmann::json rej;
+  for (size_t v = 1; v < summary.refused.size(); ++v)
+    rej[obs::to_string(static_cast<obs::MessageVerdict>(v))] = summary.refused[v];
+  j["messages"]["rejected"] = rej;
+  j["messages"]["forgotten_stale"] = summary.forgotten;
+  j["first_frame"] = summary.first_frame;
+  j["warnings"] = summary.warnings;
+  io::write_file_atomic(out_dir / (stem + ".json"), j.dump(2) + "\n");
+  return summary;
+}
+
+}  // namespace netvmo::net

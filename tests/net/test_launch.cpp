@@ -1,0 +1,238 @@
+// netvmo launch (one process per camera, lock-step over Cyclone DDS) against netvmo run on a
+// dataset rendered at test time: the merged outputs must be those of the in-process run.
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "net_test_util.hpp"
+#include "netvmo/pipeline/sources/network_source.hpp"
+#include "netvmo/pipeline/run/image_run.hpp"
+#include "test_util.hpp"
+
+using namespace netvmo;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr int kFrames = 8;
+
+std::vector<std::vector<std::string>> read_csv(const fs::path& f) {
+  std::ifstream in(f);
+  std::vector<std::vector<std::string>> rows;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<std::string> row;
+    std::stringstream s(line);
+    std::string cell;
+    while (std::getline(s, cell, ',')) row.push_back(cell);
+    if (!line.empty() && line.back() == ',') row.emplace_back();
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// Largest difference between two CSVs of the same shape (numbers compared as numbers, other
+// cells exactly); infinity when shapes or texts differ.
+double csv_difference(const fs::path& a, const fs::path& b) {
+  const auto ra = read_csv(a), rb = read_csv(b);
+  if (ra.empty() || ra.size() != rb.size()) return INFINITY;
+  double d = 0.0;
+  for (size_t r = 0; r < ra.size(); ++r) {
+    if (ra[r].size() != rb[r].size()) return INFINITY;
+    for (size_t c = 0; c < ra[r].size(); ++c) {
+      if (r == 0 || ra[r][c].empty() || rb[r][c].empty()) {
+        if (ra[r][c] != rb[r][c]) return INFINITY;
+        continue;
+      }
+      d = std::max(d, std::abs(std::stod(ra[r][c]) - std::stod(rb[r][c])));
+    }
+  }
+  return d;
+}
+
+// Largest difference between two JSON documents' numbers (other values compared exactly).
+double json_difference(const nlohmann::json& a, const nlohmann::json& b) {
+  if (a.is_number() && b.is_number()) return std::abs(a.get<double>() - b.get<double>());
+  if (a.type() != b.type() || a.size() != b.size()) return INFINITY;
+  if (a.is_object()) {
+    double d = 0.0;
+    for (const auto& [k, v] : a.items()) {
+      if (!b.contains(k)) return INFINITY;
+      d = std::max(d, json_difference(v, b[k]));
+    }
+    return d;
+  }
+  if (a.is_array()) {
+    double d = 0.0;
+    for (size_t k = 0; k < a.size(); ++k) d = std::max(d, json_difference(a[k], b[k]));
+    return d;
+  }
+  return a == b ? 0.0 : INFINITY;
+}
+
+obs::SE3 pose_at(const std::vector<std::string>& row, size_t first) {
+  obs::SE3 g = obs::SE3::Identity();
+  for (int r = 0; r < 3; ++r) g.translation()(r) = std::stod(row[first + r]);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) g.linear()(r, c) = std::stod(row[first + 3 + 3 * r + c]);
+  return g;
+}
+
+class Launch : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new fs::path(test::scratch_dir("launch"));
+    const auto r = net_test::netvmo_bounded(
+        "render " + std::string(NETVMO_SOURCE_DIR) + "/datasets/paper5_render.yaml --frames " +
+            std::to_string(kFrames) + " --out " + (*dir_ / "ds").string(),
+        *dir_, 120);
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  static void TearDownTestSuite() {
+    fs::remove_all(*dir_);
+    delete dir_;
+  }
+  static fs::path* dir_;
+};
+fs::path* Launch::dir_ = nullptr;
+
+}  // namespace
+
+TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
+  const fs::path ds = *dir_ / "ds", run = *dir_ / "run", launch = *dir_ / "launch";
+  const int domain = net_test::loopback_domain(*dir_);
+  const auto r1 =
+      net_test::netvmo_bounded("run " + ds.string() + " --out " + run.string(), *dir_, 120);
+  ASSERT_EQ(r1.code, 0) << r1.err;
+  // A ROS 2-style subscriber of camera 1's average pose, started first.
+  const pid_t ros = net::spawn({NETVMO_DDS_PEER, "ros", std::to_string(domain), "1",
+                                std::to_string(kFrames), "60", (*dir_ / "ros.txt").string()},
+                               *dir_ / "ros.log");
+  const auto r2 =
+      net_test::netvmo_bounded("launch " + ds.string() + " --out " + launch.string() +
+                                   " --domain " + std::to_string(domain) + " --timeout 90",
+                               *dir_, 120);
+  ASSERT_EQ(r2.code, 0) << r2.out << r2.err;
+  EXPECT_NE(r2.out.find("DDS domain " + std::to_string(domain) + ", loopback only"),
+            std::string::npos)
+      << r2.out;
+
+  const auto ros_result = net::supervise({ros}, 10.0, false);
+  EXPECT_TRUE(ros_result[0].finished && ros_result[0].exit_code == 0)
+      << net::describe(ros_result[0]) << test::slurp(*dir_ / "ros.log");
+
+  // The merged outputs are those of `netvmo run`.
+  for (const char* f : {"estimates.csv", "energies.csv", "errors.csv"}) {
+    const double d = csv_difference(run / f, launch / f);
+    std::printf("%s: largest difference %.3g\n", f, d);
+    EXPECT_LE(d, 1e-9) << f;
+  }
+  auto s_run = net_test::read_json(run / "summary.json"),
+       s_launch = net_test::read_json(launch / "summary.json");
+  s_run.erase("timing");
+  s_launch.erase("timing");
+  s_run.erase("warnings");
+  s_launch.erase("warnings");
+  const double ds_json = json_difference(s_run, s_launch);
+  std::printf("summary.json: largest difference %.3g\n", ds_json);
+  EXPECT_LE(ds_json, 1e-9);
+  for (const char* f : {"energies.png", "errors.png", "overlays/mosaic.png", "overlays/cam_1.mp4",
+                        "messages.json", "cyclonedds.xml", "nodes/node_3.log"})
+    EXPECT_TRUE(fs::exists(launch / f)) << f;
+
+  // Full precision: every node's estimates against the in-process run of the same options.
+  auto provider = sources::open_dataset_source(ds);
+  run::ImageRunOptions o;
+  o.progress = false;
+  const auto res = run::run_images(*provider, o);
+  ASSERT_EQ(res.history.size(), static_cast<size_t>(kFrames));
+  double worst = 0.0;
+  const auto& cams = provider->network().cameras;
+  for (size_t i = 0; i < cams.size(); ++i) {
+    const auto rows = read_csv(launch / "nodes" / ("node_" + std::to_string(cams[i].id) + ".csv"));
+    ASSERT_EQ(rows.size(), static_cast<size_t>(kFrames + 1));
+    for (int k = 0; k < kFrames; ++k) {
+      const auto& row = rows[static_cast<size_t>(k + 1)];
+      const auto& rec = res.history[static_cast<size_t>(k)].cameras[i];
+      ASSERT_EQ(row.size(), 63u);
+      EXPECT_EQ(row[2] == "1", rec.delta);
+      EXPECT_EQ(row[37] == "1", rec.initialized);
+      EXPECT_EQ(row[50] == "1", rec.indep_w.has_value());
+      worst =
+          std::max(worst, (pose_at(row, 38).matrix() - rec.est_w.matrix()).cwiseAbs().maxCoeff());
+      if (rec.indep_w)
+        worst = std::max(worst,
+                         (pose_at(row, 51).matrix() - rec.indep_w->matrix()).cwiseAbs().maxCoeff());
+    }
+  }
+  std::printf("node estimates vs in-process run: largest difference %.3g\n", worst);
+
+  // Camera 1's geometry_msgs/msg/PoseStamped messages carry its estimate of each frame (the
+  // first ones may go out before the subscriber is discovered).
+  {
+    std::ifstream in(*dir_ / "ros.txt");
+    const auto rows = read_csv(launch / "nodes" / "node_1.csv");
+    int count = 0;
+    std::string frame_id;
+    long sec = 0;
+    unsigned long nsec = 0;
+    double p[3], q[4];
+    while (in >> sec >> nsec >> frame_id >> p[0] >> p[1] >> p[2] >> q[0] >> q[1] >> q[2] >> q[3]) {
+      ++count;
+      EXPECT_EQ(frame_id, "world");
+      const int k = static_cast<int>(std::lround((sec + nsec * 1e-9) * provider->network().fps));
+      ASSERT_GE(k, 0);
+      ASSERT_LT(k, kFrames);
+      const obs::SE3 est = pose_at(rows[static_cast<size_t>(k + 1)], 38);
+      EXPECT_EQ((obs::Vec3(p[0], p[1], p[2]) - est.translation()).cwiseAbs().maxCoeff(), 0.0);
+      const Eigen::Quaterniond qq(q[0], q[1], q[2], q[3]);
+      EXPECT_LT((qq.toRotationMatrix() - est.linear()).cwiseAbs().maxCoeff(), 1e-12);
+    }
+    EXPECT_GE(count, 1) << "no PoseStamped received";
+    std::printf("PoseStamped samples of camera 1: %d of %d frames\n", count, kFrames);
+  }
+  EXPECT_LE(worst, 1e-9);
+  // Blind cameras 4 and 5 are initialised within the first frame (through their neighbours).
+  for (const auto& c : res.history[0].cameras) EXPECT_TRUE(c.initialized);
+
+  // Message statistics: every round's estimate sent, nothing malformed or out of order.
+  const auto messages = net_test::read_json(launch / "messages.json");
+  for (const auto& c : cams) {
+    const auto& m = messages[std::to_string(c.id)];
+    EXPECT_EQ(m["sent"].get<int>(), kFrames * res.substeps);
+    EXPECT_EQ(m["late"].get<int>(), 0);
+    for (const auto& [k, v] : m["rejected"].items())
+      if (k != "not a neighbour") {
+        EXPECT_EQ(v.get<int>(), 0) << k;
+      }
+  }
+}
+
+TEST_F(Launch, AFailingNodeFailsTheLaunchWithOneClearLine) {
+  // Camera 3's frame 2 is corrupt: its node stops, the launcher stops the others.
+  const fs::path ds = *dir_ / "ds_bad";
+  fs::copy(*dir_ / "ds", ds, fs::copy_options::recursive);
+  std::ofstream(ds / "cam_3" / "000002.png") << "not a png";
+  const int domain = net_test::loopback_domain(*dir_);
+  const auto r = net_test::netvmo_bounded(
+      "launch " + ds.string() + " --out " + (*dir_ / "bad").string() + " --domain " +
+          std::to_string(domain) + " --timeout 60 --node-timeout 5",
+      *dir_, 90);
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("node of camera 3 failed (exit 1)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("000002.png"), std::string::npos) << r.err;
+}
+
+TEST_F(Launch, ANodeNamesItsSilentNeighbour) {
+  // Camera 4 alone: its neighbours (cameras 3 and 5) never speak.
+  const int domain = net_test::loopback_domain(*dir_);
+  const auto r = net_test::netvmo_bounded("node " + (*dir_ / "ds").string() + " --camera 4 --out " +
+                                              (*dir_ / "alone").string() + " --domain " +
+                                              std::to_string(domain) + " --timeout 1",
+                                          *dir_, 60);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("netvmo node: error: camera 4: no message of round 1 from neighbour camera"),
+            std::string::npos)
+      << r.err;
+}

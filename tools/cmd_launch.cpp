@@ -1,0 +1,287 @@
+// netvmo launch: every camera of a dataset as its own `netvmo node` process on this machine,
+// exchanging over Cyclone DDS (loopback only), supervised, and their outputs merged into the
+// outputs of `netvmo run`.
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "commands.hpp"
+#include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/net/cyclone_config.hpp"
+#include "netvmo/pipeline/net/node.hpp"
+#include "netvmo/pipeline/net/process.hpp"
+#include "netvmo/pipeline/run/overlay.hpp"
+#include "netvmo/pipeline/run/run_report.hpp"
+#include "run_options.hpp"
+#include "run_plots.hpp"
+
+namespace netvmo::tools {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+// Async: the common start is this many seconds after the launch, time for every node to start.
+constexpr double kStartMargin = 2.5;
+
+std::string num(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+
+// The node's share of the run options (outputs and frame limits are the launcher's).
+std::vector<std::string> forwarded(const RunCliOptions& o) {
+  std::vector<std::string> a = {
+      "--ke",       num(o.k_e),      "--ks",     num(o.k_s), "--error",
+      o.error,      "--init",        o.init,     "--rounds", std::to_string(o.rounds),
+      "--decimate", num(o.decimate), "--refine", o.refine};
+  if (o.keep_going) a.push_back("--keep-going");
+  if (o.no_track) a.push_back("--no-track");
+  return a;
+}
+
+std::string last_line(const fs::path& log) {
+  std::ifstream f(log);
+  std::string line, last;
+  while (std::getline(f, line))
+    if (!line.empty()) last = line;
+  return last;
+}
+
+}  // namespace
+
+void add_launch(CLI::App& app, int& exit_code) {
+  struct Options {
+    std::string dataset, out = "results/launch";
+    int domain = -1;
+    std::uint64_t seed = 0;
+    double timeout = 600.0, node_timeout = 20.0;
+    std::string mode = "lockstep", kill;
+    double speed = 1.0, stale = 0.25, drop = 0.0, delay = 0.0, restart_after = -1.0;
+    RunCliOptions run;
+  };
+  auto o = std::make_shared<Options>();
+  auto* cmd = app.add_subcommand(
+      "launch", "Run every camera as its own process over Cyclone DDS (this machine only)");
+  cmd->footer(
+      "Writes OUT/cyclonedds.xml (loopback only), starts one `netvmo node` per camera\n"
+      "(lock-step by default), and merges their outputs into exactly those of `netvmo run`:\n"
+      "OUT/estimates.csv, energies.csv, errors.csv, summary.json, plots and overlays/, plus\n"
+      "OUT/nodes/ (per-node CSV, statistics and log) and OUT/messages.json.");
+  cmd->add_option("DATASET", o->dataset, "Dataset folder")->required();
+  cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
+  cmd->add_option("--domain", o->domain,
+                  "DDS domain id (default: derived from this process's id, printed)")
+      ->check(CLI::Range(0, 230));
+  cmd->add_option("--mode", o->mode,
+                  "lockstep (the in-process algorithm, outputs equal to `netvmo run`) or async "
+                  "(each node paced on its camera's timestamps from a common start)")
+      ->check(CLI::IsMember({"lockstep", "async"}))
+      ->capture_default_str();
+  add_async_options(*cmd, o->speed, o->stale, o->drop, o->delay, o->seed);
+  cmd->add_option("--kill", o->kill,
+                  "async: ID@T kills camera ID's node T seconds (wall) after the start");
+  cmd->add_option("--restart-after", o->restart_after,
+                  "async: restart the killed node this many seconds later (it joins at the "
+                  "current frame, with a new incarnation)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--timeout", o->timeout, "Stop every node and fail after this many seconds")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--node-timeout", o->node_timeout,
+                  "A node fails when a neighbour is silent this long [s] in a round")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  add_run_options(*cmd, o->run, /*in_process_transport=*/false);
+  cmd->callback([o, &exit_code] {
+    exit_code = guarded("launch", [&] {
+      const auto options = to_image_run_options(o->run);
+      auto provider = sources::open_dataset_source(o->dataset);
+      const auto& netcfg = provider->network();
+      for (const auto& w : provider->warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
+      int frames = provider->frame_count();
+      if (options.max_frames) frames = std::min(frames, *options.max_frames);
+
+      const bool async = o->mode == "async";
+      if (!async && (o->drop > 0 || o->delay > 0 || !o->kill.empty() || o->restart_after >= 0))
+        throw InputError("--drop, --delay, --kill and --restart-after need --mode async");
+      net::KillPlan plan;
+      bool have_plan = false;
+      if (!o->kill.empty()) {
+        const auto at = o->kill.find('@');
+        int id = -1;
+        double t = -1;
+        try {
+          if (at != std::string::npos) {
+            id = std::stoi(o->kill.substr(0, at));
+            t = std::stod(o->kill.substr(at + 1));
+          }
+        } catch (const std::exception&) {
+        }
+        if (at == std::string::npos || netcfg.index_of(id) < 0 || !(t >= 0))
+          throw InputError("--kill " + o->kill + ": expected ID@SECONDS with a camera id of " +
+                           netcfg.source);
+        plan.index = static_cast<size_t>(netcfg.index_of(id));
+        plan.kill_at = t + kStartMargin;  // after the common start
+        plan.restart_after = o->restart_after;
+        have_plan = true;
+      } else if (o->restart_after >= 0) {
+        throw InputError("--restart-after needs --kill ID@T");
+      }
+
+      const fs::path dir = o->out, nodes = dir / "nodes";
+      io::ensure_directory(nodes);
+      const int domain = o->domain >= 0 ? o->domain : net::domain_from_pid(::getpid());
+      net::write_loopback_config(dir / "cyclonedds.xml");
+      net::use_config(dir / "cyclonedds.xml");
+      std::printf("netvmo launch: %zu nodes, DDS domain %d, loopback only (%s)\n",
+                  netcfg.cameras.size(), domain, (dir / "cyclonedds.xml").string().c_str());
+      std::fflush(stdout);
+
+      double start_at = 0.0;
+      if (async) {
+        // A common start, late enough for every node to be up; printed for the record.
+        start_at =
+            std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
+                .count() +
+            kStartMargin;
+        std::printf(
+            "netvmo launch: async, speed %g, staleness %g s, drop %g, delay %g ms, seed %llu, "
+            "start at %.3f (epoch)\n",
+            o->speed, o->stale, o->drop, o->delay, static_cast<unsigned long long>(o->seed),
+            start_at);
+      }
+      std::fflush(stdout);  // before the children inherit the buffer
+      const std::string exe = net::self_exe().string();
+      std::vector<pid_t> pids;
+      for (const auto& c : netcfg.cameras) {
+        std::vector<std::string> argv = {exe,
+                                         "node",
+                                         o->dataset,
+                                         "--camera",
+                                         std::to_string(c.id),
+                                         "--out",
+                                         nodes.string(),
+                                         "--domain",
+                                         std::to_string(domain),
+                                         "--frames",
+                                         std::to_string(frames),
+                                         "--timeout",
+                                         num(o->node_timeout)};
+        for (auto& a : forwarded(o->run)) argv.push_back(std::move(a));
+        if (async)
+          for (auto a :
+               {std::string("--mode"), std::string("async"), std::string("--speed"), num(o->speed),
+                std::string("--stale"), num(o->stale), std::string("--drop"), num(o->drop),
+                std::string("--delay"), num(o->delay), std::string("--seed"),
+                std::to_string(o->seed), std::string("--start-at"), num(start_at)})
+            argv.push_back(a);
+        const fs::path log = nodes / ("node_" + std::to_string(c.id) + ".log");
+        fs::remove(log);
+        fs::remove(nodes / ("node_" + std::to_string(c.id) + ".csv"));
+        if (have_plan && pids.size() == plan.index) {
+          plan.argv = argv;
+          plan.log = log;
+        }
+        pids.push_back(net::spawn(argv, log));
+      }
+      const auto res = net::supervise(pids, o->timeout, true, have_plan ? &plan : nullptr);
+      // Report the nodes that failed on their own first; the others were stopped because of
+      // them, or by the timeout.
+      std::vector<int> stopped;
+      bool failed = false;
+      for (size_t i = 0; i < res.size(); ++i) {
+        const int id = netcfg.cameras[i].id;
+        if ((res[i].finished && res[i].exit_code == 0) || res[i].planned_kill) continue;
+        if (res[i].killed) {
+          stopped.push_back(id);
+          continue;
+        }
+        const fs::path log = nodes / ("node_" + std::to_string(id) + ".log");
+        std::fprintf(stderr, "netvmo launch: node of camera %d failed (%s): %s [%s]\n", id,
+                     net::describe(res[i]).c_str(), last_line(log).c_str(), log.string().c_str());
+        failed = true;
+      }
+      if (failed) throw std::runtime_error("a node failed; see " + nodes.string());
+      if (!stopped.empty()) {
+        std::string ids;
+        for (int id : stopped) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
+        throw std::runtime_error("timeout after " + num(o->timeout) +
+                                 " s: stopped the nodes of cameras " + ids + "; see " +
+                                 nodes.string());
+      }
+
+      // Merge: the same result structure as run_images, then the same writers as `netvmo run`.
+      auto result = net::merge_nodes(*provider, options, nodes, frames, async);
+      json messages = json::object();
+      for (const auto& c : netcfg.cameras) {
+        const fs::path f = nodes / ("node_" + std::to_string(c.id) + ".json");
+        if (async && !fs::exists(f)) {  // killed and not restarted: it never finished
+          messages[std::to_string(c.id)] = nullptr;
+          continue;
+        }
+        std::ifstream in(f);
+        json j;
+        try {
+          in >> j;
+        } catch (const std::exception&) {
+          throw InputError(f.string() + ": unreadable node statistics");
+        }
+        messages[std::to_string(c.id)] = j["messages"];
+        for (const auto& w : j["warnings"]) result.warnings.push_back(w.get<std::string>());
+        result.seconds = std::max(result.seconds, j["seconds"].get<double>());
+      }
+      io::write_file_atomic(dir / "messages.json", messages.dump(2) + "\n");
+      if (!o->run.no_overlays) {
+        run::OverlayWriter overlays(dir, *provider);
+        const size_t n = netcfg.cameras.size();
+        for (int k = 0; k < frames; ++k) {
+          std::vector<cv::Mat> images(n);
+          for (size_t i = 0; i < n; ++i) {
+            if (result.frames[static_cast<size_t>(k)][i].read_failed) continue;
+            images[i] = provider->read(i, k);
+          }
+          overlays(k, images, result.frames[static_cast<size_t>(k)],
+                   result.history[static_cast<size_t>(k)]);
+        }
+        overlays.finish();
+      }
+      for (size_t k = provider->warnings().size(); k < result.warnings.size(); ++k)
+        std::fprintf(stderr, "warning: %s\n", result.warnings[k].c_str());
+      const json s = run::write_run_outputs(dir, *provider, options, result);
+      if (!o->run.no_plots) {
+        std::vector<int> ids;
+        for (const auto& c : netcfg.cameras) ids.push_back(c.id);
+        plot_run(dir, ids);
+      }
+      // Every node reads the one estimates topic: messages of non-neighbours are ignored (and
+      // counted apart from those refused as malformed or out of order).
+      std::printf("messages: camera    sent  received  dropped  late  non-neighbour  rejected\n");
+      for (const auto& c : netcfg.cameras) {
+        const auto& m = messages[std::to_string(c.id)];
+        if (m.is_null()) {
+          std::printf("          %6d  (killed, no statistics)\n", c.id);
+          continue;
+        }
+        unsigned long long rejected = 0, foreign = 0;
+        for (const auto& [k, v] : m["rejected"].items())
+          (k == obs::to_string(obs::MessageVerdict::not_a_neighbour) ? foreign : rejected) +=
+              v.get<unsigned long long>();
+        std::printf("          %6d  %6llu  %8llu  %7llu  %4llu  %13llu  %8llu\n", c.id,
+                    m["sent"].get<unsigned long long>(), m["received"].get<unsigned long long>(),
+                    m["dropped"].get<unsigned long long>(), m["late"].get<unsigned long long>(),
+                    foreign, rejected);
+      }
+      print_run_summary(s, dir);
+      return 0;
+    });
+  });
+}
+
+}  // namespace netvmo::tools

@@ -1,0 +1,118 @@
+// netvmo node: one camera of a dataset as its own process, exchanging estimates with its
+// neighbours over Cyclone DDS (normally started by `netvmo launch`).
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+
+#include "commands.hpp"
+#include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/net/cyclone_config.hpp"
+#include "netvmo/pipeline/net/node.hpp"
+#include "run_options.hpp"
+
+namespace netvmo::tools {
+
+void add_async_options(CLI::App& cmd, double& speed, double& stale, double& drop, double& delay,
+                       std::uint64_t& seed) {
+  cmd.add_option("--speed", speed, "async: camera time per wall time (1 = real time)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd.add_option("--stale", stale,
+                 "async: staleness bound [s of camera time]; a neighbour's estimate older than "
+                 "this leaves the mutual term until it is heard again")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd.add_option("--drop", drop, "async: probability that a received message is dropped")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  cmd.add_option("--delay", delay,
+                 "async: every received message reaches the observer this late [ms]")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  cmd.add_option("--seed", seed, "Seed of the injected drops (combined with the camera id)")
+      ->capture_default_str();
+}
+
+void add_node(CLI::App& app, int& exit_code) {
+  struct Options {
+    std::string dataset, out, mode = "lockstep";
+    int camera = 0, domain = -1, frames = 0;
+    double timeout = 20.0, speed = 1.0, stale = 0.25, drop = 0.0, delay = 0.0, start_at = 0.0;
+    std::uint64_t seed = 0;
+    RunCliOptions run;
+  };
+  auto o = std::make_shared<Options>();
+  auto* cmd = app.add_subcommand(
+      "node", "Run one camera of a dataset as its own process, exchanging over Cyclone DDS");
+  cmd->footer(
+      "Reads network.yaml and the camera's own calibration and frames. Writes OUT/node_<id>.csv\n"
+      "(per frame: detection, PnP pose, networked and independent estimates, %.17g) and\n"
+      "OUT/node_<id>.json (message statistics). Without CYCLONEDDS_URI it writes and uses the\n"
+      "loopback-only configuration OUT/cyclonedds.xml.");
+  cmd->add_option("DATASET", o->dataset, "Dataset folder")->required();
+  cmd->add_option("--camera", o->camera, "This node's camera id (network.yaml)")->required();
+  cmd->add_option("--out", o->out, "Output directory")->required();
+  cmd->add_option("--mode", o->mode,
+                  "Exchange: lockstep (wait for every neighbour's message of each round: the "
+                  "in-process algorithm) or async (paced on the camera's timestamps, latest value "
+                  "of each neighbour)")
+      ->check(CLI::IsMember({"lockstep", "async"}))
+      ->capture_default_str();
+  add_async_options(*cmd, o->speed, o->stale, o->drop, o->delay, o->seed);
+  cmd->add_option("--start-at", o->start_at,
+                  "async: common start, seconds since the epoch (0 = now); a node started later "
+                  "joins at the current frame")
+      ->capture_default_str();
+  cmd->add_option("--domain", o->domain, "DDS domain id (the same for every node of a run)")
+      ->required()
+      ->check(CLI::Range(0, 230));
+  cmd->add_option("--frames", o->frames,
+                  "The dataset's frame count (0 = network.yaml's frames or this camera's count)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--timeout", o->timeout,
+                  "Longest wait [s] for a neighbour's message of a round before failing")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  add_run_options(*cmd, o->run, /*in_process_transport=*/false);
+  cmd->callback([o, &exit_code] {
+    exit_code = guarded("node", [&] {
+      if (!std::getenv("CYCLONEDDS_URI")) {
+        io::ensure_directory(o->out);
+        net::write_loopback_config(std::filesystem::path(o->out) / "cyclonedds.xml");
+        net::use_config(std::filesystem::path(o->out) / "cyclonedds.xml");
+      }
+      net::NodeOptions no;
+      no.run = to_image_run_options(o->run);
+      no.run.progress = false;
+      no.camera_id = o->camera;
+      no.dds.domain = o->domain;
+      no.dds.mode = net::parse_mode(o->mode);
+      no.dds.timeout_s = o->timeout;
+      if (o->frames > 0) no.frames = o->frames;
+      no.speed = o->speed;
+      no.stale_s = o->stale;
+      no.drop = o->drop;
+      no.delay_ms = o->delay;
+      no.seed = o->seed;
+      if (o->start_at > 0) no.start_epoch = o->start_at;
+      std::printf("netvmo node: camera %d, DDS domain %d, %s, config %s\n", o->camera, o->domain,
+                  o->mode.c_str(), std::getenv("CYCLONEDDS_URI"));
+      std::fflush(stdout);
+      const auto s = net::run_node(o->dataset, o->out, no);
+      std::printf(
+          "netvmo node: camera %d done: %d frames, %d rounds/frame, %llu sent, %llu received, "
+          "%llu late, %llu from non-neighbours, %llu dropped, %llu forgotten, %.2f s\n",
+          o->camera, s.frames, s.substeps, static_cast<unsigned long long>(s.stats.sent),
+          static_cast<unsigned long long>(s.stats.received),
+          static_cast<unsigned long long>(s.stats.late),
+          static_cast<unsigned long long>(s.stats.foreign),
+          static_cast<unsigned long long>(s.stats.dropped),
+          static_cast<unsigned long long>(s.forgotten), s.seconds);
+      return 0;
+    });
+  });
+}
+
+}  // namespace netvmo::tools
