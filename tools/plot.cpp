@@ -8,7 +8,9 @@
 namespace netvmo::plot {
 namespace fs = std::filesystem;
 
-std::string partial_path(const fs::path& png) { return png.string() + ".partial"; }
+std::string partial_path(const fs::path& png) {
+  return png.string() + ".partial";
+}
 
 std::string quoted(const std::string& s) {
   std::string out = "'";

@@ -19,10 +19,16 @@ bool has_rows(const fs::path& csv) {
 void plot_run(const fs::path& dir, const std::vector<int>& camera_ids) {
   const fs::path energies = dir / "energies.csv", errors = dir / "errors.csv";
   if (has_rows(energies)) {
-    plot::Panel up{"position error energy U_p", "U_p [m^2]", true,
-                   {{energies, "networked observer", 3, 2, "lines lw 2 lc rgb '#d62728'"}}, {}};
-    plot::Panel ur{"orientation error energy U_R", "U_R", true,
-                   {{energies, "networked observer", 4, 2, "lines lw 2 lc rgb '#d62728'"}}, {}};
+    plot::Panel up{"position error energy U_p",
+                   "U_p [m^2]",
+                   true,
+                   {{energies, "networked observer", 3, 2, "lines lw 2 lc rgb '#d62728'"}},
+                   {}};
+    plot::Panel ur{"orientation error energy U_R",
+                   "U_R",
+                   true,
+                   {{energies, "networked observer", 4, 2, "lines lw 2 lc rgb '#d62728'"}},
+                   {}};
     plot::panels_figure({up, ur}, dir / "energies.png", "Estimation error energies against g*(t)");
   }
   if (has_rows(errors)) {

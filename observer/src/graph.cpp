@@ -133,7 +133,8 @@ double exact_D(const Graph& g, int root) {
   const auto& kids = g.neighbors(root);
   std::vector<int> branch_of(static_cast<size_t>(g.size()), -1);
   std::vector<int> rest;
-  for (size_t b = 0; b < kids.size(); ++b) branch_of[static_cast<size_t>(kids[b])] = static_cast<int>(b);
+  for (size_t b = 0; b < kids.size(); ++b)
+    branch_of[static_cast<size_t>(kids[b])] = static_cast<int>(b);
   for (int v = 0; v < g.size(); ++v)
     if (v != root && branch_of[static_cast<size_t>(v)] < 0) rest.push_back(v);
   std::vector<int> scratch(static_cast<size_t>(g.size()));
@@ -166,7 +167,8 @@ double heuristic_D(const Graph& g, int root) {
   const auto& kids = g.neighbors(root);
   std::vector<int> branch_of(static_cast<size_t>(g.size()), -1);
   std::vector<double> weight(kids.size(), 0.0);
-  for (size_t b = 0; b < kids.size(); ++b) branch_of[static_cast<size_t>(kids[b])] = static_cast<int>(b);
+  for (size_t b = 0; b < kids.size(); ++b)
+    branch_of[static_cast<size_t>(kids[b])] = static_cast<int>(b);
   for (int v : order) {
     const int dv = dist[static_cast<size_t>(v)];
     if (dv <= 0) continue;
@@ -175,7 +177,8 @@ double heuristic_D(const Graph& g, int root) {
       for (int u : g.neighbors(v)) {
         if (dist[static_cast<size_t>(u)] != dv - 1) continue;
         const int b = branch_of[static_cast<size_t>(u)];
-        if (best_b < 0 || weight[static_cast<size_t>(b)] < weight[static_cast<size_t>(best_b)]) best_b = b;
+        if (best_b < 0 || weight[static_cast<size_t>(b)] < weight[static_cast<size_t>(best_b)])
+          best_b = b;
       }
       branch_of[static_cast<size_t>(v)] = best_b;
     }
@@ -206,7 +209,7 @@ PaperW paper_W(const Graph& g, int max_exact_nodes) {
 }
 
 std::string describe_components(const std::vector<std::vector<int>>& comps,
-                                 const std::vector<int>& labels) {
+                                const std::vector<int>& labels) {
   std::ostringstream os;
   for (size_t c = 0; c < comps.size(); ++c) {
     if (c) os << ' ';

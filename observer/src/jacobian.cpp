@@ -36,8 +36,8 @@ Eigen::MatrixXd image_jacobian(const SE3& g_bar, const FeatureModel& model) {
     dpi << 1.0, 0.0, -p.x() / p.z(), 0.0, 1.0, -p.y() / p.z();
     dpi *= model.lambda / p.z();
     const Eigen::Matrix<double, 2, 3> A = dpi * R;
-    J.block<2, 3>(2 * l, 0) = A;               // d/dp_e
-    J.block<2, 3>(2 * l, 3) = -A * hat(po);    // d/de_R: R (e_R x p_ol) = -R hat(p_ol) e_R
+    J.block<2, 3>(2 * l, 0) = A;             // d/dp_e
+    J.block<2, 3>(2 * l, 3) = -A * hat(po);  // d/de_R: R (e_R x p_ol) = -R hat(p_ol) e_R
   }
   return J;
 }

@@ -102,9 +102,13 @@ Vec6 log_se3(const SE3& g) {
   return V;
 }
 
-Mat3 sk(const Mat3& R) { return (R - R.transpose()) * 0.5; }
+Mat3 sk(const Mat3& R) {
+  return (R - R.transpose()) * 0.5;
+}
 
-Vec3 e_R(const Mat3& R) { return vee(R); }
+Vec3 e_R(const Mat3& R) {
+  return vee(R);
+}
 
 Vec6 E_R(const SE3& g) {
   Vec6 e;
@@ -113,9 +117,13 @@ Vec6 E_R(const SE3& g) {
   return e;
 }
 
-double phi(const Mat3& R) { return 3.0 - R.trace(); }
+double phi(const Mat3& R) {
+  return 3.0 - R.trace();
+}
 
-double psi(const SE3& g) { return 0.5 * g.translation().squaredNorm() + phi(g.linear()); }
+double psi(const SE3& g) {
+  return 0.5 * g.translation().squaredNorm() + phi(g.linear());
+}
 
 SE3 make_pose(const Vec3& p, const Vec3& xitheta) {
   SE3 g = SE3::Identity();

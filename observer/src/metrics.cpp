@@ -55,6 +55,8 @@ EpsLevels eps_levels(const std::vector<SE3>& g_bar_w, const SE3& g_star, const S
   return EpsLevels{ratio(ep, s.rho_p / n_visible), ratio(eR, s.rho_R / n_visible)};
 }
 
-double theorem1_orientation_offset(const Spread& s) { return std::sqrt(2.0 * s.phi_m); }
+double theorem1_orientation_offset(const Spread& s) {
+  return std::sqrt(2.0 * s.phi_m);
+}
 
 }  // namespace netvmo::obs

@@ -51,7 +51,8 @@ void Intrinsics::validate() const {
   if (width <= 0 || height <= 0 || width > 16384 || height > 16384)
     throw std::invalid_argument("image size must be between 1 and 16384 pixels");
   if (!(fx > 0) || !(fy > 0)) throw std::invalid_argument("focal lengths fx, fy must be positive");
-  if (!std::isfinite(cx) || !std::isfinite(cy)) throw std::invalid_argument("cx, cy must be finite");
+  if (!std::isfinite(cx) || !std::isfinite(cy))
+    throw std::invalid_argument("cx, cy must be finite");
   for (double d : dist)
     if (!std::isfinite(d)) throw std::invalid_argument("distortion coefficients must be finite");
 }

@@ -28,7 +28,8 @@ Pose Trajectory::at(double t) const {
 
 void Trajectory::validate() const {
   if (kind != Kind::Keyframes) return;
-  if (keyframes.empty()) throw std::invalid_argument("keyframe trajectory needs at least one keyframe");
+  if (keyframes.empty())
+    throw std::invalid_argument("keyframe trajectory needs at least one keyframe");
   for (size_t i = 1; i < keyframes.size(); ++i)
     if (!(keyframes[i].t > keyframes[i - 1].t))
       throw std::invalid_argument("keyframe times must be strictly increasing (keyframe " +

@@ -40,7 +40,8 @@ CornerStats corner_rms(render::SceneDescription scene, int frames) {
   CornerStats s;
   for (int k = 0; k < frames; ++k) {
     for (int i = 0; i < r.camera_count(); ++i) {
-      const auto obs = fe.observe(r.render(i, k), calibration(r.scene().cameras[static_cast<size_t>(i)].intrinsics));
+      const auto obs = fe.observe(
+          r.render(i, k), calibration(r.scene().cameras[static_cast<size_t>(i)].intrinsics));
       const auto truth = r.truth(i, k);
       if (!obs.delta) continue;
       ++s.detections;
@@ -113,7 +114,8 @@ TEST(FrontEndOnRenderedImages, PnpOfATwentyCentimetreTagAtTwoMetres) {
     const obs::SE3 g_io = r.truth(i, 0).g_io;
     EXPECT_NEAR((g_io.translation()).norm(), 2.0, 0.25);
     EXPECT_LT((pose->g_io.translation() - g_io.translation()).norm(), 0.005) << "camera " << i + 1;
-    EXPECT_LT(obs::log_so3(g_io.linear().transpose() * pose->g_io.linear()).norm() * 180 / M_PI, 0.5)
+    EXPECT_LT(obs::log_so3(g_io.linear().transpose() * pose->g_io.linear()).norm() * 180 / M_PI,
+              0.5)
         << "camera " << i + 1;
   }
 }
@@ -140,13 +142,16 @@ TEST(FrontEndOnRenderedImages, DetectionAgreesWithGeometricVisibility) {
       if (t.in_fov) {
         side = 1e9;
         for (int c = 0; c < 4; ++c)
-          side = std::min(side, (*t.corners[static_cast<size_t>(c)] - *t.corners[static_cast<size_t>((c + 1) % 4)]).norm());
+          side = std::min(side, (*t.corners[static_cast<size_t>(c)] -
+                                 *t.corners[static_cast<size_t>((c + 1) % 4)])
+                                    .norm());
       }
       const bool fully_visible = t.in_fov && t.visible_fraction >= 0.999 && side >= 24.0;
       const bool hidden = t.visible_fraction == 0.0;
       if (!fully_visible && !hidden) continue;  // partly visible: either outcome is allowed
       const bool detected =
-          fe.observe(r.render(i, k), calibration(scene.cameras[static_cast<size_t>(i)].intrinsics)).delta;
+          fe.observe(r.render(i, k), calibration(scene.cameras[static_cast<size_t>(i)].intrinsics))
+              .delta;
       if (fully_visible) {
         ++must;
         EXPECT_TRUE(detected) << "frame " << k << " camera " << i + 1;

@@ -10,10 +10,10 @@
 #include <sstream>
 
 #include "netvmo/pipeline/io/dataset_writer.hpp"
-#include "netvmo/pipeline/run/image_run.hpp"
-#include "netvmo/pipeline/sources/render_source.hpp"
 #include "netvmo/pipeline/io/render_scenario.hpp"
+#include "netvmo/pipeline/run/image_run.hpp"
 #include "netvmo/pipeline/run/run_report.hpp"
+#include "netvmo/pipeline/sources/render_source.hpp"
 #include "netvmo/render/renderer.hpp"
 #include "test_util.hpp"
 
@@ -34,7 +34,6 @@ run::ImageRunOptions quiet_options() {
   o.progress = false;
   return o;
 }
-
 
 // A small rendered dataset shared by the recorded-data and bad-input tests.
 class SmallDataset : public ::testing::Test {
@@ -82,8 +81,10 @@ TEST(EndToEnd, StaticTargetEveryCameraConvergesToGStar) {
     EXPECT_LT(e.orientation_deg, 0.5) << "camera " << i + 1;
   }
   // Blind cameras end on their neighbours' estimates.
-  EXPECT_LT((last.cameras[3].est_w.translation() - last.cameras[2].est_w.translation()).norm(), 0.005);
-  EXPECT_LT((last.cameras[4].est_w.translation() - last.cameras[0].est_w.translation()).norm(), 0.005);
+  EXPECT_LT((last.cameras[3].est_w.translation() - last.cameras[2].est_w.translation()).norm(),
+            0.005);
+  EXPECT_LT((last.cameras[4].est_w.translation() - last.cameras[0].est_w.translation()).norm(),
+            0.005);
   // The networked observer beats the independent observers.
   ASSERT_TRUE(last.energies && last.energies_indep);
   EXPECT_LT(last.energies->U_p, last.energies_indep->U_p);
@@ -112,9 +113,12 @@ TEST(EndToEnd, MovingTargetDeltaIsDetectionAndEstimatesStayBounded) {
   for (int k = 0; k < frames; ++k) {
     for (size_t i = 0; i < scene.cameras.size(); ++i) {
       const bool d = fe.observe(again->read(i, k), again->calibration(i)).delta;
-      EXPECT_EQ(r.history[static_cast<size_t>(k)].cameras[i].delta, d) << "frame " << k << " camera " << i + 1;
+      EXPECT_EQ(r.history[static_cast<size_t>(k)].cameras[i].delta, d)
+          << "frame " << k << " camera " << i + 1;
       detected += d;
-      if (k > 0) changes += r.history[static_cast<size_t>(k)].cameras[i].delta != r.history[static_cast<size_t>(k) - 1].cameras[i].delta;
+      if (k > 0)
+        changes += r.history[static_cast<size_t>(k)].cameras[i].delta !=
+                   r.history[static_cast<size_t>(k) - 1].cameras[i].delta;
     }
   }
   EXPECT_GE(changes, 6) << "visibility should change over time";
@@ -157,8 +161,8 @@ TEST_F(SmallDataset, RecordedFoldersAndVideoGiveTheSameEstimates) {
     fs::copy_file(rendered / "calib" / (cam + ".yaml"), recorded / "calib" / (cam + ".yaml"));
     if (id == 3) {
       // Camera 3 as a lossless video file.
-      cv::VideoWriter w((recorded / (cam + ".mkv")).string(), cv::VideoWriter::fourcc('F', 'F', 'V', '1'),
-                        30, cv::Size(640, 480), false);
+      cv::VideoWriter w((recorded / (cam + ".mkv")).string(),
+                        cv::VideoWriter::fourcc('F', 'F', 'V', '1'), 30, cv::Size(640, 480), false);
       ASSERT_TRUE(w.isOpened());
       for (int k = 0; k < 12; ++k) {
         char name[32];
@@ -201,12 +205,14 @@ TEST_F(SmallDataset, BadInputGivesOneClearLineAndKeepGoingBlindsTheCamera) {
   fs::copy(*dir_ / "rendered", bad, fs::copy_options::recursive);
   std::ofstream(bad / "cam_2" / "000005.png", std::ios::trunc) << "not a png";
   const std::string out = (*dir_ / "out_bad").string();
-  auto c = test::run_netvmo("run " + bad.string() + " --out " + out + " --no-overlays --no-plots", *dir_);
+  auto c = test::run_netvmo("run " + bad.string() + " --out " + out + " --no-overlays --no-plots",
+                            *dir_);
   EXPECT_NE(c.code, 0);
   EXPECT_NE(c.err.find("cam_2/000005.png"), std::string::npos) << c.err;
   EXPECT_FALSE(fs::exists(fs::path(out) / "summary.json"));
 
-  c = test::run_netvmo("run " + bad.string() + " --out " + out + " --no-overlays --no-plots --keep-going", *dir_);
+  c = test::run_netvmo(
+      "run " + bad.string() + " --out " + out + " --no-overlays --no-plots --keep-going", *dir_);
   EXPECT_EQ(c.code, 0) << c.err;
   EXPECT_NE(c.err.find("cam_2/000005.png"), std::string::npos) << "warned: " << c.err;
   // Camera 2 is blind at frame 5 only; the others keep detecting.
@@ -233,14 +239,16 @@ TEST_F(SmallDataset, BadInputGivesOneClearLineAndKeepGoingBlindsTheCamera) {
   std::string net = slurp(unknown / "network.yaml");
   const auto edges_at = net.find("edges:");
   ASSERT_NE(edges_at, std::string::npos);
-  std::ofstream(unknown / "network.yaml") << net.substr(0, edges_at) << "edges: [[1, 2], [1, 3], [1, 5], [2, 3], [3, 4], [4, 9]]\n";
+  std::ofstream(unknown / "network.yaml")
+      << net.substr(0, edges_at) << "edges: [[1, 2], [1, 3], [1, 5], [2, 3], [3, 4], [4, 9]]\n";
   c = test::run_netvmo("run " + unknown.string() + " --out " + out + "_u", *dir_);
   EXPECT_NE(c.code, 0);
   EXPECT_NE(c.err.find("network.yaml"), std::string::npos) << c.err;
   EXPECT_NE(c.err.find("9"), std::string::npos) << c.err;
   EXPECT_EQ(std::count(c.err.begin(), c.err.end(), '\n'), 1) << c.err;
 
-  std::ofstream(unknown / "network.yaml") << net.substr(0, edges_at) << "edges: [[1, 2], [1, 3], [2, 3], [4, 5]]\n";
+  std::ofstream(unknown / "network.yaml")
+      << net.substr(0, edges_at) << "edges: [[1, 2], [1, 3], [2, 3], [4, 5]]\n";
   c = test::run_netvmo("run " + unknown.string() + " --out " + out + "_d", *dir_);
   EXPECT_NE(c.code, 0);
   EXPECT_NE(c.err.find("components {1,2,3} {4,5}"), std::string::npos) << c.err;

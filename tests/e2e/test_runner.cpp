@@ -29,7 +29,8 @@ struct PaperNetwork : test::Paper5 {
       in[i].delta = true;
       in[i].f = obs::project(g_io, m);
       in[i].g_io_true = g_io;
-      in[i].g_io_pnp = g_io * make_pose(Vec3(nd(rng), nd(rng), nd(rng)), Vec3(nd(rng), nd(rng), nd(rng)));
+      in[i].g_io_pnp =
+          g_io * make_pose(Vec3(nd(rng), nd(rng), nd(rng)), Vec3(nd(rng), nd(rng), nd(rng)));
     }
     return in;
   }
@@ -37,7 +38,8 @@ struct PaperNetwork : test::Paper5 {
 
 double max_position_error(const run::FrameRecord& r, const SE3& ref) {
   double e = 0;
-  for (const auto& c : r.cameras) e = std::max(e, (c.est_w.translation() - ref.translation()).norm());
+  for (const auto& c : r.cameras)
+    e = std::max(e, (c.est_w.translation() - ref.translation()).norm());
   return e;
 }
 double max_orientation_error_deg(const run::FrameRecord& r, const SE3& ref) {
@@ -106,7 +108,8 @@ TEST(Runner, PaperInitialisationStartsEveryCameraAtTheFixedPose) {
   std::mt19937 rng(4);
   const auto& f0 = r.process(0, 0.0, 1e-9, s.inputs(rng, 0.0));
   for (size_t i = 0; i < 5; ++i)
-    EXPECT_TRUE((s.g_wi[i].inverse() * f0.cameras[i].est_w).isApprox(run::paper_initial_estimate(), 1e-6));
+    EXPECT_TRUE(
+        (s.g_wi[i].inverse() * f0.cameras[i].est_w).isApprox(run::paper_initial_estimate(), 1e-6));
 }
 
 TEST(Runner, ExactModelNeedsGroundTruth) {
@@ -152,12 +155,14 @@ TEST(Runner, MovingCamerasTrackAStaticTarget) {
       r.set_camera_motion(g_wi, with_motion ? V : std::vector<obs::Vec6>(5, obs::Vec6::Zero()));
       const auto& f = r.process(k, k * dt, dt, in);
       for (size_t i = 0; i < 5; ++i) g_wi[i] = g_wi[i] * obs::exp_se3(dt * V[i]);  // cameras move
-      if (k > 90) worst = std::max(worst, (f.cameras[0].est_w.translation() - f.g_star->translation()).norm());
+      if (k > 90)
+        worst =
+            std::max(worst, (f.cameras[0].est_w.translation() - f.g_star->translation()).norm());
     }
     err[with_motion] = worst;
   }
-  EXPECT_LT(err[1], 0.01);              // with the camera-motion term: locked on
-  EXPECT_GT(err[0], 5.0 * err[1]);      // without it: the estimate lags the moving cameras
+  EXPECT_LT(err[1], 0.01);          // with the camera-motion term: locked on
+  EXPECT_GT(err[0], 5.0 * err[1]);  // without it: the estimate lags the moving cameras
 }
 
 TEST(Runner, TransportIsChosenByNameFromTheRegistry) {
@@ -182,8 +187,9 @@ TEST(Runner, TransportIsChosenByNameFromTheRegistry) {
     EXPECT_TRUE(named.cameras[i].est_w.isApprox(plain.cameras[i].est_w, 0.0)) << i;
     EXPECT_TRUE(lossy.cameras[i].est_w.isApprox(lossy_again.cameras[i].est_w, 0.0)) << i;
   }
-  EXPECT_GT(max_position_error(lossy, *plain.g_star) + max_orientation_error_deg(lossy, *plain.g_star),
-            0.0);
+  EXPECT_GT(
+      max_position_error(lossy, *plain.g_star) + max_orientation_error_deg(lossy, *plain.g_star),
+      0.0);
   EXPECT_FALSE(lossy.cameras[3].est_w.isApprox(plain.cameras[3].est_w, 1e-12));
   EXPECT_LT(max_position_error(lossy, *lossy.g_star), 0.01);
   EXPECT_LT(max_orientation_error_deg(lossy, *lossy.g_star), 0.5);

@@ -6,8 +6,8 @@
 #include <sstream>
 
 #include "net_test_util.hpp"
-#include "netvmo/pipeline/sources/network_source.hpp"
 #include "netvmo/pipeline/run/image_run.hpp"
+#include "netvmo/pipeline/sources/network_source.hpp"
 #include "test_util.hpp"
 
 using namespace netvmo;

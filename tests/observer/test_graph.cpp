@@ -14,7 +14,9 @@ using namespace netvmo::obs;
 
 namespace {
 // The paper's Section 5 graph, 0-based.
-Graph paper_graph() { return netvmo::test::Paper5().graph; }
+Graph paper_graph() {
+  return netvmo::test::Paper5().graph;
+}
 
 Graph path_graph(int n) {
   std::vector<Graph::Edge> e;
@@ -32,13 +34,20 @@ double brute_force_W(const Graph& g) {
     std::vector<int> choice(static_cast<size_t>(n), 0), parent(static_cast<size_t>(n), -1);
     while (true) {
       for (int v = 0; v < n; ++v)
-        parent[static_cast<size_t>(v)] = v == root ? -1 : g.neighbors(v)[static_cast<size_t>(choice[static_cast<size_t>(v)])];
+        parent[static_cast<size_t>(v)] =
+            v == root ? -1 : g.neighbors(v)[static_cast<size_t>(choice[static_cast<size_t>(v)])];
       std::vector<int> depth(static_cast<size_t>(n), -1);
       bool tree = true;
       for (int v = 0; v < n && tree; ++v) {
         int u = v, d = 0;
-        while (u != root && d <= n) { u = parent[static_cast<size_t>(u)]; ++d; }
-        if (d > n) tree = false; else depth[static_cast<size_t>(v)] = d;
+        while (u != root && d <= n) {
+          u = parent[static_cast<size_t>(u)];
+          ++d;
+        }
+        if (d > n)
+          tree = false;
+        else
+          depth[static_cast<size_t>(v)] = d;
       }
       if (tree) {
         double Dt = 0.0;
@@ -48,7 +57,13 @@ double brute_force_W(const Graph& g) {
           for (int i = 0; i < n; ++i) {  // does the path root -> i include edge (parent(v), v)?
             int u = i;
             bool uses = false;
-            while (u != root) { if (u == v) { uses = true; break; } u = parent[static_cast<size_t>(u)]; }
+            while (u != root) {
+              if (u == v) {
+                uses = true;
+                break;
+              }
+              u = parent[static_cast<size_t>(u)];
+            }
             if (uses) sum += depth[static_cast<size_t>(i)];
           }
           Dt = std::max(Dt, sum);

@@ -8,7 +8,9 @@ using namespace netvmo::obs;
 
 namespace {
 // g_e(d) = (d_p, exp(d_w)): the perturbation whose E_R is d to first order.
-SE3 perturbation(const Vec6& d) { return make_pose(d.head<3>(), d.tail<3>()); }
+SE3 perturbation(const Vec6& d) {
+  return make_pose(d.head<3>(), d.tail<3>());
+}
 
 const SE3 kGBar = make_pose(Vec3(0.25, -0.15, 1.9), Vec3(2.9, 0.3, -0.2));  // tag facing camera
 }  // namespace

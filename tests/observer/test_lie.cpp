@@ -50,7 +50,8 @@ TEST(Lie, LogSO3InvertsExpIncludingNearZeroAndNearPi) {
 }
 
 TEST(Lie, LogSO3AtExactlyPiGivesAnAngleOfPi) {
-  for (const Vec3& axis : {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1), Vec3(1, 1, 0).normalized()}) {
+  for (const Vec3& axis :
+       {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1), Vec3(1, 1, 0).normalized()}) {
     const Mat3 R = Eigen::AngleAxisd(kPi, axis).toRotationMatrix();
     const Vec3 w = log_so3(R);
     EXPECT_NEAR(w.norm(), kPi, 1e-12);

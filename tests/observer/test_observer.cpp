@@ -16,7 +16,8 @@ struct PaperSetup : netvmo::test::Paper5 {
     std::vector<Measurement> z(5);
     for (int i = 0; i < 3; ++i) {
       z[static_cast<size_t>(i)].delta = true;
-      z[static_cast<size_t>(i)].g_io_true = g_wi[static_cast<size_t>(i)].inverse() * g_wo[static_cast<size_t>(i)];
+      z[static_cast<size_t>(i)].g_io_true =
+          g_wi[static_cast<size_t>(i)].inverse() * g_wo[static_cast<size_t>(i)];
     }
     return z;
   }
@@ -213,7 +214,8 @@ TEST(Observer, ExchangesGoThroughTheTransportOncePerSubstep) {
   }
   EXPECT_EQ(calls, 5 * 30 * a.substeps(1.0 / 30.0));  // every camera, every round
   // Camera 5's neighbours (1 and 4) never hear from it, so the runs differ.
-  EXPECT_GT((a.estimates_world()[0].translation() - b.estimates_world()[0].translation()).norm(), 1e-3);
+  EXPECT_GT((a.estimates_world()[0].translation() - b.estimates_world()[0].translation()).norm(),
+            1e-3);
 }
 
 TEST(Observer, InactiveCamerasAreFrozenAndIgnored) {
@@ -230,5 +232,7 @@ TEST(Observer, InactiveCamerasAreFrozenAndIgnored) {
   EXPECT_TRUE(obs.estimates()[4].isApprox(init[4]));
   const SE3 g_star = average_pose(p.g_wo);
   for (int i = 0; i < 4; ++i)
-    EXPECT_LT((obs.estimates_world()[static_cast<size_t>(i)].translation() - g_star.translation()).norm(), 0.05);
+    EXPECT_LT(
+        (obs.estimates_world()[static_cast<size_t>(i)].translation() - g_star.translation()).norm(),
+        0.05);
 }

@@ -24,18 +24,18 @@ namespace netvmo::testing {
 
 struct SynthTag {
   int id = 0;
-  double size = 0.2;                      ///< black border side, metres
-  obs::SE3 g_io = obs::SE3::Identity();   ///< tag -> camera
+  double size = 0.2;                               ///< black border side, metres
+  obs::SE3 g_io = obs::SE3::Identity();            ///< tag -> camera
   std::vector<std::pair<int, int>> flipped_cells;  ///< (row, col) bitmap cells to invert
 };
 
 struct SynthOptions {
   std::string family = "tag36h11";
-  int supersample = 4;          ///< sub-samples per pixel side
-  double background = 128.0;    ///< gray level where no tag is hit
+  int supersample = 4;        ///< sub-samples per pixel side
+  double background = 128.0;  ///< gray level where no tag is hit
   double black = 20.0, white = 230.0;
   double quiet_zone_cells = 1.0;  ///< white margin added around the bitmap (cells)
-  double noise_sigma = 0.0;     ///< Gaussian noise (gray levels), seeded
+  double noise_sigma = 0.0;       ///< Gaussian noise (gray levels), seeded
   std::uint64_t seed = 1;
   std::vector<cv::Rect> occluders;  ///< image rectangles painted with `occluder_level`
   double occluder_level = 90.0;
@@ -47,8 +47,8 @@ cv::Mat render_tags(const io::Calibration& calib, const std::vector<SynthTag>& t
 
 /// The true corners of a tag (obs::FeatureModel::square order) in OpenCV pixels, with
 /// distortion (cv::projectPoints).
-std::array<cv::Point2d, 4> project_corners(const io::Calibration& calib,
-                                           const obs::SE3& g_io, double size);
+std::array<cv::Point2d, 4> project_corners(const io::Calibration& calib, const obs::SE3& g_io,
+                                           double size);
 
 /// A 640x480 calibration (fx 610, fy 605, cx 321.7, cy 238.4), optionally with moderate
 /// distortion (k1 -0.12, k2 0.05, p1 4e-4, p2 -3e-4, k3 0).
@@ -71,11 +71,11 @@ struct SynthCamera {
 
 struct SynthDatasetSpec {
   std::vector<SynthCamera> cameras;
-  std::vector<obs::SE3> g_wo;   ///< target pose per frame
+  std::vector<obs::SE3> g_wo;  ///< target pose per frame
   int target_id = 0;
   double tag_size = 0.2;
   double fps = 30.0;
-  bool video = false;           ///< write cam_<id><video_ext> instead of cam_<id>/%06d.png
+  bool video = false;  ///< write cam_<id><video_ext> instead of cam_<id>/%06d.png
   std::string video_ext = ".avi";
   std::string video_fourcc = "MJPG";  ///< e.g. MJPG (.avi), FFV1 (.avi, lossless), mp4v (.mp4)
   SynthOptions options;

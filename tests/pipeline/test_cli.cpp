@@ -15,12 +15,13 @@ namespace {
 using namespace io;
 namespace fs = std::filesystem;
 
-
 using test::slurp;
 
-test::CliResult run_detect(const fs::path& dataset, const fs::path& out, const std::string& extra = "") {
-  return test::run_netvmo("detect " + dataset.string() + " --out " + out.string() + " --quiet " + extra,
-                          out.parent_path());
+test::CliResult run_detect(const fs::path& dataset, const fs::path& out,
+                           const std::string& extra = "") {
+  return test::run_netvmo(
+      "detect " + dataset.string() + " --out " + out.string() + " --quiet " + extra,
+      out.parent_path());
 }
 
 int count_lines(const std::string& s) {

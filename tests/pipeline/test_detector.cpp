@@ -57,8 +57,10 @@ TEST(Detector, PixelOffsetConvertedToOpenCV) {
   }
   bias_x /= n;
   bias_y /= n;
-  std::printf("mean corner bias after -0.5 conversion: (%.4f, %.4f) px; raw libapriltag: "
-              "(%.4f, %.4f)\n", bias_x, bias_y, bias_x + 0.5, bias_y + 0.5);
+  std::printf(
+      "mean corner bias after -0.5 conversion: (%.4f, %.4f) px; raw libapriltag: "
+      "(%.4f, %.4f)\n",
+      bias_x, bias_y, bias_x + 0.5, bias_y + 0.5);
   EXPECT_LT(std::abs(bias_x), 0.1);
   EXPECT_LT(std::abs(bias_y), 0.1);
 }
@@ -90,8 +92,7 @@ struct RmsTable {
 
 RmsTable measure(const Calibration& calib) {
   // Each image is rendered once and detected with all three modes.
-  const Refinement modes[3] = {Refinement::none, Refinement::corner_subpix,
-                               Refinement::edge_lines};
+  const Refinement modes[3] = {Refinement::none, Refinement::corner_subpix, Refinement::edge_lines};
   std::vector<TagDetector> dets;
   for (auto m : modes) dets.emplace_back(settings_with(m));
   RmsTable t{};
@@ -118,8 +119,9 @@ RmsTable measure(const Calibration& calib) {
       }
   for (int m = 0; m < 3; ++m)
     for (int c = 0; c < 2; ++c) t.rms[m][c] = std::sqrt(t.rms[m][c] / n[c]);
-  std::printf("corner RMS (px), 640x480, 4x4 supersampling, 5 poses 0.8-2 m:\n"
-              "| refinement | clean | noise sigma 2 |\n|---|---|---|\n");
+  std::printf(
+      "corner RMS (px), 640x480, 4x4 supersampling, 5 poses 0.8-2 m:\n"
+      "| refinement | clean | noise sigma 2 |\n|---|---|---|\n");
   for (int m = 0; m < 3; ++m)
     std::printf("| %s | %.3f | %.3f |\n", to_string(modes[m]), t.rms[m][0], t.rms[m][1]);
   return t;
@@ -218,8 +220,9 @@ TEST(Detector, TagOutsideImageOrBehindNotDetected) {
   // fully occluded
   SynthOptions occ;
   occ.occluders = {cv::Rect(200, 150, 250, 200)};
-  EXPECT_EQ(det.detect(render_tags(calib, {{0, kSize, facing_pose(1.5, 0.0, 0.0), {}}}, occ)).status,
-            TargetStatus::not_found);
+  EXPECT_EQ(
+      det.detect(render_tags(calib, {{0, kSize, facing_pose(1.5, 0.0, 0.0), {}}}, occ)).status,
+      TargetStatus::not_found);
   // and the same pose unoccluded is detected (the negatives above are not vacuous)
   EXPECT_EQ(det.detect(render_tags(calib, {{0, kSize, facing_pose(1.5, 0.0, 0.0), {}}})).status,
             TargetStatus::detected);
@@ -242,7 +245,8 @@ TEST(Detector, HammingAndMarginThresholds) {
 
   DetectorSettings margin;
   margin.min_decision_margin = 1e6;
-  const auto dm = TagDetector(margin).detect(render_tags(calib, {{0, kSize, facing_pose(1.2), {}}}));
+  const auto dm =
+      TagDetector(margin).detect(render_tags(calib, {{0, kSize, facing_pose(1.2), {}}}));
   ASSERT_EQ(dm.all.size(), 1u);
   EXPECT_EQ(dm.status, TargetStatus::low_margin);
 }

@@ -2,12 +2,12 @@
 // naming the file (and the key or line).
 #include <gtest/gtest.h>
 
-#include <fstream>
 #include <visp3/core/vpCameraParameters.h>
 #include <visp3/core/vpXmlParserCamera.h>
+#include <fstream>
 
-#include "netvmo/pipeline/io/calibration.hpp"
 #include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/io/calibration.hpp"
 #include "netvmo/pipeline/io/network_config.hpp"
 #include "netvmo/pipeline/io/truth_io.hpp"
 #include "synth.hpp"
@@ -20,7 +20,9 @@ namespace fs = std::filesystem;
 
 using test::expect_input_error;
 
-void write(const fs::path& p, const std::string& s) { std::ofstream(p) << s; }
+void write(const fs::path& p, const std::string& s) {
+  std::ofstream(p) << s;
+}
 
 TEST(Calibration, OpenCvYamlRoundTrip) {
   const auto dir = testing::fresh_dir("calib_yaml");
@@ -36,17 +38,20 @@ TEST(Calibration, OpenCvYamlRoundTrip) {
 
 TEST(Calibration, OpenCvFileErrorsNameFileAndNode) {
   const auto dir = testing::fresh_dir("calib_err");
-  expect_input_error([&] { load_calibration_opencv(dir / "nope.yaml"); }, {"nope.yaml", "not found"});
-  write(dir / "a.yaml", "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n"
-                         "camera_matrix: !!opencv-matrix\n  rows: 3\n  cols: 3\n  dt: d\n"
-                         "  data: [600, 0, 320, 0, 600, 240, 0, 0, 1]\n");
+  expect_input_error([&] { load_calibration_opencv(dir / "nope.yaml"); },
+                     {"nope.yaml", "not found"});
+  write(dir / "a.yaml",
+        "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n"
+        "camera_matrix: !!opencv-matrix\n  rows: 3\n  cols: 3\n  dt: d\n"
+        "  data: [600, 0, 320, 0, 600, 240, 0, 0, 1]\n");
   expect_input_error([&] { load_calibration_opencv(dir / "a.yaml"); },
                      {"a.yaml", "distortion_coefficients"});
-  write(dir / "b.yaml", "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n"
-                         "camera_matrix: !!opencv-matrix\n  rows: 2\n  cols: 2\n  dt: d\n"
-                         "  data: [600, 0, 0, 600]\n"
-                         "distortion_coefficients: !!opencv-matrix\n  rows: 1\n  cols: 5\n"
-                         "  dt: d\n  data: [0, 0, 0, 0, 0]\n");
+  write(dir / "b.yaml",
+        "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n"
+        "camera_matrix: !!opencv-matrix\n  rows: 2\n  cols: 2\n  dt: d\n"
+        "  data: [600, 0, 0, 600]\n"
+        "distortion_coefficients: !!opencv-matrix\n  rows: 1\n  cols: 5\n"
+        "  dt: d\n  data: [0, 0, 0, 0, 0]\n");
   expect_input_error([&] { load_calibration_opencv(dir / "b.yaml"); }, {"b.yaml", "camera_matrix"});
   write(dir / "c.yaml", "this is : not : yaml [");
   expect_input_error([&] { load_calibration_opencv(dir / "c.yaml"); }, {"c.yaml"});
@@ -127,7 +132,8 @@ TEST(NetworkConfig, ErrorsNameFileAndKey) {
     write(f, s);
   };
   with("[[1, 4]]", "[[1, 7]]");
-  expect_input_error([&] { load_network_config(f); }, {"network.yaml", "edges[0]", "unknown camera id 7"});
+  expect_input_error([&] { load_network_config(f); },
+                     {"network.yaml", "edges[0]", "unknown camera id 7"});
   with("id: 4,", "id: 1,");
   expect_input_error([&] { load_network_config(f); }, {"network.yaml", "duplicate camera id 1"});
   with("fps: 30", "fsp: 30");

@@ -2,15 +2,15 @@
 // rule (missing frames, shorter cameras, `frames:`) with warnings; errors name the file.
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <tuple>
-#include <opencv2/imgcodecs.hpp>
 #include <visp3/core/vpCameraParameters.h>
 #include <visp3/core/vpXmlParserCamera.h>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <tuple>
 
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/sources/dataset.hpp"
 #include "netvmo/pipeline/frontend/front_end.hpp"
+#include "netvmo/pipeline/sources/dataset.hpp"
 #include "synth.hpp"
 #include "test_util.hpp"
 
@@ -74,8 +74,9 @@ TEST(Sources, Ffv1AviAndMp4VideosAgree) {
   testing::write_synth_dataset(d_img, testing::simple_dataset_spec(1, 3, false));
   Dataset a = open_dataset(d_img);
   const auto oa = run_all(a);
-  for (const auto& [ext, fourcc, tol] : {std::tuple<std::string, std::string, double>{".avi", "FFV1", 1e-9},
-                                         {".mp4", "mp4v", 0.5}}) {
+  for (const auto& [ext, fourcc, tol] :
+       {std::tuple<std::string, std::string, double>{".avi", "FFV1", 1e-9},
+        {".mp4", "mp4v", 0.5}}) {
     auto spec = testing::simple_dataset_spec(1, 3, true);
     spec.video_ext = ext;
     spec.video_fourcc = fourcc;
@@ -162,7 +163,8 @@ TEST(Sources, DatasetErrorsNameTheFile) {
   testing::write_synth_dataset(dir, testing::simple_dataset_spec(2, 1));
   // missing calibration
   fs::rename(dir / "calib" / "cam_2.yaml", dir / "cam_2.yaml.bak");
-  expect_input_error([&] { open_dataset(dir); }, {(dir / "calib" / "cam_2.yaml").string(), "camera 2"});
+  expect_input_error([&] { open_dataset(dir); },
+                     {(dir / "calib" / "cam_2.yaml").string(), "camera 2"});
   fs::rename(dir / "cam_2.yaml.bak", dir / "calib" / "cam_2.yaml");
   // no frames for a declared camera
   fs::rename(dir / "cam_2", dir / "frames_2");

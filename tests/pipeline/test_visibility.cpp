@@ -19,11 +19,16 @@ using testing::facing_pose;
 enum class Geo { visible, small, partial, out_of_view, occluded };
 const char* name(Geo g) {
   switch (g) {
-    case Geo::visible: return "fully visible, side >= 24 px";
-    case Geo::small: return "fully visible, side < 24 px";
-    case Geo::partial: return "partly in the image";
-    case Geo::out_of_view: return "out of view / behind";
-    case Geo::occluded: return "fully occluded";
+    case Geo::visible:
+      return "fully visible, side >= 24 px";
+    case Geo::small:
+      return "fully visible, side < 24 px";
+    case Geo::partial:
+      return "partly in the image";
+    case Geo::out_of_view:
+      return "out of view / behind";
+    case Geo::occluded:
+      return "fully occluded";
   }
   return "?";
 }
@@ -39,15 +44,16 @@ TEST(Visibility, DetectionAgreesWithGeometry) {
   for (double z : {1.0, 2.0, 4.0, 6.0, 9.0})
     for (double x = -2.2; x <= 2.2; x += 0.2, ++frame) {
       const double xs = x * z / 2.0;  // same angular sweep at every depth
-      const obs::SE3 g = facing_pose(z, xs, 0.1 * std::sin(frame), {0.3 * std::sin(0.7 * frame),
-                                                                   0.25 * std::cos(frame), 0.4 * frame});
+      const obs::SE3 g =
+          facing_pose(z, xs, 0.1 * std::sin(frame),
+                      {0.3 * std::sin(0.7 * frame), 0.25 * std::cos(frame), 0.4 * frame});
       const auto c = testing::project_corners(calib, g, size);
       int inside = 0;
       double side = 1e9;
       double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
       for (size_t k = 0; k < 4; ++k) {
-        inside += c[k].x >= 2 && c[k].y >= 2 && c[k].x <= calib.width - 3 &&
-                  c[k].y <= calib.height - 3;
+        inside +=
+            c[k].x >= 2 && c[k].y >= 2 && c[k].x <= calib.width - 3 && c[k].y <= calib.height - 3;
         side = std::min(side, cv::norm(c[(k + 1) % 4] - c[k]));
         x0 = std::min(x0, c[k].x);
         y0 = std::min(y0, c[k].y);
@@ -74,16 +80,20 @@ TEST(Visibility, DetectionAgreesWithGeometry) {
       opt.supersample = 2;  // geometry classification only; keeps the sweep fast
       opt.seed = static_cast<std::uint64_t>(frame);
       Geo geo;
-      if (!any_in) geo = Geo::out_of_view;
+      if (!any_in)
+        geo = Geo::out_of_view;
       else if (all_in && frame % 7 == 3) {
         geo = Geo::occluded;
         opt.occluders = {cv::Rect(cv::Point(int(printed.x) - 2, int(printed.y) - 2),
                                   cv::Point(int(printed.br().x) + 3, int(printed.br().y) + 3))};
-      } else if (all_in && inside == 4) geo = side >= 24 ? Geo::visible : Geo::small;
-      else geo = Geo::partial;
+      } else if (all_in && inside == 4)
+        geo = side >= 24 ? Geo::visible : Geo::small;
+      else
+        geo = Geo::partial;
       const cv::Mat img = testing::render_tags(calib, {{0, size, g, {}}}, opt);
       const bool detected = det.detect(img, &calib).status == TargetStatus::detected;
-      if (std::getenv("NETVMO_DUMP")) cv::imwrite("/tmp/vis_" + std::to_string(frame) + ".png", img);
+      if (std::getenv("NETVMO_DUMP"))
+        cv::imwrite("/tmp/vis_" + std::to_string(frame) + ".png", img);
       ++table[static_cast<int>(geo)][detected];
       if (geo == Geo::visible) {
         EXPECT_TRUE(detected) << "frame " << frame << " z " << z << " side " << side;
@@ -92,8 +102,10 @@ TEST(Visibility, DetectionAgreesWithGeometry) {
         EXPECT_FALSE(detected) << "frame " << frame << " " << name(geo);
       }
     }
-  std::printf("| geometry (synthetic sweep, 640x480, 2x2 supersampling, distortion, noise 2) | detected | not detected |\n"
-              "|---|---|---|\n");
+  std::printf(
+      "| geometry (synthetic sweep, 640x480, 2x2 supersampling, distortion, noise 2) | detected | "
+      "not detected |\n"
+      "|---|---|---|\n");
   for (int gi = 0; gi < 5; ++gi)
     std::printf("| %s | %d | %d |\n", name(static_cast<Geo>(gi)), table[gi][1], table[gi][0]);
   EXPECT_GT(table[0][1], 20);  // the sweep really contains visible frames

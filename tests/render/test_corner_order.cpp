@@ -48,7 +48,8 @@ TEST(CornerOrder, DetectionCornerKIsProjectedCornerK) {
   for (int id : {0, 7}) {
     for (double angle : {0.0, M_PI / 2, M_PI, -M_PI / 2, 0.6}) {
       SCOPED_TRACE("id " + std::to_string(id) + " in-plane angle " + std::to_string(angle));
-      auto scene = testing::single_tag_scene(testing::facing_pose(Vec3(0.05, -0.03, 1.2), Vec3(0.25, -0.2, angle)));
+      auto scene = testing::single_tag_scene(
+          testing::facing_pose(Vec3(0.05, -0.03, 1.2), Vec3(0.25, -0.2, angle)));
       scene.target.tag.id = id;
       scene.imaging.noise = true;  // the detector must work on realistic images
       Renderer r(scene);
@@ -70,8 +71,9 @@ TEST(CornerOrder, DetectionCornerKIsProjectedCornerK) {
     }
   }
   const Vec2 mean = offset_sum / n;
-  std::printf("mean (libapriltag corner - projected OpenCV corner) = (%.3f, %.3f) px over %d corners\n",
-              mean.x(), mean.y(), n);
+  std::printf(
+      "mean (libapriltag corner - projected OpenCV corner) = (%.3f, %.3f) px over %d corners\n",
+      mean.x(), mean.y(), n);
   // The documented +0.5 px offset of libapriltag's corners, measured.
   EXPECT_NEAR(mean.x(), 0.5, 0.2);
   EXPECT_NEAR(mean.y(), 0.5, 0.2);
@@ -81,7 +83,8 @@ TEST(CornerOrder, DetectionCornerKIsProjectedCornerK) {
 // the ground truth uses forward: an off-centre tag, displaced ~4 px by distortion, is detected at
 // the distorted projection (an undistorted or doubly distorted ray table misses by 4-8 px).
 TEST(CornerOrder, DistortedCameraDetectionMatchesDistortedProjection) {
-  auto scene = testing::single_tag_scene(testing::facing_pose(Vec3(0.3, 0.2, 1.0), Vec3(0.1, -0.2, 0.3)));
+  auto scene =
+      testing::single_tag_scene(testing::facing_pose(Vec3(0.3, 0.2, 1.0), Vec3(0.1, -0.2, 0.3)));
   scene.cameras[0].intrinsics.dist = {-0.25, 0.08, 0.002, -0.001, 0.0};
   scene.imaging.noise = true;
   Renderer r(scene);

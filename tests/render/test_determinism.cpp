@@ -8,7 +8,8 @@ namespace netvmo::render {
 namespace {
 
 SceneDescription noisy_scene(std::uint64_t seed, int threads) {
-  auto s = testing::single_tag_scene(testing::facing_pose(Vec3(0.1, 0, 1.5), Vec3(0.2, 0.3, 0.1)), 4);
+  auto s =
+      testing::single_tag_scene(testing::facing_pose(Vec3(0.1, 0, 1.5), Vec3(0.2, 0.3, 0.1)), 4);
   s.imaging.noise = true;
   s.imaging.seed = seed;
   s.imaging.threads = threads;

@@ -61,7 +61,8 @@ TEST(Visibility, HalfOccluded) {
   const FrameTruth t = r.truth(0, 0);
   EXPECT_TRUE(t.in_fov);
   EXPECT_NEAR(t.visible_fraction, 0.5, 0.1);
-  // The image agrees: the tag's left image half shows the (uniform grey) wall, the right half the tag.
+  // The image agrees: the tag's left image half shows the (uniform grey) wall, the right half the
+  // tag.
   const cv::Mat img = r.render(0, 0);
   const int row = 240;
   int dark_left = 0, dark_right = 0;

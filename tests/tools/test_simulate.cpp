@@ -68,15 +68,18 @@ TEST(Simulation, SteadyStatePositionsSolveTheLinearEquationForBothGains) {
     const auto r = sim::simulate(sk);
     const Eigen::MatrixXd P = (sk.k_e * D + k_s * L).fullPivLu().solve(sk.k_e * D * Po);
     for (int i = 0; i < n; ++i)
-      EXPECT_LT((r.estimates_world.back()[static_cast<size_t>(i)].translation() - P.row(i).transpose()).norm(), 1e-6)
+      EXPECT_LT(
+          (r.estimates_world.back()[static_cast<size_t>(i)].translation() - P.row(i).transpose())
+              .norm(),
+          1e-6)
           << "k_s " << k_s << " camera " << i + 1;
   }
 }
 
 TEST(Simulation, LargerMutualGainSettlesLowerForBothErrorModels) {
-  for (const auto& [file, e] : {std::pair{"paper5.yaml", "exact"},
-                                std::pair{"paper5_jacobian.yaml", "exact"},
-                                std::pair{"paper5_jacobian.yaml", "jacobian"}}) {
+  for (const auto& [file, e] :
+       {std::pair{"paper5.yaml", "exact"}, std::pair{"paper5_jacobian.yaml", "exact"},
+        std::pair{"paper5_jacobian.yaml", "jacobian"}}) {
     const auto r1 = run(file, 1, e), r50 = run(file, 50, e);
     EXPECT_LT(r50.energies.back().U_p, r1.energies.back().U_p) << file << " " << e;
     EXPECT_LT(r50.energies.back().U_R, r1.energies.back().U_R) << file << " " << e;
@@ -94,7 +97,8 @@ TEST(Simulation, CameraTwoIsTheOutlierAtUnitGain) {
   const auto worst = std::max_element(err.begin(), err.end()) - err.begin();
   EXPECT_EQ(worst, 1) << "camera 2 (index 1) should be farthest from g*";
   const auto r50 = run("paper5.yaml", 50, "exact");
-  for (const auto& g : r50.estimates_world.back()) EXPECT_LT(orientation_error(g, r50.g_star), err[1] / 5);
+  for (const auto& g : r50.estimates_world.back())
+    EXPECT_LT(orientation_error(g, r50.g_star), err[1] / 5);
 }
 
 TEST(Simulation, TurnedCamerasGiveThePrintedOrientationTransientExactly) {
@@ -103,7 +107,8 @@ TEST(Simulation, TurnedCamerasGiveThePrintedOrientationTransientExactly) {
   const auto a = run("paper5.yaml", 50, "exact");
   const auto b = run("paper5_jacobian.yaml", 50, "exact");
   ASSERT_EQ(a.t.size(), b.t.size());
-  for (size_t k = 0; k < a.t.size(); k += 30) EXPECT_NEAR(a.energies[k].U_R, b.energies[k].U_R, 1e-9);
+  for (size_t k = 0; k < a.t.size(); k += 30)
+    EXPECT_NEAR(a.energies[k].U_R, b.energies[k].U_R, 1e-9);
 }
 
 TEST(Simulation, FacingAwayInitialEstimateTrapsTheFeatureObserver) {
@@ -120,16 +125,17 @@ TEST(Simulation, FacingAwayInitialEstimateTrapsTheFeatureObserver) {
 
 TEST(Simulation, JacobianModelOutputsFiles) {
   const fs::path dir = test::scratch_dir("sim_cli");
-  const auto c = test::run_netvmo("simulate " + (kSource / "datasets/paper5_jacobian.yaml").string() +
-                                " --ks 50 --duration 5 --out " + (dir / "out").string(),
-                            dir);
+  const auto c =
+      test::run_netvmo("simulate " + (kSource / "datasets/paper5_jacobian.yaml").string() +
+                           " --ks 50 --duration 5 --out " + (dir / "out").string(),
+                       dir);
   ASSERT_EQ(c.code, 0) << c.err;
   const fs::path out = dir / "out";
   EXPECT_EQ(slurp(out / "energies.csv").substr(0, 10), "t,U_p,U_R\n");
   EXPECT_EQ(slurp(out / "estimates.csv").substr(0, 29), "t,camera,px,py,pz,rx,ry,rz\n0,");
   const auto j = nlohmann::json::parse(slurp(out / "summary.json"));
-  for (const char* key : {"p_star", "xitheta_star", "U_p_final", "U_R_final", "eps_p", "eps_R",
-                          "W", "diameter"})
+  for (const char* key :
+       {"p_star", "xitheta_star", "U_p_final", "U_R_final", "eps_p", "eps_R", "W", "diameter"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["error"], "jacobian");
   EXPECT_GT(fs::file_size(out / "energies.png"), 10000u);
@@ -146,9 +152,9 @@ test::CliResult run_modified(const std::string& from, const std::string& to, con
   EXPECT_NE(pos, std::string::npos) << from;
   s.replace(pos, from.size(), to);
   std::ofstream(dir / "bad.yaml") << s;
-  return test::run_netvmo("simulate " + (dir / "bad.yaml").string() + " --no-plots --out " +
-                        (dir / "out").string(),
-                    dir);
+  return test::run_netvmo(
+      "simulate " + (dir / "bad.yaml").string() + " --no-plots --out " + (dir / "out").string(),
+      dir);
 }
 }  // namespace
 
@@ -158,12 +164,15 @@ TEST(SimulationErrors, BadScenariosNameTheFileAndKey) {
     std::string from, to, expect;
   } cases[] = {
       {"fps: 30", "fsp: 30", "bad.yaml: fsp: unknown key"},
-      {"gains: {k_e: 1, k_s: 50}", "gains: {k_e: 1, k_s: fast}", "bad.yaml: gains.k_s: expected a number, got 'fast'"},
-      {"- {id: 4, p_wi: [-1, 0, 0], r_wi: [0, 0, 0]}", "- {id: 4, p_wi: [-1, 0], r_wi: [0, 0, 0]}", "bad.yaml: cameras[3].p_wi: expected 3 numbers"},
-      {"- {id: 5, p_wi: [0, -1, 0], r_wi: [0, 0, 0]}", "- {id: 5, p_wi: [0, -1, 0], r_wi: }", "bad.yaml: cameras[4].r_wi: missing value"},
+      {"gains: {k_e: 1, k_s: 50}", "gains: {k_e: 1, k_s: fast}",
+       "bad.yaml: gains.k_s: expected a number, got 'fast'"},
+      {"- {id: 4, p_wi: [-1, 0, 0], r_wi: [0, 0, 0]}", "- {id: 4, p_wi: [-1, 0], r_wi: [0, 0, 0]}",
+       "bad.yaml: cameras[3].p_wi: expected 3 numbers"},
+      {"- {id: 5, p_wi: [0, -1, 0], r_wi: [0, 0, 0]}", "- {id: 5, p_wi: [0, -1, 0], r_wi: }",
+       "bad.yaml: cameras[4].r_wi: missing value"},
       {"[4, 5]]", "[4, 9]]", "bad.yaml: edges[5]: unknown camera id 9"},
-      {"edges: [[1, 2], [1, 3], [1, 5], [2, 3], [3, 4], [4, 5]]", "edges: [[1, 2], [1, 3], [2, 3], [4, 5]]",
-       "components {1,2,3} {4,5}"},
+      {"edges: [[1, 2], [1, 3], [1, 5], [2, 3], [3, 4], [4, 5]]",
+       "edges: [[1, 2], [1, 3], [2, 3], [4, 5]]", "components {1,2,3} {4,5}"},
   };
   for (const auto& c : cases) {
     const auto r = run_modified(c.from, c.to, dir);
@@ -179,10 +188,14 @@ TEST(SimulationErrors, FailedRunLeavesEarlierResultsIntact) {
   const fs::path dir = test::scratch_dir("sim_keep");
   const std::string out = (dir / "out").string();
   ASSERT_EQ(test::run_netvmo("simulate " + (kSource / "datasets/paper5.yaml").string() +
-                           " --duration 1 --no-plots --out " + out, dir).code, 0);
+                                 " --duration 1 --no-plots --out " + out,
+                             dir)
+                .code,
+            0);
   const std::string before = slurp(dir / "out" / "summary.json");
   std::ofstream(dir / "broken.yaml") << "fps: [\n";
-  const auto r = test::run_netvmo("simulate " + (dir / "broken.yaml").string() + " --out " + out, dir);
+  const auto r =
+      test::run_netvmo("simulate " + (dir / "broken.yaml").string() + " --out " + out, dir);
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.err.find("broken.yaml: invalid YAML"), std::string::npos) << r.err;
   EXPECT_EQ(slurp(dir / "out" / "summary.json"), before);

@@ -37,7 +37,8 @@ cv::Mat bench_frame(const Calibration& calib) {
   cv::Mat tag(cells * px, cells * px, CV_8UC1, cv::Scalar(230));
   for (int r = 0; r < total; ++r)
     for (int c = 0; c < total; ++c)
-      tag(cv::Rect((c + 1) * px, (r + 1) * px, px, px)).setTo(im->buf[r * im->stride + c] > 127 ? 230 : 20);
+      tag(cv::Rect((c + 1) * px, (r + 1) * px, px, px))
+          .setTo(im->buf[r * im->stride + c] > 127 ? 230 : 20);
   std::free(im->buf);
   std::free(im);
   const int wb = fam->width_at_border;
@@ -46,8 +47,8 @@ cv::Mat bench_frame(const Calibration& calib) {
   const double s = 0.2, h = s / 2;
   std::vector<cv::Point3d> obj = {{-h, -h, 0}, {h, -h, 0}, {h, h, 0}, {-h, h, 0}};
   const double a = (border + 1) * px, b = (border + 1 + wb) * px;
-  std::vector<cv::Point2f> src = {{float(a), float(b)}, {float(b), float(b)}, {float(b), float(a)},
-                                  {float(a), float(a)}};
+  std::vector<cv::Point2f> src = {
+      {float(a), float(b)}, {float(b), float(b)}, {float(b), float(a)}, {float(a), float(a)}};
   std::vector<cv::Point2d> img;
   // facing the camera (rotation pi about x) with a small tilt, 2 m away
   cv::Matx33d R1, R2;
@@ -61,8 +62,9 @@ cv::Mat bench_frame(const Calibration& calib) {
   // clutter: a few dark and bright rectangles
   cv::RNG rng(42);
   for (int i = 0; i < 12; ++i)
-    cv::rectangle(frame, cv::Rect(rng.uniform(0, 600), rng.uniform(0, 440), rng.uniform(10, 80),
-                                  rng.uniform(10, 80)),
+    cv::rectangle(frame,
+                  cv::Rect(rng.uniform(0, 600), rng.uniform(0, 440), rng.uniform(10, 80),
+                           rng.uniform(10, 80)),
                   cv::Scalar(rng.uniform(0, 255)), cv::FILLED);
   // the quiet-zone square maps through the same homography
   const cv::Mat H = cv::getPerspectiveTransform(src, dst);
@@ -144,7 +146,7 @@ void BM_FrontEndRendered(benchmark::State& state) {
   const int cam = static_cast<int>(state.range(0));
   const bool tracking = state.range(1) != 0;
   auto scene = netvmo::io::load_render_scenario(std::string(NETVMO_SOURCE_DIR) +
-                                                      "/datasets/paper5_render.yaml");
+                                                "/datasets/paper5_render.yaml");
   netvmo::render::Renderer r(scene);
   const cv::Mat frame = r.render(cam, 0);
   const auto& k = scene.cameras[static_cast<size_t>(cam)].intrinsics;
@@ -162,7 +164,8 @@ void BM_FrontEndRendered(benchmark::State& state) {
   bool detected = false;
   for (auto _ : state) detected = fe.observe(frame, calib, nullptr, &track).delta;
   state.SetLabel(std::string("rendered camera ") + std::to_string(cam + 1) +
-                 (detected ? " (tag)" : " (no tag)") + (tracking ? ", tracking window" : ", full frame"));
+                 (detected ? " (tag)" : " (no tag)") +
+                 (tracking ? ", tracking window" : ", full frame"));
 }
 
 }  // namespace
@@ -174,7 +177,11 @@ BENCHMARK(BM_FrontEndRendered)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MinTime(2.0);
-BENCHMARK(BM_AprilTagOnly)->Args({2, 1})->Args({2, 2})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_AprilTagOnly)
+    ->Args({2, 1})
+    ->Args({2, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_RefineOnly)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
 
 // args: quad_decimate, refinement (0 none, 1 subpix, 2 edges), min_white_black_diff

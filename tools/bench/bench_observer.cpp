@@ -29,7 +29,8 @@ void BM_ObserverFrame(benchmark::State& state, const char* error_model) {
   for (int i = 0; i < n; ++i) {
     const double a = 2.0 * 3.14159265358979 * i / n;
     // Cameras on a circle looking at the origin region, every third one seeing the target.
-    g_wi[static_cast<size_t>(i)] = make_pose(Vec3(3 * std::cos(a), 3 * std::sin(a), 0), Vec3(0, 0, a));
+    g_wi[static_cast<size_t>(i)] =
+        make_pose(Vec3(3 * std::cos(a), 3 * std::sin(a), 0), Vec3(0, 0, a));
     g_bar[static_cast<size_t>(i)] = make_pose(Vec3(0, 0, 2), Vec3(3.0, 0, 0));
     if (i % 3 == 0) {
       auto& zi = z[static_cast<size_t>(i)];
@@ -49,18 +50,25 @@ void BM_ObserverFrame(benchmark::State& state, const char* error_model) {
   state.SetComplexityN(work);
   state.counters["cameras"] = n;
   state.counters["substeps"] = obs.substeps(dt);
-  state.counters["ns_per_(n+|E|)"] = benchmark::Counter(
-      static_cast<double>(work), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["ns_per_(n+|E|)"] =
+      benchmark::Counter(static_cast<double>(work), benchmark::Counter::kIsIterationInvariantRate |
+                                                        benchmark::Counter::kInvert);
   state.SetItemsProcessed(state.iterations() * work);
 }
 }  // namespace
 
 BENCHMARK_CAPTURE(BM_ObserverFrame, pose_error, "exact")
-    ->Arg(5)->Arg(100)->Arg(1000)->Arg(10000)
+    ->Arg(5)
+    ->Arg(100)
+    ->Arg(1000)
+    ->Arg(10000)
     ->Unit(benchmark::kMicrosecond)
     ->Complexity(benchmark::oN);
 BENCHMARK_CAPTURE(BM_ObserverFrame, feature_error, "jacobian")
-    ->Arg(5)->Arg(100)->Arg(1000)->Arg(10000)
+    ->Arg(5)
+    ->Arg(100)
+    ->Arg(1000)
+    ->Arg(10000)
     ->Unit(benchmark::kMicrosecond)
     ->Complexity(benchmark::oN);
 

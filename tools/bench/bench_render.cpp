@@ -22,7 +22,8 @@ std::unique_ptr<Renderer> make_renderer(int spp, bool shadows = true, bool textu
   if (!textures) {
     for (auto& b : scene.occluders)
       for (auto& sh : b.shapes) sh.material.pattern = netvmo::render::Material::Pattern::Solid;
-    for (auto& sh : scene.target.shapes) sh.material.pattern = netvmo::render::Material::Pattern::Solid;
+    for (auto& sh : scene.target.shapes)
+      sh.material.pattern = netvmo::render::Material::Pattern::Solid;
   }
   return std::make_unique<Renderer>(scene);
 }
@@ -38,10 +39,15 @@ void BM_RenderFrame(benchmark::State& state) {
     benchmark::DoNotOptimize(img.data);
   }
   const double rays = double(640 * 480) * spp;
-  state.counters["primary_rays/s"] = benchmark::Counter(rays * double(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["primary_rays/s"] =
+      benchmark::Counter(rays * double(state.iterations()), benchmark::Counter::kIsRate);
   state.counters["threads"] = std::thread::hardware_concurrency();
 }
-BENCHMARK(BM_RenderFrame)->ArgsProduct({{1, 4}, {0, 4}})->ArgNames({"spp", "cam"})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderFrame)
+    ->ArgsProduct({{1, 4}, {0, 4}})
+    ->ArgNames({"spp", "cam"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // Cost breakdown: the same frame without shadow rays, and without shadows or procedural
 // textures (solid albedo; the tag texture stays).
@@ -53,10 +59,14 @@ void BM_RenderFrameNoShadows(benchmark::State& state) {
     cv::Mat img = r->render(0, 0);
     benchmark::DoNotOptimize(img.data);
   }
-  state.counters["primary_rays/s"] =
-      benchmark::Counter(double(640 * 480) * spp * double(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["primary_rays/s"] = benchmark::Counter(
+      double(640 * 480) * spp * double(state.iterations()), benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_RenderFrameNoShadows)->ArgsProduct({{1, 4}, {1, 0}})->ArgNames({"spp", "textures"})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderFrameNoShadows)
+    ->ArgsProduct({{1, 4}, {1, 0}})
+    ->ArgNames({"spp", "textures"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // Bare rtcIntersect1 loop, no shading, over `threads` threads.
 void BM_BareIntersect1(benchmark::State& state) {
@@ -66,7 +76,8 @@ void BM_BareIntersect1(benchmark::State& state) {
   const int cam = int(state.range(1));
   for (auto _ : state) benchmark::DoNotOptimize(r->intersect_bare(cam, 0, threads));
   const double rays = double(640 * 480) * spp;
-  state.counters["primary_rays/s"] = benchmark::Counter(rays * double(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["primary_rays/s"] =
+      benchmark::Counter(rays * double(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_BareIntersect1)
     ->ArgsProduct({{1, 4}, {0, 4}, {1, 2}})

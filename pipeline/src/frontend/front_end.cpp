@@ -6,8 +6,8 @@ namespace netvmo::frontend {
 
 Eigen::Matrix<double, 8, 1> normalized_features(const std::array<cv::Point2d, 4>& corners_px,
                                                 const io::Calibration& calib) {
-  const auto xy = io::normalize_points(std::vector<cv::Point2d>(corners_px.begin(), corners_px.end()),
-                                   calib);
+  const auto xy =
+      io::normalize_points(std::vector<cv::Point2d>(corners_px.begin(), corners_px.end()), calib);
   Eigen::Matrix<double, 8, 1> f;
   for (int k = 0; k < 4; ++k) {
     f[2 * k] = xy[static_cast<size_t>(k)].x;

@@ -1,12 +1,12 @@
 #include "netvmo/pipeline/frontend/pnp.hpp"
 
-#include <cmath>
-#include <opencv2/calib3d.hpp>
-#include <stdexcept>
 #include <visp3/core/vpException.h>
 #include <visp3/core/vpHomogeneousMatrix.h>
 #include <visp3/core/vpPoint.h>
 #include <visp3/vision/vpPose.h>
+#include <cmath>
+#include <opencv2/calib3d.hpp>
+#include <stdexcept>
 
 namespace netvmo::frontend {
 
@@ -15,7 +15,8 @@ namespace {
 obs::SE3 to_se3(const vpHomogeneousMatrix& M) {
   obs::SE3 g = obs::SE3::Identity();
   for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) g.linear()(r, c) = M[static_cast<unsigned>(r)][static_cast<unsigned>(c)];
+    for (int c = 0; c < 3; ++c)
+      g.linear()(r, c) = M[static_cast<unsigned>(r)][static_cast<unsigned>(c)];
     g.translation()[r] = M[static_cast<unsigned>(r)][3];
   }
   return g;
@@ -44,7 +45,8 @@ std::optional<PnpResult> pnp_pose(const Eigen::VectorXd& f, const obs::FeatureMo
     const auto& P = model.points_o[l];
     vpPoint p;
     p.setWorldCoordinates(P.x(), P.y(), P.z());
-    const double x = f[static_cast<Eigen::Index>(2 * l)], y = f[static_cast<Eigen::Index>(2 * l + 1)];
+    const double x = f[static_cast<Eigen::Index>(2 * l)],
+                 y = f[static_cast<Eigen::Index>(2 * l + 1)];
     p.set_x(x);
     p.set_y(y);
     pts.push_back(p);

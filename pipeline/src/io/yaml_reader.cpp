@@ -98,7 +98,9 @@ void MapReader::fail(const std::string& what) const {
   throw InputError(file_ + ": " + (path_.empty() ? std::string("(root)") : path_) + ": " + what);
 }
 
-bool MapReader::has(const std::string& key) const { return static_cast<bool>(node_[key]); }
+bool MapReader::has(const std::string& key) const {
+  return static_cast<bool>(node_[key]);
+}
 
 Value MapReader::get(const std::string& key) {
   used_.insert(key);

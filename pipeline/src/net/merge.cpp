@@ -103,8 +103,8 @@ std::vector<Row> read_node_csv(const fs::path& file, int frames, bool allow_gaps
 }  // namespace
 
 run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
-                                     const run::ImageRunOptions& options,
-                                     const fs::path& nodes_dir, int frames, bool allow_gaps) {
+                                const run::ImageRunOptions& options, const fs::path& nodes_dir,
+                                int frames, bool allow_gaps) {
   const io::NetworkConfig& net = provider.network();
   const size_t n = net.cameras.size();
   const obs::Graph graph = run::network_graph(net);

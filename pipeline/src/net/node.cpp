@@ -12,8 +12,8 @@
 
 #include "netvmo/observer/camera_observer.hpp"
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/io/atomic_file.hpp"
 #include "netvmo/pipeline/frontend/pnp.hpp"
+#include "netvmo/pipeline/io/atomic_file.hpp"
 
 namespace netvmo::net {
 namespace fs = std::filesystem;
@@ -44,8 +44,8 @@ void put(std::string& s, double v) {
   s += b;
 }
 
-std::string frame_row(int k, double t, const run::CameraFrame& cam,
-                      const obs::CameraObserver& net, const obs::CameraObserver& ind) {
+std::string frame_row(int k, double t, const run::CameraFrame& cam, const obs::CameraObserver& net,
+                      const obs::CameraObserver& ind) {
   std::string s = std::to_string(k);
   put(s, t);
   s += "," + std::to_string(cam.obs.delta ? 1 : 0) + "," + std::to_string(cam.read_failed ? 1 : 0) +

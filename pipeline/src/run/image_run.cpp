@@ -26,7 +26,8 @@ obs::Graph network_graph(const io::NetworkConfig& net) {
     std::vector<int> labels;
     for (const auto& c : net.cameras) labels.push_back(c.id);
     throw InputError(net.source + ": edges: the communication graph is disconnected " +
-                     "(Assumption 1); components " + obs::describe_components(g.components(), labels) +
+                     "(Assumption 1); components " +
+                     obs::describe_components(g.components(), labels) +
                      ": add an edge joining them");
   }
   return g;
@@ -100,7 +101,7 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
           continue;
         }
         cams[i].obs = front_ends[static_cast<size_t>(w)].observe(images[i], provider.calibration(i),
-                                                                  nullptr, &tracks[i]);
+                                                                 nullptr, &tracks[i]);
         if (cams[i].obs.delta) {
           const auto pose = frontend::pnp_pose(cams[i].obs.f_normalized, model);
           if (pose) cams[i].g_io_pnp = pose->g_io;

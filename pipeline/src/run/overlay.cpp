@@ -16,7 +16,8 @@ const cv::Scalar kDetected(60, 220, 60), kEstimate(220, 60, 220), kText(255, 255
 void polygon(cv::Mat& img, const std::vector<cv::Point2d>& pts, const cv::Scalar& color) {
   constexpr int kShift = 4;  // sub-pixel drawing
   std::vector<cv::Point> p;
-  for (const auto& q : pts) p.emplace_back(cvRound(q.x * (1 << kShift)), cvRound(q.y * (1 << kShift)));
+  for (const auto& q : pts)
+    p.emplace_back(cvRound(q.x * (1 << kShift)), cvRound(q.y * (1 << kShift)));
   cv::polylines(img, p, true, color, 2, cv::LINE_AA, kShift);
   cv::circle(img, p[0], 5 << kShift, color, 2, cv::LINE_AA, kShift);  // corner 0
 }
@@ -31,7 +32,8 @@ cv::Mat draw_overlay(const cv::Mat& gray, int camera_id, const io::Calibration& 
   else
     cv::cvtColor(gray, img, cv::COLOR_GRAY2BGR);
   if (cam.obs.delta)
-    polygon(img, std::vector<cv::Point2d>(cam.obs.corners_px.begin(), cam.obs.corners_px.end()), kDetected);
+    polygon(img, std::vector<cv::Point2d>(cam.obs.corners_px.begin(), cam.obs.corners_px.end()),
+            kDetected);
   if (rec.initialized) {
     const obs::SE3 g_bar = g_wi.inverse() * rec.est_w;  // the camera's own estimate g_bar_i
     const auto model = obs::FeatureModel::square(tag_size);
@@ -45,7 +47,9 @@ cv::Mat draw_overlay(const cv::Mat& gray, int camera_id, const io::Calibration& 
     if (in_front) polygon(img, io::denormalize_points(xy, calib), kEstimate);
   }
   const std::string label = "cam " + std::to_string(camera_id) +
-                            (cam.read_failed ? "  unreadable" : cam.obs.delta ? "  detected" : "  no target");
+                            (cam.read_failed ? "  unreadable"
+                             : cam.obs.delta ? "  detected"
+                                             : "  no target");
   cv::putText(img, label, {10, 24}, cv::FONT_HERSHEY_SIMPLEX, 0.7, kText, 2, cv::LINE_AA);
   cv::putText(img, "green: detection  magenta: networked estimate", {10, img.rows - 12},
               cv::FONT_HERSHEY_SIMPLEX, 0.45, kText, 1, cv::LINE_AA);
@@ -64,7 +68,8 @@ void OverlayWriter::operator()(int /*frame*/, const std::vector<cv::Mat>& images
   const auto& net = provider_.network();
   const size_t n = net.cameras.size();
   const int cols = std::max(1, std::min<int>(settings_.mosaic_columns, static_cast<int>(n)));
-  const int rows = static_cast<int>((n + static_cast<size_t>(cols) - 1) / static_cast<size_t>(cols));
+  const int rows =
+      static_cast<int>((n + static_cast<size_t>(cols) - 1) / static_cast<size_t>(cols));
   cv::Size tile;
   for (size_t i = 0; i < n; ++i) {
     const auto& calib = provider_.calibration(i);
@@ -74,28 +79,32 @@ void OverlayWriter::operator()(int /*frame*/, const std::vector<cv::Mat>& images
       if (videos_.size() <= i) videos_.resize(n);
       if (!videos_[i].isOpened()) {
         const fs::path file = dir_ / ("cam_" + std::to_string(net.cameras[i].id) + ".mp4");
-        videos_[i].open(file.string(), cv::VideoWriter::fourcc('m', 'p', '4', 'v'), net.fps, img.size());
-        if (!videos_[i].isOpened()) throw InputError(file.string() + ": cannot open video for writing");
+        videos_[i].open(file.string(), cv::VideoWriter::fourcc('m', 'p', '4', 'v'), net.fps,
+                        img.size());
+        if (!videos_[i].isOpened())
+          throw InputError(file.string() + ": cannot open video for writing");
       }
       videos_[i].write(img);
     }
     cv::Mat small;
-    cv::resize(img, small, cv::Size(), settings_.mosaic_scale, settings_.mosaic_scale, cv::INTER_AREA);
+    cv::resize(img, small, cv::Size(), settings_.mosaic_scale, settings_.mosaic_scale,
+               cv::INTER_AREA);
     if (i == 0) {
       tile = small.size();
       last_mosaic_ = cv::Mat(tile.height * rows, tile.width * cols, CV_8UC3, cv::Scalar(0, 0, 0));
     }
     if (small.size() != tile) cv::resize(small, small, tile);
-    small.copyTo(last_mosaic_(cv::Rect(static_cast<int>(i % static_cast<size_t>(cols)) * tile.width,
-                                      static_cast<int>(i / static_cast<size_t>(cols)) * tile.height,
-                                      tile.width, tile.height)));
+    small.copyTo(last_mosaic_(cv::Rect(
+        static_cast<int>(i % static_cast<size_t>(cols)) * tile.width,
+        static_cast<int>(i / static_cast<size_t>(cols)) * tile.height, tile.width, tile.height)));
   }
   if (settings_.video) {
     if (!mosaic_video_.isOpened()) {
       const fs::path file = dir_ / "mosaic.mp4";
       mosaic_video_.open(file.string(), cv::VideoWriter::fourcc('m', 'p', '4', 'v'), net.fps,
                          last_mosaic_.size());
-      if (!mosaic_video_.isOpened()) throw InputError(file.string() + ": cannot open video for writing");
+      if (!mosaic_video_.isOpened())
+        throw InputError(file.string() + ": cannot open video for writing");
     }
     mosaic_video_.write(last_mosaic_);
   }
@@ -106,7 +115,8 @@ void OverlayWriter::finish() {
   mosaic_video_.release();
   if (!last_mosaic_.empty()) {
     const fs::path png = dir_ / "mosaic.png", partial = dir_ / "mosaic.partial.png";
-    if (!cv::imwrite(partial.string(), last_mosaic_)) throw InputError(png.string() + ": cannot write");
+    if (!cv::imwrite(partial.string(), last_mosaic_))
+      throw InputError(png.string() + ": cannot write");
     fs::rename(partial, png);
   }
 }

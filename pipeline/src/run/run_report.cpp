@@ -40,7 +40,9 @@ class ErrorStats {
   int count_ = 0;
 };
 
-json vec3(const obs::Vec3& v) { return json::array({v.x(), v.y(), v.z()}); }
+json vec3(const obs::Vec3& v) {
+  return json::array({v.x(), v.y(), v.z()});
+}
 
 }  // namespace
 
@@ -117,8 +119,11 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
   double eps_p_tail = 0, eps_R_tail = 0;
   for (size_t k = 0; k < h.size(); ++k) {
     if (!h[k].energies) continue;
-    energy = {{"U_p", h[k].energies->U_p}, {"U_R", h[k].energies->U_R},
-              {"eps_p", h[k].eps->eps_p}, {"eps_R", h[k].eps->eps_R}, {"frame", h[k].frame}};
+    energy = {{"U_p", h[k].energies->U_p},
+              {"U_R", h[k].energies->U_R},
+              {"eps_p", h[k].eps->eps_p},
+              {"eps_R", h[k].eps->eps_R},
+              {"frame", h[k].frame}};
     if (h[k].energies_indep) {
       energy["U_p_independent_observers"] = h[k].energies_indep->U_p;
       energy["U_R_independent_observers"] = h[k].energies_indep->U_R;
@@ -131,10 +136,11 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
   s["final"] = energy;
   s["eps_p_last_quarter"] = energy.is_null() ? json(nullptr) : json(eps_p_tail);
   s["eps_R_last_quarter"] = energy.is_null() ? json(nullptr) : json(eps_R_tail);
-  s["timing"] = {{"seconds", result.seconds},
-                 {"front_end_seconds", result.seconds_front_end},
-                 {"observer_seconds", result.seconds_observer},
-                 {"network_frames_per_second", result.seconds > 0 ? h.size() / result.seconds : 0.0}};
+  s["timing"] = {
+      {"seconds", result.seconds},
+      {"front_end_seconds", result.seconds_front_end},
+      {"observer_seconds", result.seconds_observer},
+      {"network_frames_per_second", result.seconds > 0 ? h.size() / result.seconds : 0.0}};
   s["warnings"] = result.warnings;
   return s;
 }
@@ -168,13 +174,15 @@ json write_run_outputs(const fs::path& dir, const sources::NetworkSource& provid
     io::AtomicFile f(dir / "energies.csv");
     f << "frame,t,U_p,U_R\n";
     for (const auto& r : h)
-      if (r.energies) f << r.frame << ',' << r.t << ',' << r.energies->U_p << ',' << r.energies->U_R << '\n';
+      if (r.energies)
+        f << r.frame << ',' << r.t << ',' << r.energies->U_p << ',' << r.energies->U_R << '\n';
     f.commit();
   }
   {
     io::AtomicFile f(dir / "errors.csv");
     f << "frame,t";
-    for (const auto& c : net.cameras) f << ",cam" << c.id << "_position_mm,cam" << c.id << "_orientation_deg";
+    for (const auto& c : net.cameras)
+      f << ",cam" << c.id << "_position_mm,cam" << c.id << "_orientation_deg";
     f << '\n';
     for (const auto& r : h) {
       if (!r.g_star) continue;

@@ -62,6 +62,6 @@ PaperW paper_W(const Graph& g, int max_exact_nodes = 12);
 
 /// A human-readable description of components, e.g. "{1,2,3} {4,5}", with node labels.
 std::string describe_components(const std::vector<std::vector<int>>& comps,
-                                 const std::vector<int>& labels);
+                                const std::vector<int>& labels);
 
 }  // namespace netvmo::obs

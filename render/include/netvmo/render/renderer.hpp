@@ -26,10 +26,10 @@ namespace netvmo::render {
 /// Ground truth of one camera in one frame (all from the true poses).
 struct FrameTruth {
   int frame = 0;
-  double t = 0;                          ///< frame / fps [s]
+  double t = 0;  ///< frame / fps [s]
   int camera_id = 0;
-  Pose g_wo = Pose::Identity();          ///< true target pose in the world
-  Pose g_io = Pose::Identity();          ///< true target pose in the camera = g_wi^-1 g_wo
+  Pose g_wo = Pose::Identity();  ///< true target pose in the world
+  Pose g_io = Pose::Identity();  ///< true target pose in the camera = g_wi^-1 g_wo
   /// Tag corners c_k in the object frame: c0 (-s/2,-s/2,0), c1 (s/2,-s/2,0), c2 (s/2,s/2,0),
   /// c3 (-s/2,s/2,0), i.e. libapriltag's detection order; projected with distortion (OpenCV
   /// pixel centres). Empty (nullopt) for a corner behind the camera.

@@ -24,11 +24,11 @@ struct Shape {
   /// Box: full side lengths (x, y, z). Plane: (sx, sy, unused), normal +z.
   /// Cylinder: (radius, unused, height) with the axis along z.
   Vec3 size = Vec3(0.3, 0.3, 0.3);
-  int segments = 48;          ///< cylinder facets
-  Mesh mesh;                  ///< Kind::Mesh: vertices in the shape frame (e.g. from parse_obj)
+  int segments = 48;  ///< cylinder facets
+  Mesh mesh;          ///< Kind::Mesh: vertices in the shape frame (e.g. from parse_obj)
   Pose pose = Pose::Identity();
   Material material;
-  std::string name;           ///< for messages
+  std::string name;  ///< for messages
 };
 
 /// An occluder: static (no motion: its shapes' poses are in the world and its BVH is built
@@ -64,14 +64,14 @@ struct Light {
   /// Directional: irradiance factor on a surface facing the light. Point: the same at 1 m,
   /// falling off with 1 / d^2.
   double intensity = 0.7;
-  bool shadows = true;                    ///< cast shadow rays (rtcOccluded)
+  bool shadows = true;  ///< cast shadow rays (rtcOccluded)
 };
 
 /// Image formation. Pixel value DN = 255 * exposure * radiance + noise, clamped to [0, 255],
 /// radiance = albedo * (ambient + sum of lights), averaged over the samples of a pixel.
 struct Imaging {
-  int spp = 4;               ///< samples per pixel; perfect squares use an n x n stratified
-                             ///< grid, other counts a Hammersley pattern
+  int spp = 4;  ///< samples per pixel; perfect squares use an n x n stratified
+                ///< grid, other counts a Hammersley pattern
   double exposure = 1.0;
   double background = 0.55;  ///< radiance of rays that hit nothing
   double ambient = 0.3;      ///< ambient light level

@@ -8,15 +8,15 @@
 namespace netvmo::render {
 
 struct Keyframe {
-  double t = 0;                ///< time [s]
-  Pose g = Pose::Identity();   ///< pose at t
+  double t = 0;               ///< time [s]
+  Pose g = Pose::Identity();  ///< pose at t
 };
 
 struct Trajectory {
   enum class Kind { Static, Twist, Keyframes };
   Kind kind = Kind::Static;
-  Pose g0 = Pose::Identity();  ///< Static / Twist: pose at t = 0
-  Vec6 twist = Vec6::Zero();   ///< Twist: body twist [v; w] (m/s, rad/s): g(t) = g0 exp(t V^)
+  Pose g0 = Pose::Identity();       ///< Static / Twist: pose at t = 0
+  Vec6 twist = Vec6::Zero();        ///< Twist: body twist [v; w] (m/s, rad/s): g(t) = g0 exp(t V^)
   std::vector<Keyframe> keyframes;  ///< Keyframes: strictly increasing t; clamped outside
 
   /// Pose at time t [s]. Keyframes: g_k exp(s log(g_k^-1 g_k+1)) between keyframes k, k+1.

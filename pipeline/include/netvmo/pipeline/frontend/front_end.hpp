@@ -3,21 +3,21 @@
 
 #include <Eigen/Core>
 #include <array>
-#include <optional>
 #include <opencv2/core.hpp>
+#include <optional>
 
-#include "netvmo/pipeline/io/calibration.hpp"
 #include "netvmo/pipeline/frontend/tag_detector.hpp"
+#include "netvmo/pipeline/io/calibration.hpp"
 
 namespace netvmo::frontend {
 
 /// One camera's measurement of the target in one frame.
 struct TagObservation {
-  bool delta = false;             ///< delta_i(t): the target id was decoded and accepted
+  bool delta = false;  ///< delta_i(t): the target id was decoded and accepted
   TargetStatus status = TargetStatus::not_found;
-  int tag_id = -1;                ///< the target id when detected, else -1
+  int tag_id = -1;  ///< the target id when detected, else -1
   int hamming = 0;
-  double margin = 0.0;            ///< decision margin of the accepted detection
+  double margin = 0.0;                      ///< decision margin of the accepted detection
   std::array<cv::Point2d, 4> corners_px{};  ///< refined corners, OpenCV pixels
   /// Undistorted normalized coordinates [x0,y0,x1,y1,x2,y2,x3,y3], corner k matching
   /// obs::FeatureModel::square(size).points_o[k]. Zero when not detected.

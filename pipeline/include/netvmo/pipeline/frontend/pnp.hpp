@@ -14,7 +14,7 @@ namespace netvmo::frontend {
 
 struct PnpResult {
   obs::SE3 g_io = obs::SE3::Identity();  ///< object (tag) -> camera; ViSP's cMo
-  double residual = 0.0;  ///< RMS reprojection error in normalized coordinates
+  double residual = 0.0;                 ///< RMS reprojection error in normalized coordinates
 };
 
 /// Pose of the object in the camera from m >= 4 undistorted normalized image points

@@ -14,19 +14,19 @@
 // Every error is an InputError naming the file and, where it applies, the node.
 #pragma once
 
-#include <opencv2/core.hpp>
 #include <array>
 #include <filesystem>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
 namespace netvmo::io {
 
 struct Calibration {
-  int width = 0, height = 0;                      ///< image size in pixels
-  cv::Matx33d K = cv::Matx33d::eye();             ///< [fx 0 cx; 0 fy cy; 0 0 1]
-  cv::Vec<double, 5> dist = {0, 0, 0, 0, 0};      ///< k1, k2, p1, p2, k3
-  std::string source;                             ///< file it was read from (for messages)
+  int width = 0, height = 0;                  ///< image size in pixels
+  cv::Matx33d K = cv::Matx33d::eye();         ///< [fx 0 cx; 0 fy cy; 0 0 1]
+  cv::Vec<double, 5> dist = {0, 0, 0, 0, 0};  ///< k1, k2, p1, p2, k3
+  std::string source;                         ///< file it was read from (for messages)
 
   bool has_distortion() const { return cv::norm(dist) != 0.0; }
 };

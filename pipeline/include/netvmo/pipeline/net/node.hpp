@@ -16,14 +16,14 @@
 #include <string>
 #include <vector>
 
-#include "netvmo/pipeline/run/image_run.hpp"
 #include "netvmo/pipeline/net/dds_transport.hpp"
+#include "netvmo/pipeline/run/image_run.hpp"
 
 namespace netvmo::net {
 
 struct NodeOptions {
   run::ImageRunOptions run;  ///< gains, error model, initialisation, rounds, front end
-  int camera_id = 0;              ///< this node's camera (network.yaml id)
+  int camera_id = 0;         ///< this node's camera (network.yaml id)
   DdsSettings dds;
   /// The dataset's frame count (launch passes the whole dataset's; a node alone knows only its
   /// own camera's, or network.yaml's `frames`).
@@ -67,8 +67,8 @@ NodeSummary run_node(const std::filesystem::path& dataset, const std::filesystem
 /// blind and uninitialised there; otherwise every frame must be present. Throws InputError naming
 /// the file on a missing or malformed one.
 run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
-                                     const run::ImageRunOptions& options,
-                                     const std::filesystem::path& nodes_dir, int frames,
-                                     bool allow_gaps = false);
+                                const run::ImageRunOptions& options,
+                                const std::filesystem::path& nodes_dir, int frames,
+                                bool allow_gaps = false);
 
 }  // namespace netvmo::net

@@ -8,36 +8,37 @@
 #include <string>
 #include <vector>
 
-#include "netvmo/pipeline/sources/network_source.hpp"
 #include "netvmo/pipeline/frontend/front_end.hpp"
 #include "netvmo/pipeline/run/runner.hpp"
 #include "netvmo/pipeline/run/transports.hpp"
+#include "netvmo/pipeline/sources/network_source.hpp"
 
 namespace netvmo::run {
 
 struct ImageRunOptions {
   run::RunnerSettings runner;  ///< gains, error model, initialisation, rounds (tag size: dataset)
-  frontend::DetectorSettings detector;   ///< detector settings (family and target id: from the dataset)
-  frontend::TrackingSettings tracking;   ///< windowed search around the last detection
-  TransportSettings transport;  ///< how estimates travel between cameras (transports.hpp)
-  bool keep_going = false;     ///< an unreadable image blinds its camera for that frame (warning)
-                               ///< instead of stopping the run
-  int workers = 2;             ///< threads detecting cameras in parallel (one detector each)
+  frontend::DetectorSettings
+      detector;  ///< detector settings (family and target id: from the dataset)
+  frontend::TrackingSettings tracking;  ///< windowed search around the last detection
+  TransportSettings transport;          ///< how estimates travel between cameras (transports.hpp)
+  bool keep_going = false;  ///< an unreadable image blinds its camera for that frame (warning)
+                            ///< instead of stopping the run
+  int workers = 2;          ///< threads detecting cameras in parallel (one detector each)
   std::optional<int> max_frames;  ///< stop after this many frames
   bool progress = true;           ///< progress bar on stderr
 };
 
 /// What one camera made of one frame.
 struct CameraFrame {
-  frontend::TagObservation obs;              ///< detection (delta, corners, normalized features)
+  frontend::TagObservation obs;      ///< detection (delta, corners, normalized features)
   std::optional<obs::SE3> g_io_pnp;  ///< ViSP pose when detected
-  bool read_failed = false;        ///< the image could not be read (only with keep_going)
+  bool read_failed = false;          ///< the image could not be read (only with keep_going)
 };
 
 /// Called after each frame with the frame's images, the front-end results and the record.
-using FrameHook = std::function<void(int frame, const std::vector<cv::Mat>& images,
-                                     const std::vector<CameraFrame>& cams,
-                                     const run::FrameRecord& record)>;
+using FrameHook =
+    std::function<void(int frame, const std::vector<cv::Mat>& images,
+                       const std::vector<CameraFrame>& cams, const run::FrameRecord& record)>;
 
 struct ImageRunResult {
   std::vector<run::FrameRecord> history;
@@ -45,9 +46,9 @@ struct ImageRunResult {
   std::vector<std::string> warnings;
   int substeps = 0;
   double step_factor = 0.0;
-  double seconds = 0.0;             ///< wall time of the loop
-  double seconds_front_end = 0.0;   ///< of which reading + detection + PnP
-  double seconds_observer = 0.0;    ///< of which the observer and baselines
+  double seconds = 0.0;            ///< wall time of the loop
+  double seconds_front_end = 0.0;  ///< of which reading + detection + PnP
+  double seconds_observer = 0.0;   ///< of which the observer and baselines
 };
 
 /// The communication graph of network.yaml (camera indices in its order). Throws InputError

@@ -13,8 +13,8 @@
 namespace netvmo::run {
 
 struct OverlaySettings {
-  bool video = true;      ///< per-camera MP4s and mosaic.mp4
-  int mosaic_columns = 3; ///< cameras per mosaic row
+  bool video = true;          ///< per-camera MP4s and mosaic.mp4
+  int mosaic_columns = 3;     ///< cameras per mosaic row
   double mosaic_scale = 0.5;  ///< each camera's size in the mosaic
 };
 

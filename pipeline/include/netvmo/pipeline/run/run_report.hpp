@@ -27,7 +27,8 @@ nlohmann::json run_summary(const sources::NetworkSource& provider, const ImageRu
 /// (frame,t,U_p,U_R, only frames with ground truth), errors.csv (frame,t and per camera the
 /// networked observer's position [mm] and orientation [deg] error to g*) and summary.json, each
 /// atomically. Returns the summary.
-nlohmann::json write_run_outputs(const std::filesystem::path& dir, const sources::NetworkSource& provider,
+nlohmann::json write_run_outputs(const std::filesystem::path& dir,
+                                 const sources::NetworkSource& provider,
                                  const ImageRunOptions& options, const ImageRunResult& result);
 
 }  // namespace netvmo::run

@@ -17,22 +17,22 @@ namespace netvmo::sim {
 using obs::SE3;
 
 struct SimCamera {
-  int id = 0;                   ///< user-facing camera id (as in the scenario file)
-  SE3 g_wi = SE3::Identity();   ///< camera pose in the world
-  std::optional<SE3> g_wo;      ///< fictitious target pose o_i in the world; none = never sees it
+  int id = 0;                  ///< user-facing camera id (as in the scenario file)
+  SE3 g_wi = SE3::Identity();  ///< camera pose in the world
+  std::optional<SE3> g_wo;     ///< fictitious target pose o_i in the world; none = never sees it
 };
 
 /// A simulation scenario (datasets/paper5.yaml documents the file format).
 struct SimScenario {
   std::string name;
-  double fps = 30.0;        ///< observer update rate (frames per second)
-  double duration = 20.0;   ///< simulated seconds
-  double k_e = 1.0;         ///< visual feedback gain
-  double k_s = 50.0;        ///< mutual feedback gain
+  double fps = 30.0;       ///< observer update rate (frames per second)
+  double duration = 20.0;  ///< simulated seconds
+  double k_e = 1.0;        ///< visual feedback gain
+  double k_s = 50.0;       ///< mutual feedback gain
   /// Visual error model (observer/error_model.hpp): exact or jacobian. A simulation gives every
   /// camera its true relative pose and its projected features, not a PnP pose.
   std::string error_model = "exact";
-  double square_side = 0.2; ///< side of the m = 4 point square used by the jacobian model (m)
+  double square_side = 0.2;       ///< side of the m = 4 point square used by the jacobian model (m)
   SE3 initial = SE3::Identity();  ///< g_bar_i(0), the same in every camera's frame
   std::vector<SimCamera> cameras;
   std::vector<std::pair<int, int>> edges;  ///< camera indices (0-based)
@@ -52,8 +52,8 @@ struct SimResult {
   std::vector<double> t;
   std::vector<obs::Energies> energies;            ///< per sample
   std::vector<std::vector<SE3>> estimates_world;  ///< per sample, per camera
-  obs::EpsLevels eps_final;    ///< at the final time
-  obs::EpsLevels eps_tail;     ///< sup over the last quarter of the run (T = 3/4 duration)
+  obs::EpsLevels eps_final;                       ///< at the final time
+  obs::EpsLevels eps_tail;  ///< sup over the last quarter of the run (T = 3/4 duration)
 };
 
 SimResult simulate(const SimScenario& s);

@@ -5,14 +5,14 @@
 
 #include <filesystem>
 #include <memory>
-#include <optional>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "netvmo/pipeline/io/calibration.hpp"
-#include "netvmo/pipeline/sources/dataset.hpp"
 #include "netvmo/pipeline/io/network_config.hpp"
+#include "netvmo/pipeline/sources/dataset.hpp"
 
 namespace netvmo::sources {
 
