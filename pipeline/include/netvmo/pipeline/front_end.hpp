@@ -3,8 +3,9 @@
 
 #include <Eigen/Core>
 #include <array>
-#include <optional>
 #include <opencv2/core.hpp>
+#include <optional>
+#include <string>
 
 #include "netvmo/pipeline/calibration.hpp"
 #include "netvmo/pipeline/tag_detector.hpp"
@@ -15,6 +16,7 @@ namespace netvmo::pipeline {
 struct TagObservation {
   bool detected = false;          ///< delta_i(t): the target id was decoded and accepted
   TargetStatus status = TargetStatus::not_found;
+  std::string reason;             ///< why the target was rejected (empty when detected)
   int tag_id = -1;                ///< the target id when detected, else -1
   int hamming = 0;
   double margin = 0.0;            ///< decision margin of the accepted detection
