@@ -459,8 +459,13 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
     if (!std::isnan(w)) all_white.push_back(w);
   const double global_white = median(all_white);
 
-  char buf[200];
-  double worst = 0.0;  // how far the worst failing side exceeds its threshold (ratio)
+  // Pixels whose centre lies within 0.5 px of a side: in an image integrated over the pixel
+  // area (a camera, a supersampled rendering, any blur) those the edge crosses have
+  // intermediate values (14-99 % of them on the rendered and synthesized tags); in a
+  // point-sampled (aliased) image, such as a 1-sample-per-pixel rendering, none do (0-5 %), and
+  // every edge position is quantised to the pixel grid by up to 0.5 px, so the border's two
+  // edges may disagree by up to 1 px on a correct quad.
+  int near_side = 0, intermediate = 0;
   std::vector<double> near, offsets, ts;
   for (int k = 0; k < 4; ++k) {
     const size_t ks = static_cast<size_t>(k);
@@ -478,6 +483,19 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
       if (pass) {
         const double vq = sample_bilinear(gray, q.x, q.y), vb = sample_bilinear(gray, b.x, b.y);
         pass = white - vb > 0.0 && vq - vb >= s.border_min_contrast * (white - vb);
+        const double len = cv::norm(q - b);
+        if (pass && len > 0.0) {
+          const cv::Point2d mid = 0.5 * (q + b), n = (q - b) / len;
+          const int cx = cvRound(mid.x), cy = cvRound(mid.y);
+          for (int y = cy - 1; y <= cy + 1; ++y)
+            for (int x = cx - 1; x <= cx + 1; ++x) {
+              if (x < 0 || y < 0 || x >= gray.cols || y >= gray.rows) continue;
+              if (std::abs((cv::Point2d(x, y) - mid).dot(n)) > 0.5) continue;
+              const double f = (gray.at<uchar>(y, x) - vb) / (vq - vb);
+              ++near_side;
+              intermediate += f >= 0.15 && f <= 0.85;
+            }
+        }
       }
       failed += !pass;
     }
@@ -523,14 +541,22 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
       ts.push_back(edge_t[ks][i]);
     }
     out.thickness_error[ks] = end_offset(ts, offsets);
-    // A side fails on either test; the reason names the side that fails worst (relative to
-    // its threshold), which is the one on the occluder's outline when the others only inherit
-    // part of its error through the homography.
+  }
+  out.aliased = near_side >= 16 && intermediate < 0.1 * near_side;
+  out.thickness_limit = s.border_max_thickness_error + (out.aliased ? 0.5 : 0.0);
+
+  // A side fails on either test; the reason names the side that fails worst (relative to its
+  // threshold), which is the one on the occluder's outline when the others only inherit part
+  // of its error through the homography.
+  char buf[200];
+  double worst = 0.0;  // how far the worst failing side exceeds its threshold (ratio)
+  for (int k = 0; k < 4; ++k) {
+    const size_t ks = static_cast<size_t>(k);
+    const int failed = out.failed[ks];
     const double contrast_excess = failed / std::max(1.0, s.border_max_failed_fraction * m);
-    const double thickness_excess =
-        std::isnan(out.thickness_error[ks])
-            ? 0.0
-            : std::abs(out.thickness_error[ks]) / s.border_max_thickness_error;
+    const double thickness_excess = std::isnan(out.thickness_error[ks])
+                                        ? 0.0
+                                        : std::abs(out.thickness_error[ks]) / out.thickness_limit;
     const bool contrast_fails = failed > s.border_max_failed_fraction * m;
     const bool thickness_fails = thickness_excess > 1.0;
     if (!contrast_fails && !thickness_fails) continue;

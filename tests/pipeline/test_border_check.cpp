@@ -176,6 +176,44 @@ TEST(BorderCheck, CleanBlurredAndShadowedTagsKept) {
   EXPECT_EQ(n, 72);
 }
 
+// Point-sampled images (one sample per pixel, as a 1-spp rendering): an upright tag's edges
+// are quantised to the pixel grid, so its border's two edges can disagree by up to ~0.8 px on
+// a correct quad. The check sees that no pixel on the sides has an intermediate value, flags
+// the image as aliased and allows 0.5 px more; the same tags integrated over the pixel (4x4
+// samples) are not flagged and stay well inside the strict limit.
+TEST(BorderCheck, PointSampledTagsKept) {
+  const auto calib = testing::test_calibration();
+  TagDetector unchecked(with_check(false)), checked(with_check(true));
+  const cv::Mat pattern = tag_pattern("tag36h11", 0);
+  double worst_point_sampled = 0.0;
+  for (int supersample : {1, 4})
+    for (double z : {1.0, 1.5, 2.0, 2.5})
+      for (double dx : {0.0, 0.013, 0.027, 0.041}) {
+        SynthOptions opt;
+        opt.supersample = supersample;
+        opt.noise_sigma = 2.0;
+        const cv::Mat img = render_tags(calib, {{0, kSize, facing_pose(z, dx, 0.011), {}}}, opt);
+        const std::string what = std::to_string(supersample) + " samples per pixel side, z " +
+                                 std::to_string(z) + ", dx " + std::to_string(dx);
+        const auto a = unchecked.detect(img, &calib);
+        ASSERT_EQ(a.status, TargetStatus::detected) << what;
+        const BorderCheck bc =
+            check_border(img, a.target()->corners, pattern, 8, checked.settings(), &calib);
+        EXPECT_EQ(bc.aliased, supersample == 1) << what;
+        for (double t : bc.thickness_error) {
+          if (std::isnan(t)) continue;
+          if (supersample == 1) {
+            worst_point_sampled = std::max(worst_point_sampled, std::abs(t));
+          } else {
+            EXPECT_LT(std::abs(t), 0.3) << what;
+          }
+        }
+        EXPECT_EQ(checked.detect(img, &calib).status, TargetStatus::detected) << what;
+      }
+  std::printf("point-sampled: largest inner-edge offset %.2f px\n", worst_point_sampled);
+  EXPECT_GT(worst_point_sampled, DetectorSettings{}.border_max_thickness_error);  // not vacuous
+}
+
 // Families without a black border ring inside a white one are not checked.
 TEST(BorderCheck, ReversedBorderFamilyNotChecked) {
   const cv::Mat pattern = tag_pattern("tagStandard41h12", 0);

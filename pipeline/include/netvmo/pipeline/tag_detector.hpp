@@ -157,6 +157,12 @@ struct BorderCheck {
   /// thinner than one cell; NaN where fewer than 4 points were measured (no white data cell
   /// next to that side, or the steps were not clean).
   std::array<double, 4> thickness_error{};
+  /// The image is point-sampled (aliased) along the sides: no pixel straddling a side has an
+  /// intermediate value. Edge positions are then quantised to the pixel grid by up to 0.5 px.
+  bool aliased = false;
+  /// The limit the thickness errors were held to: border_max_thickness_error, plus 0.5 px
+  /// when `aliased` (the border's two edges may then disagree by up to 1 px on a correct quad).
+  double thickness_limit = 0.0;
 };
 
 /// The tag's bitmap as libapriltag prints it (apriltag_to_image): total_width x total_width
@@ -184,9 +190,10 @@ cv::Mat tag_pattern(const std::string& family, int id);
 ///    half that window agrees to 0.2 px (no second edge, such as a shadow boundary, nearby).
 ///    A line through the offsets (robust least squares along the side) is evaluated at the
 ///    first and last measured point; the side fails when either is further than
-///    border_max_thickness_error px from one cell inside the side (needs 4 points). A side fitted
-///    to an occluder's outline that hides part of the border cell row makes the border look
-///    thinner towards the wrong corner, whatever the occluder's brightness.
+///    border_max_thickness_error px from one cell inside the side (needs 4 points), 0.5 px more
+///    in a point-sampled image (`aliased`). A side fitted to an occluder's outline that hides
+///    part of the border cell row makes the border look thinner towards the wrong corner,
+///    whatever the occluder's brightness.
 /// Families without a black border ring inside a white one (tagStandard41h12, ...) are not
 /// checked (`checked` false).
 BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners,
