@@ -7,7 +7,9 @@
 // line naming the first unreadable file and exit code 1; with --keep-going each is a warning and
 // the exit code is 0. Dataset-level problems (network.yaml, a missing calibration, no frames for
 // a camera, an unknown camera id) stop before anything is written.
+#include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <map>
 #include <set>
 
@@ -31,19 +33,25 @@ struct DetectOptions {
   std::string dataset, out;
   DetectorSettings det;
   std::string refinement = to_string(DetectorSettings{}.refinement);
+  bool no_border_check = false;
   bool keep_going = false;
   bool quiet = false;
 };
 
 struct CameraStats {
   int frames = 0, images = 0, detected = 0, unreadable = 0;
-  int low_margin = 0, high_hamming = 0, duplicate = 0;
+  std::map<TargetStatus, int> by_status;  ///< frames per status (detected and every reason)
   double margin_sum = 0;
   std::set<int> other_ids;
 };
 
+int column_width(TargetStatus s) {
+  return std::max(6, static_cast<int>(std::strlen(to_string(s))));
+}
+
 int run_detect(DetectOptions o) {
   o.det.refinement = parse_refinement(o.refinement);
+  o.det.border_check = !o.no_border_check;
   Dataset ds = open_dataset(o.dataset);
   for (const auto& w : ds.warnings) std::fprintf(stderr, "netvmo detect: warning: %s\n", w.c_str());
   o.det.family = ds.network.target.family;
@@ -76,24 +84,13 @@ int run_detect(DetectOptions o) {
       const TagObservation obs = fe.observe(img, ds.cameras[c].calib, &all);
       for (const auto& d : all.all)
         if (d.id != o.det.target_id) st.other_ids.insert(d.id);
-      switch (obs.status) {
-        case TargetStatus::low_margin:
-          ++st.low_margin;
-          break;
-        case TargetStatus::high_hamming:
-          ++st.high_hamming;
-          break;
-        case TargetStatus::duplicate_id:
-          ++st.duplicate;
-          break;
-        default:
-          break;
-      }
+      ++st.by_status[obs.status];
       DetectionRow row;
       row.frame = f;
       row.camera = ds.cameras[c].id;
       row.tag_id = o.det.target_id;
       row.detected = obs.delta;
+      row.status = obs.status;
       if (obs.delta) {
         ++st.detected;
         st.margin_sum += obs.margin;
@@ -110,16 +107,26 @@ int run_detect(DetectOptions o) {
   std::printf("netvmo detect: %s -> %s (%d frames, target %s id %d)\n", o.dataset.c_str(),
               (out_dir / "detections.csv").string().c_str(), ds.frame_count,
               ds.network.target.family.c_str(), ds.network.target.id);
-  std::printf("%-8s %-28s %7s %7s %9s %6s %11s %9s %10s %10s\n", "camera", "source", "frames",
-              "images", "detected", "rate", "mean_margin", "rejected", "other_ids", "unreadable");
+  // Per camera: detections, then one column per reason the target was not used in a frame
+  // (the `status` tokens of detections.csv), then other ids and unreadable frames.
+  std::printf("%-8s %-28s %7s %7s %9s %6s %11s", "camera", "source", "frames", "images", "detected",
+              "rate", "mean_margin");
+  for (TargetStatus s : kAllTargetStatuses)
+    if (s != TargetStatus::detected) std::printf(" %*s", column_width(s), to_string(s));
+  std::printf(" %10s %10s\n", "other_ids", "unreadable");
   for (size_t c = 0; c < ds.cameras.size(); ++c) {
     const CameraStats& st = stats[c];
     const std::string src = ds.cameras[c].source->path().filename().string();
     const double rate = st.frames ? 100.0 * st.detected / st.frames : 0.0;
     const double mm = st.detected ? st.margin_sum / st.detected : 0.0;
-    std::printf("%-8d %-28s %7d %7d %9d %5.1f%% %11.1f %9d %10zu %10d\n", ds.cameras[c].id,
-                src.c_str(), st.frames, st.images, st.detected, rate, mm,
-                st.low_margin + st.high_hamming + st.duplicate, st.other_ids.size(), st.unreadable);
+    std::printf("%-8d %-28s %7d %7d %9d %5.1f%% %11.1f", ds.cameras[c].id, src.c_str(), st.frames,
+                st.images, st.detected, rate, mm);
+    for (TargetStatus s : kAllTargetStatuses)
+      if (s != TargetStatus::detected) {
+        const auto it = st.by_status.find(s);
+        std::printf(" %*d", column_width(s), it == st.by_status.end() ? 0 : it->second);
+      }
+    std::printf(" %10zu %10d\n", st.other_ids.size(), st.unreadable);
   }
   if (!unreadable.empty() && !o.keep_going)
     throw InputError(unreadable.front() + " (" + std::to_string(unreadable.size()) +
@@ -134,9 +141,11 @@ void add_detect(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<DetectOptions>();
   CLI::App* cmd = add_command(
       app, "detect", "Run the AprilTag front end on a dataset folder",
-      "Writes OUT/detections.csv: frame,camera,tag_id,detected,margin,u0,v0,...,u3,v3 (OpenCV\n"
-      "pixels, corners in libapriltag order; empty when not detected) and prints a per-camera\n"
-      "summary. The tag family and target id come from network.yaml.");
+      "Writes OUT/detections.csv: frame,camera,tag_id,detected,status,margin,u0,v0,...,u3,v3\n"
+      "(OpenCV pixels, corners in libapriltag order; empty when not detected; status is\n"
+      "detected or the reason the target was not used: not_found, duplicate_id, low_margin,\n"
+      "high_hamming, border_mismatch, no_image) and prints a per-camera summary with the count\n"
+      "of each reason. The tag family and target id come from network.yaml.");
   cmd->add_option("dataset", o->dataset,
                   "Dataset folder (network.yaml, calib/, cam_<id>/ or cam_<id>.<ext>)")
       ->required();
@@ -159,6 +168,20 @@ void add_detect(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   cmd->add_option("--max-hamming", o->det.max_hamming,
                   "Maximum corrected bits to accept the target")
+      ->capture_default_str();
+  cmd->add_flag("--no-border-check", o->no_border_check,
+                "Accept the target without checking that its corners frame a black border inside "
+                "a white quiet zone (the check rejects quads on an occluder's outline)");
+  cmd->add_option("--border-min-contrast", o->det.border_min_contrast,
+                  "Border check: a sample passes when quiet zone - border >= this x (local white "
+                  "- border)")
+      ->capture_default_str();
+  cmd->add_option("--border-max-failed", o->det.border_max_failed_fraction,
+                  "Border check: a side fails when more than this fraction of its samples fail")
+      ->capture_default_str();
+  cmd->add_option("--border-max-thickness", o->det.border_max_thickness_error,
+                  "Border check: a side fails when the inner edge of the border is further than "
+                  "this from one cell inside it [px]")
       ->capture_default_str();
   cmd->add_option("--refine", o->refinement,
                   "Corner refinement of the target: none, subpix (cv::cornerSubPix) or edges "

@@ -38,12 +38,6 @@ struct CliResult {
   std::string out, err;
 };
 
-/// The whole text of a file (empty if it cannot be read).
-inline std::string read_text(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
 /// Runs `netvmo ARGS` from the build folder, capturing stdout and stderr in files under `scratch`.
 inline CliResult run_netvmo(const std::string& args, const std::filesystem::path& scratch) {
   const auto out = scratch / "stdout.txt", err = scratch / "stderr.txt";

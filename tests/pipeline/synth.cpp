@@ -1,5 +1,7 @@
 #include "synth.hpp"
 
+#include "test_util.hpp"
+
 #include <apriltag/apriltag.h>
 
 #include <unistd.h>
@@ -224,10 +226,7 @@ TempDirs g_temp_dirs;
 
 fs::path fresh_dir(const std::string& name) {
   // per process, so concurrent test runs (ctest -j, other worktrees) never collide
-  const fs::path d =
-      fs::temp_directory_path() / ("netvmo_test_" + std::to_string(::getpid()) + "_" + name);
-  fs::remove_all(d);
-  fs::create_directories(d);
+  const fs::path d = test::scratch_dir(name);
   g_temp_dirs.dirs.push_back(d);
   return d;
 }

@@ -4,6 +4,7 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "netvmo/pipeline/io/truth_io.hpp"
@@ -13,6 +14,8 @@
 namespace netvmo {
 namespace {
 using namespace io;
+using frontend::kAllTargetStatuses;
+using frontend::TargetStatus;
 namespace fs = std::filesystem;
 
 using test::slurp;
@@ -47,8 +50,52 @@ TEST(Cli, DetectWritesCsvAndSummary) {
     const size_t ci = static_cast<size_t>(row.camera - 1), f = static_cast<size_t>(row.frame);
     EXPECT_LT(testing::corner_rms(*row.corners, truth[ci][f]), 0.1);
   }
-  const std::string header = "frame,camera,tag_id,detected,margin,u0,v0,u1,v1,u2,v2,u3,v3\n";
+  const std::string header = "frame,camera,tag_id,detected,status,margin,u0,v0,u1,v1,u2,v2,u3,v3\n";
   EXPECT_EQ(slurp(dir / "out" / "detections.csv").substr(0, header.size()), header);
+  // the summary has a column per reason for not using the target
+  for (TargetStatus st : kAllTargetStatuses)
+    EXPECT_NE(r.out.find(to_string(st)), std::string::npos) << to_string(st);
+}
+
+// A frame whose target quad fails the border check (frame 1: the tag's side on the image
+// border, test BorderCheck.QuadOnTheImageBorderRejected) is a `border_mismatch` row, counted in
+// the summary's border_mismatch column; --no-border-check accepts it.
+TEST(Cli, DetectReportsBorderMismatch) {
+  const auto dir = testing::fresh_dir("cli_border");
+  auto spec = testing::simple_dataset_spec(1, 2);
+  spec.g_wo = {testing::facing_pose(1.2, 0.0, 0.0, {0.0, 0.0, 0.05}),
+               testing::facing_pose(1.2, 0.5175, 0.0, {0.0, 0.0, 0.05})};
+  spec.options.noise_sigma = 2.0;
+  testing::write_synth_dataset(dir / "ds", spec);
+  const auto r = run_detect(dir / "ds", dir / "out");
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto rows = read_detections_csv(dir / "out" / "detections.csv");
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].status, TargetStatus::detected);
+  EXPECT_EQ(rows[1].status, TargetStatus::border_mismatch);
+  EXPECT_FALSE(rows[1].detected);
+  // summary: the header has the reasons in enum order, the camera's row a 1 under border_mismatch
+  std::istringstream out(r.out);
+  std::string line, header, row;
+  while (std::getline(out, line)) {
+    if (line.rfind("camera", 0) == 0) header = line;
+    if (line.rfind("1 ", 0) == 0) row = line;
+  }
+  std::istringstream hs(header), rs(row);
+  std::vector<std::string> names, values;
+  for (std::string w; hs >> w;) names.push_back(w);
+  for (std::string w; rs >> w;) values.push_back(w);
+  ASSERT_EQ(names.size(), values.size()) << header << "\n" << row;
+  std::map<std::string, std::string> column;
+  for (size_t i = 0; i < names.size(); ++i) column[names[i]] = values[i];
+  EXPECT_EQ(column["detected"], "1");
+  EXPECT_EQ(column["border_mismatch"], "1");
+  EXPECT_EQ(column["not_found"], "0");
+  const auto r2 = run_detect(dir / "ds", dir / "out2", "--no-border-check");
+  ASSERT_EQ(r2.code, 0) << r2.err;
+  rows = read_detections_csv(dir / "out2" / "detections.csv");
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[1].status, TargetStatus::detected);
 }
 
 TEST(Cli, CorruptImageOneErrorLineOtherCamerasKept) {

@@ -18,8 +18,8 @@ namespace fs = std::filesystem;
 namespace {
 
 // The scenario, kept as a data file next to this test.
-const std::string kScenario = netvmo::test::read_text(fs::path(NETVMO_SOURCE_DIR) /
-                                                      "tests/pipeline/data/writer_scenario.yaml");
+const std::string kScenario =
+    netvmo::test::slurp(fs::path(NETVMO_SOURCE_DIR) / "tests/pipeline/data/writer_scenario.yaml");
 
 std::vector<std::string> lines(const fs::path& f) {
   std::ifstream in(f);

@@ -16,6 +16,7 @@
 namespace netvmo {
 namespace {
 using namespace io;
+using namespace frontend;
 namespace fs = std::filesystem;
 
 using test::expect_input_error;
@@ -192,22 +193,54 @@ TEST(DetectionsIo, FormatAndReadBack) {
   a.camera = 2;
   a.tag_id = 0;
   a.detected = true;
+  a.status = TargetStatus::detected;
   a.margin = 87.123;
   a.corners = std::array<cv::Point2d, 4>{{{1.5, 2.25}, {3, 4}, {5, 6}, {7.12345, 8}}};
   DetectionRow b;
   b.frame = 3;
   b.camera = 5;
   b.tag_id = 0;
-  EXPECT_EQ(format_detection_row(b), "3,5,0,0,,,,,,,,,");
+  b.status = TargetStatus::border_mismatch;
+  EXPECT_EQ(format_detection_row(b), "3,5,0,0,border_mismatch,,,,,,,,,");
   write(dir / "d.csv", std::string(kDetectionsHeader) + "\n" + format_detection_row(a) + "\n" +
                            format_detection_row(b) + "\n");
   const auto rows = read_detections_csv(dir / "d.csv");
   ASSERT_EQ(rows.size(), 2u);
   EXPECT_TRUE(rows[0].detected);
+  EXPECT_EQ(rows[0].status, TargetStatus::detected);
   EXPECT_NEAR(rows[0].margin, 87.12, 1e-9);
   EXPECT_NEAR((*rows[0].corners)[3].x, 7.1235, 1e-9);
   EXPECT_FALSE(rows[1].detected);
+  EXPECT_EQ(rows[1].status, TargetStatus::border_mismatch);
   EXPECT_FALSE(rows[1].corners.has_value());
+}
+
+// Every status token reads back as itself; an unknown token or a status that contradicts the
+// detected flag is an error naming the file, line and column.
+TEST(DetectionsIo, StatusColumn) {
+  const auto dir = testing::fresh_dir("det_status");
+  std::string csv = std::string(kDetectionsHeader) + "\n";
+  for (TargetStatus st : kAllTargetStatuses) {
+    DetectionRow r;
+    r.camera = 1;
+    r.tag_id = 0;
+    r.status = st;
+    r.detected = st == TargetStatus::detected;
+    if (r.detected) r.corners = std::array<cv::Point2d, 4>{};
+    csv += format_detection_row(r) + "\n";
+    EXPECT_EQ(parse_target_status(to_string(st)), st);
+  }
+  write(dir / "d.csv", csv);
+  const auto rows = read_detections_csv(dir / "d.csv");
+  ASSERT_EQ(rows.size(), std::size(kAllTargetStatuses));
+  for (size_t i = 0; i < rows.size(); ++i) EXPECT_EQ(rows[i].status, kAllTargetStatuses[i]);
+
+  const std::string header = std::string(kDetectionsHeader) + "\n";
+  write(dir / "bad.csv", header + "0,1,0,0,occluded,,,,,,,,,\n");
+  expect_input_error([&] { read_detections_csv(dir / "bad.csv"); },
+                     {"bad.csv:2", "status", "occluded", "border_mismatch"});
+  write(dir / "bad2.csv", header + "0,1,0,0,detected,,,,,,,,,\n");
+  expect_input_error([&] { read_detections_csv(dir / "bad2.csv"); }, {"bad2.csv:2", "status"});
 }
 
 }  // namespace

@@ -14,8 +14,8 @@ namespace fs = std::filesystem;
 namespace {
 
 // The scenario, kept as a data file next to this test.
-const std::string kMinimal = netvmo::test::read_text(fs::path(NETVMO_SOURCE_DIR) /
-                                                     "tests/pipeline/data/minimal_scenario.yaml");
+const std::string kMinimal =
+    netvmo::test::slurp(fs::path(NETVMO_SOURCE_DIR) / "tests/pipeline/data/minimal_scenario.yaml");
 
 fs::path write_scenario(const std::string& name, const std::string& text) {
   const fs::path dir = fs::path(NETVMO_BINARY_DIR) / "test_tmp" / "scenario_yaml";

@@ -139,6 +139,30 @@ void BM_RefineOnly(benchmark::State& state) {
   state.SetLabel(std::string("refine ") + to_string(mode));
 }
 
+// The border / quiet-zone check alone on the refined corners (what it adds per frame when the
+// target is accepted).
+void BM_BorderCheckOnly(benchmark::State& state) {
+  const Calibration calib = bench_calibration();
+  const cv::Mat frame = bench_frame(calib);
+  DetectorSettings s;
+  s.border_check = false;
+  TagDetector det(s);
+  const auto d = det.detect(frame, &calib);
+  if (!d.target()) {
+    state.SkipWithError("target not detected");
+    return;
+  }
+  const cv::Mat pattern = tag_pattern(s.family, s.target_id);
+  bool ok = false;
+  for (auto _ : state) {
+    const BorderCheck bc = check_border(frame, d.target()->corners, pattern, det.border_cells(),
+                                        DetectorSettings{}, &calib);
+    ok = bc.ok && bc.checked;
+  }
+  if (!ok) state.SkipWithError("the check rejected the benchmark frame");
+  state.SetLabel("border check, calibration with distortion");
+}
+
 // The front end on frames rendered from datasets/paper5_render.yaml (its default 2x2 samples and
 // sensor noise): camera 1 (tag at ~2 m) and camera 5 (no tag; pillar and textures only), full
 // frame or tracking (window around the last detection). args: camera index, tracking.
@@ -183,6 +207,7 @@ BENCHMARK(BM_AprilTagOnly)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK(BM_RefineOnly)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_BorderCheckOnly)->Unit(benchmark::kMicrosecond);
 
 // args: quad_decimate, refinement (0 none, 1 subpix, 2 edges), min_white_black_diff
 BENCHMARK(BM_FrontEnd)

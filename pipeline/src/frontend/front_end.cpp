@@ -33,7 +33,10 @@ TagObservation FrontEnd::observe(const cv::Mat& gray, const io::Calibration& cal
                                  FrameDetections* all, TrackState* track) {
   TagObservation obs;
   FrameDetections dets;
-  if (!gray.empty()) {
+  if (gray.empty()) {
+    dets.status = TargetStatus::no_image;
+    dets.reason = "no image (camera blind in this frame)";
+  } else {
     const bool windowed = track && tracking_.enabled && track->last &&
                           track->frames_since_full + 1 < tracking_.full_frame_every;
     if (windowed) {
@@ -52,6 +55,7 @@ TagObservation FrontEnd::observe(const cv::Mat& gray, const io::Calibration& cal
       track->last.reset();
   }
   obs.status = dets.status;
+  obs.reason = dets.reason;
   if (const TagDetection* t = dets.target()) {
     obs.delta = true;
     obs.tag_id = t->id;

@@ -132,10 +132,17 @@ std::vector<DetectionRow> read_detections_csv(const fs::path& file) {
              r.camera = integer(f, names, 1, where);
              r.tag_id = f[2].empty() ? -1 : integer(f, names, 2, where);
              r.detected = flag(f, names, 3, where);
-             r.margin = f[4].empty() ? 0.0 : num(f, names, 4, where);
-             r.corners = corners(f, names, 5, where);
+             try {
+               r.status = frontend::parse_target_status(f[4]);
+             } catch (const InputError& e) {
+               throw InputError(where + ": " + names[4] + ": " + e.what());
+             }
+             r.margin = f[5].empty() ? 0.0 : num(f, names, 5, where);
+             r.corners = corners(f, names, 6, where);
              if (r.detected != r.corners.has_value())
                throw InputError(where + ": corners must be given exactly when detected = 1");
+             if (r.detected != (r.status == frontend::TargetStatus::detected))
+               throw InputError(where + ": status must be 'detected' exactly when detected = 1");
              rows.push_back(r);
            });
   return rows;
@@ -183,6 +190,8 @@ std::string format_detection_row(const DetectionRow& r) {
   std::string s(buf, static_cast<size_t>(n));
   if (r.tag_id >= 0) s += std::to_string(r.tag_id);
   s += r.detected ? ",1," : ",0,";
+  s += to_string(r.status);
+  s += ',';
   if (r.detected) {
     n = std::snprintf(buf, sizeof buf, "%.2f", r.margin);
     s.append(buf, static_cast<size_t>(n));

@@ -5,6 +5,7 @@
 #include <array>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <string>
 
 #include "netvmo/pipeline/frontend/tag_detector.hpp"
 #include "netvmo/pipeline/io/calibration.hpp"
@@ -15,7 +16,8 @@ namespace netvmo::frontend {
 struct TagObservation {
   bool delta = false;  ///< delta_i(t): the target id was decoded and accepted
   TargetStatus status = TargetStatus::not_found;
-  int tag_id = -1;  ///< the target id when detected, else -1
+  std::string reason;  ///< why the target was rejected (empty when detected)
+  int tag_id = -1;     ///< the target id when detected, else -1
   int hamming = 0;
   double margin = 0.0;                      ///< decision margin of the accepted detection
   std::array<cv::Point2d, 4> corners_px{};  ///< refined corners, OpenCV pixels

@@ -53,6 +53,21 @@ struct DetectorSettings {
   int max_hamming = 1;                ///< reject target detections with more corrected bits
   // Refinement of the accepted target's corners
   Refinement refinement = Refinement::edge_lines;
+  // Border / quiet-zone consistency check of the accepted target's refined corners (see
+  // check_border()): a quad with a side on an occluder's outline, a shadow edge or the image
+  // border is rejected as TargetStatus::border_mismatch.
+  bool border_check = true;
+  /// A contrast sample passes when (quiet zone - border) >= this x (local white - border).
+  /// 0.2 keeps a quiet zone in deep shadow next to a lit border (0.3 of the lit white, as the
+  /// renderer's ambient-only shadows); an occluder close to the black ink fails it.
+  double border_min_contrast = 0.2;
+  /// A side fails when more than this fraction of its contrast samples fail.
+  double border_max_failed_fraction = 0.2;
+  /// A side fails when the inner edge of its black border (measured where the adjacent data
+  /// cell is white) lies further than this from one cell inside the side [px]. Measured on
+  /// rendered frames: at most 0.49 px on fully visible tags, at least 0.68 px on quads with
+  /// a corner more than 1 px off (README, front end).
+  double border_max_thickness_error = 0.6;
 };
 
 /// One decoded tag.
@@ -64,13 +79,33 @@ struct TagDetection {
   cv::Point2d center;                    ///< OpenCV pixels
 };
 
-enum class TargetStatus { detected, not_found, duplicate_id, low_margin, high_hamming };
+/// The front end's decision about the target in one frame. Every status but `detected` is a
+/// reason for not using the frame.
+enum class TargetStatus {
+  detected,         ///< exactly one acceptable detection of the target id, corners checked
+  not_found,        ///< the target id was not decoded
+  duplicate_id,     ///< two or more acceptable detections of the target id: all rejected
+  low_margin,       ///< decoded, but the decision margin is below min_decision_margin
+  high_hamming,     ///< decoded, but with more corrected bits than max_hamming
+  border_mismatch,  ///< the corners do not frame a black border inside a white quiet zone
+  no_image,         ///< no image for this camera and frame (missing or unreadable: blind)
+};
+/// The status as one token, as in detections.csv's `status` column: detected, not_found,
+/// duplicate_id, low_margin, high_hamming, border_mismatch, no_image.
 const char* to_string(TargetStatus s);
+/// Inverse of to_string(TargetStatus); throws InputError for anything else.
+TargetStatus parse_target_status(const std::string& token);
+/// Every status, in enum order.
+inline constexpr TargetStatus kAllTargetStatuses[] = {
+    TargetStatus::detected,   TargetStatus::not_found,    TargetStatus::duplicate_id,
+    TargetStatus::low_margin, TargetStatus::high_hamming, TargetStatus::border_mismatch,
+    TargetStatus::no_image};
 
 /// All tags decoded in a frame and the decision about the target.
 struct FrameDetections {
   std::vector<TagDetection> all;  ///< every decoded tag (other ids are reported, not used)
   TargetStatus status = TargetStatus::not_found;
+  std::string reason;     ///< why the target was rejected (empty when detected)
   int target_index = -1;  ///< index into `all` of the accepted target, or -1
   /// The accepted target detection (refined corners), or nullptr.
   const TagDetection* target() const {
@@ -106,6 +141,61 @@ class TagDetector {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// Result of check_border().
+struct BorderCheck {
+  bool checked = false;  ///< false: not applicable (reversed-border family), `ok` stays true
+  bool ok = true;        ///< the corners frame a black border inside a white quiet zone
+  std::string reason;    ///< the worst failing side and why (empty when ok)
+  /// Per side (side k runs from corner k to corner k+1): contrast samples, and how many failed.
+  std::array<int, 4> samples{}, failed{};
+  /// Per side: the larger offset of the inner edge of the black border from one cell inside
+  /// the side, at the ends of the measured stretch [px], negative when the border looks
+  /// thinner than one cell; NaN where fewer than 4 points were measured (no white data cell
+  /// next to that side, or the steps were not clean).
+  std::array<double, 4> thickness_error{};
+  /// The image is point-sampled (aliased) along the sides: no pixel straddling a side has an
+  /// intermediate value. Edge positions are then quantised to the pixel grid by up to 0.5 px.
+  bool aliased = false;
+  /// The limit the thickness errors were held to: border_max_thickness_error, plus 0.5 px
+  /// when `aliased` (the border's two edges may then disagree by up to 1 px on a correct quad).
+  double thickness_limit = 0.0;
+};
+
+/// The tag's bitmap as libapriltag prints it (apriltag_to_image): total_width x total_width
+/// cells, 255 white / 0 black, row 0 at the top (+y) of the printed tag. Empty for an id
+/// outside the family.
+cv::Mat tag_pattern(const std::string& family, int id);
+
+/// Border / quiet-zone consistency of the refined corners of a decoded tag whose bitmap is
+/// `pattern` (tag_pattern()). The homography of the corners maps the object square (in bit
+/// cells, the black square is [0, n]^2) to the image, in undistorted pixels when `calib` has
+/// distortion (sample points are re-distorted). Along each side (side k runs from corner k to
+/// corner k+1):
+///  - contrast, every quarter cell: a quiet-zone sample half a cell outside the side and a
+///    border sample half a cell inside (the centres of the white ring and of the black border
+///    cell row). It passes when quiet - border >= border_min_contrast x (white - border), with
+///    `white` the median of the tag's white data cells within 2.5 cells of the border sample:
+///    a local level, so a shadow that darkens both sides of the edge scales both sides of the
+///    inequality. A sample outside the image fails. The side fails when more than
+///    border_max_failed_fraction of its 4n samples fail (an occluder darker than the quiet zone
+///    beyond the side, or corners more than half a cell off).
+///  - border thickness, where the data cell next to the border is white: the inner edge of the
+///    border (the dark-to-bright step one cell inside the side) is located to sub-pixel at 5
+///    points per such cell, by the centroid of the intensity differences along the normal as in
+///    the edge refinement (window 0.45 cell, at most 4 px), kept only where the centroid in
+///    half that window agrees to 0.2 px (no second edge, such as a shadow boundary, nearby).
+///    A line through the offsets (robust least squares along the side) is evaluated at the
+///    first and last measured point; the side fails when either is further than
+///    border_max_thickness_error px from one cell inside the side (needs 4 points), 0.5 px more
+///    in a point-sampled image (`aliased`). A side fitted to an occluder's outline that hides
+///    part of the border cell row makes the border look thinner towards the wrong corner,
+///    whatever the occluder's brightness.
+/// Families without a black border ring inside a white one (tagStandard41h12, ...) are not
+/// checked (`checked` false).
+BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners,
+                         const cv::Mat& pattern, int border_cells, const DetectorSettings& s,
+                         const io::Calibration* calib = nullptr);
 
 /// Refines the four corners of one detected quad in place (OpenCV). `border_cells` is the
 /// number of bit cells across the black border square. Exposed for tests and benchmarks.

@@ -5,8 +5,9 @@
 //               corners in OpenCV pixels (libapriltag corner order), empty when the tag is
 //               behind the camera
 //   target.csv  frame,t,px,py,pz,rx,ry,rz         (g_wo: target position, rotation vector)
-//   detections.csv  frame,camera,tag_id,detected,margin,u0,v0,u1,v1,u2,v2,u3,v3
-//               one row per camera and frame; corners empty when detected = 0
+//   detections.csv  frame,camera,tag_id,detected,status,margin,u0,v0,u1,v1,u2,v2,u3,v3
+//               one row per camera and frame; status is to_string(TargetStatus) (detected, or
+//               the reason the target was not used); margin and corners empty when detected = 0
 //
 // The header must match exactly; every error is an InputError "<file>:<line>: <column>: ...".
 #pragma once
@@ -19,6 +20,7 @@
 #include <vector>
 
 #include "netvmo/observer/lie.hpp"
+#include "netvmo/pipeline/frontend/tag_detector.hpp"
 #include "netvmo/render/renderer.hpp"
 
 namespace netvmo::io {
@@ -43,6 +45,8 @@ struct DetectionRow {
   int camera = 0;
   int tag_id = -1;  ///< -1 when not detected (written as empty)
   bool detected = false;
+  frontend::TargetStatus status =
+      frontend::TargetStatus::not_found;  ///< detected exactly when `detected`
   double margin = 0.0;
   std::optional<std::array<cv::Point2d, 4>> corners;
 };
@@ -51,7 +55,7 @@ inline constexpr const char* kTruthHeader =
     "frame,t,camera,in_fov,visible_fraction,u0,v0,u1,v1,u2,v2,u3,v3";
 inline constexpr const char* kTargetHeader = "frame,t,px,py,pz,rx,ry,rz";
 inline constexpr const char* kDetectionsHeader =
-    "frame,camera,tag_id,detected,margin,u0,v0,u1,v1,u2,v2,u3,v3";
+    "frame,camera,tag_id,detected,status,margin,u0,v0,u1,v1,u2,v2,u3,v3";
 
 std::vector<TruthRow> read_truth_csv(const std::filesystem::path& file);
 std::vector<TargetTruthRow> read_target_csv(const std::filesystem::path& file);

@@ -1,0 +1,231 @@
+// The border / quiet-zone check of the accepted target on synthesized images with exactly
+// known corners: a quad with one side on an occluder's outline (dark or bright occluder) or on
+// the image border is rejected as border_mismatch with the failing side in the reason, while
+// clean, blurred and shadowed tags are kept.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "netvmo/pipeline/frontend/front_end.hpp"
+#include "netvmo/pipeline/frontend/tag_detector.hpp"
+#include "synth.hpp"
+
+namespace netvmo {
+namespace {
+using namespace io;
+using namespace frontend;
+using testing::facing_pose;
+using testing::project_corners;
+using testing::render_tags;
+using testing::SynthOptions;
+
+constexpr double kSize = 0.2;
+
+DetectorSettings with_check(bool on) {
+  DetectorSettings s;
+  s.border_check = on;
+  return s;
+}
+
+double max_corner_error(const std::array<cv::Point2d, 4>& a, const std::array<cv::Point2d, 4>& b) {
+  double e = 0.0;
+  for (size_t k = 0; k < 4; ++k) e = std::max(e, cv::norm(a[k] - b[k]));
+  return e;
+}
+
+/// Multiplies the image by `factor` on the left of the directed line through `p` at angle
+/// `angle` (4x4 supersampled, so the shadow edge is a sharp, pixel-integrated straight edge).
+void shade(cv::Mat& img, cv::Point2d p, double angle, double factor) {
+  const cv::Point2d d(std::cos(angle), std::sin(angle));
+  for (int r = 0; r < img.rows; ++r)
+    for (int c = 0; c < img.cols; ++c) {
+      int in = 0;
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) {
+          const cv::Point2d q = cv::Point2d(c - 0.5 + (j + 0.5) / 4, r - 0.5 + (i + 0.5) / 4) - p;
+          in += q.x * d.y - q.y * d.x < 0;
+        }
+      uchar& v = img.at<uchar>(r, c);
+      v = cv::saturate_cast<uchar>(v * (1.0 - in / 16.0 * (1.0 - factor)));
+    }
+}
+
+void add_noise(cv::Mat& img, double sigma, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n(0.0, sigma);
+  for (int r = 0; r < img.rows; ++r)
+    for (int c = 0; c < img.cols; ++c)
+      img.at<uchar>(r, c) = cv::saturate_cast<uchar>(img.at<uchar>(r, c) + n(rng));
+}
+
+// An occluder covers the tag's left side, its straight edge a few degrees off the side, so
+// libapriltag fits the left side to the occluder's outline (a corner 1.8-3.7 px off) and
+// still decodes the tag. Without the check the quad is accepted; with it the frame is
+// border_mismatch, and the reason names side 3 (corners 3-0, the left side). Black and dark
+// grey occluders hide part of the border cell row (the border looks thinner, or the quiet zone
+// beyond the fitted side is dark); a bright one, nearly the quiet zone's white, only by the
+// thinner border.
+TEST(BorderCheck, QuadOnAnOccludersOutlineRejected) {
+  const auto calib = testing::test_calibration();
+  struct Case {
+    double level, roll, edge_cells;  // occluder gray level, tag roll, its edge from the left side
+  };
+  for (const Case& c : {Case{20, 0.03, -0.4}, Case{90, 0.06, -0.4}, Case{200, 0.06, 0.2}}) {
+    const obs::SE3 g = facing_pose(1.5, 0.0, 0.0, {0.0, 0.0, c.roll});
+    const auto truth = project_corners(calib, g, kSize);
+    const double left = 0.5 * (truth[0].x + truth[3].x), cell = cv::norm(truth[1] - truth[0]) / 8;
+    SynthOptions opt;
+    opt.noise_sigma = 2.0;
+    opt.occluder_level = c.level;
+    opt.occluders = {
+        cv::Rect(0, 0, static_cast<int>(std::lround(left + c.edge_cells * cell)), 480)};
+    const cv::Mat img = render_tags(calib, {{0, kSize, g, {}}}, opt);
+    const std::string what = "occluder level " + std::to_string(c.level);
+
+    const auto unchecked = TagDetector(with_check(false)).detect(img, &calib);
+    ASSERT_EQ(unchecked.status, TargetStatus::detected) << what;
+    const double err = max_corner_error(unchecked.target()->corners, truth);
+    std::printf("%s: without the check a corner is %.2f px off\n", what.c_str(), err);
+    ASSERT_GT(err, 1.5) << what << ": libapriltag did not fit the occluder's edge";
+
+    const auto checked = TagDetector(with_check(true)).detect(img, &calib);
+    EXPECT_EQ(checked.status, TargetStatus::border_mismatch) << what;
+    EXPECT_EQ(checked.target(), nullptr) << what;
+    EXPECT_NE(checked.reason.find("side 3"), std::string::npos) << what << ": " << checked.reason;
+    std::printf("  with it: %s: %s\n", to_string(checked.status), checked.reason.c_str());
+    // the front end reports the same
+    FrontEnd fe;
+    const auto o = fe.observe(img, calib);
+    EXPECT_FALSE(o.delta);
+    EXPECT_EQ(o.status, TargetStatus::border_mismatch);
+    EXPECT_EQ(o.reason, checked.reason);
+  }
+}
+
+// The tag's right side 2 px inside the image border: libapriltag closes the quad on the image
+// border (corners ~7 px off). The quiet zone beyond that side is outside the image: rejected.
+TEST(BorderCheck, QuadOnTheImageBorderRejected) {
+  const auto calib = testing::test_calibration();
+  const obs::SE3 g = facing_pose(1.2, 0.5175, 0.0, {0.0, 0.0, 0.05});
+  const auto truth = project_corners(calib, g, kSize);
+  SynthOptions opt;
+  opt.noise_sigma = 2.0;
+  const cv::Mat img = render_tags(calib, {{0, kSize, g, {}}}, opt);
+  const auto unchecked = TagDetector(with_check(false)).detect(img, &calib);
+  ASSERT_EQ(unchecked.status, TargetStatus::detected);
+  ASSERT_GT(max_corner_error(unchecked.target()->corners, truth), 1.5);
+  const auto checked = TagDetector(with_check(true)).detect(img, &calib);
+  EXPECT_EQ(checked.status, TargetStatus::border_mismatch);
+  EXPECT_NE(checked.reason.find("side 1"), std::string::npos) << checked.reason;
+  EXPECT_NE(checked.reason.find("quiet zone"), std::string::npos) << checked.reason;
+}
+
+// Tags that are really there are kept: six poses 0.8-3 m (sides 40-150 px, tilted up to 35
+// degrees), without and with lens distortion, each clean, blurred (Gaussian sigma 1 and 1.5 px)
+// and under a shadow edge through its centre at three angles (the shadowed side at 0.6 of the
+// light), all with noise sigma 2. Every one is decoded without the check (so only the check
+// is tested), the check runs on it (`checked`) and accepts it.
+TEST(BorderCheck, CleanBlurredAndShadowedTagsKept) {
+  const std::vector<obs::SE3> poses = {facing_pose(1.0, 0.05, -0.03, {0.3, -0.2, 0.4}),
+                                       facing_pose(1.5, -0.2, 0.1, {-0.4, 0.1, 1.2}),
+                                       facing_pose(2.0, 0.3, 0.2, {0.2, 0.5, -2.5}),
+                                       facing_pose(0.8, -0.1, -0.15, {0.6, 0.0, 0.1}),
+                                       facing_pose(2.0, -0.1, 0.05, {-0.3, -0.35, 0.8}),
+                                       facing_pose(3.0, 0.1, -0.1, {0.5, 0.3, 0.2})};
+  TagDetector unchecked(with_check(false)), checked(with_check(true));
+  const cv::Mat pattern = tag_pattern("tag36h11", 0);
+  int n = 0;
+  double worst = 0.0;
+  for (bool distortion : {false, true}) {
+    const auto calib = testing::test_calibration(distortion);
+    for (size_t p = 0; p < poses.size(); ++p) {
+      const auto truth = project_corners(calib, poses[p], kSize);
+      const cv::Point2d centre = 0.25 * (truth[0] + truth[1] + truth[2] + truth[3]);
+      const cv::Mat clean = render_tags(calib, {{0, kSize, poses[p], {}}});
+      for (int v = 0; v < 6; ++v) {
+        cv::Mat img = clean.clone();
+        std::string what = "clean";
+        if (v == 1 || v == 2) {
+          cv::GaussianBlur(img, img, cv::Size(0, 0), v == 1 ? 1.0 : 1.5);
+          what = v == 1 ? "blur 1" : "blur 1.5";
+        } else if (v >= 3) {
+          const double angle = 0.5 + 1.1 * (v - 3);
+          shade(img, centre, angle, 0.6);
+          what = "shadow edge at " + std::to_string(angle) + " rad";
+        }
+        add_noise(img, 2.0, static_cast<unsigned>(100 * distortion + 10 * p + v));
+        what += (distortion ? ", distortion" : "") + std::string(", pose ") + std::to_string(p);
+        const auto a = unchecked.detect(img, &calib);
+        ASSERT_EQ(a.status, TargetStatus::detected) << what;
+        const BorderCheck bc =
+            check_border(img, a.target()->corners, pattern, 8, checked.settings(), &calib);
+        EXPECT_TRUE(bc.checked) << what;
+        for (double t : bc.thickness_error)
+          if (!std::isnan(t)) worst = std::max(worst, std::abs(t));
+        const auto b = checked.detect(img, &calib);
+        EXPECT_EQ(b.status, TargetStatus::detected) << what << ": " << b.reason;
+        EXPECT_TRUE(b.reason.empty()) << what;
+        ++n;
+      }
+    }
+  }
+  std::printf("%d tags kept; largest inner-edge offset %.2f px (limit %.2f)\n", n, worst,
+              DetectorSettings{}.border_max_thickness_error);
+  EXPECT_EQ(n, 72);
+}
+
+// Point-sampled images (one sample per pixel, as a 1-spp rendering): an upright tag's edges
+// are quantised to the pixel grid, so its border's two edges can disagree by up to ~0.8 px on
+// a correct quad. The check sees that no pixel on the sides has an intermediate value, flags
+// the image as aliased and allows 0.5 px more; the same tags integrated over the pixel (4x4
+// samples) are not flagged and stay well inside the strict limit.
+TEST(BorderCheck, PointSampledTagsKept) {
+  const auto calib = testing::test_calibration();
+  TagDetector unchecked(with_check(false)), checked(with_check(true));
+  const cv::Mat pattern = tag_pattern("tag36h11", 0);
+  double worst_point_sampled = 0.0;
+  for (int supersample : {1, 4})
+    for (double z : {1.0, 1.5, 2.0, 2.5})
+      for (double dx : {0.0, 0.013, 0.027, 0.041}) {
+        SynthOptions opt;
+        opt.supersample = supersample;
+        opt.noise_sigma = 2.0;
+        const cv::Mat img = render_tags(calib, {{0, kSize, facing_pose(z, dx, 0.011), {}}}, opt);
+        const std::string what = std::to_string(supersample) + " samples per pixel side, z " +
+                                 std::to_string(z) + ", dx " + std::to_string(dx);
+        const auto a = unchecked.detect(img, &calib);
+        ASSERT_EQ(a.status, TargetStatus::detected) << what;
+        const BorderCheck bc =
+            check_border(img, a.target()->corners, pattern, 8, checked.settings(), &calib);
+        EXPECT_EQ(bc.aliased, supersample == 1) << what;
+        for (double t : bc.thickness_error) {
+          if (std::isnan(t)) continue;
+          if (supersample == 1) {
+            worst_point_sampled = std::max(worst_point_sampled, std::abs(t));
+          } else {
+            EXPECT_LT(std::abs(t), 0.3) << what;
+          }
+        }
+        EXPECT_EQ(checked.detect(img, &calib).status, TargetStatus::detected) << what;
+      }
+  std::printf("point-sampled: largest inner-edge offset %.2f px\n", worst_point_sampled);
+  EXPECT_GT(worst_point_sampled, DetectorSettings{}.border_max_thickness_error);  // not vacuous
+}
+
+// Families without a black border ring inside a white one are not checked.
+TEST(BorderCheck, ReversedBorderFamilyNotChecked) {
+  const cv::Mat pattern = tag_pattern("tagStandard41h12", 0);
+  ASSERT_FALSE(pattern.empty());
+  const cv::Mat img(480, 640, CV_8UC1, cv::Scalar(128));
+  const std::array<cv::Point2d, 4> quad{{{300, 260}, {340, 260}, {340, 220}, {300, 220}}};
+  const BorderCheck bc = check_border(img, quad, pattern, 5, DetectorSettings{});
+  EXPECT_FALSE(bc.checked);
+  EXPECT_TRUE(bc.ok);
+  EXPECT_TRUE(tag_pattern("tag36h11", 100000).empty());  // id outside the family
+}
+
+}  // namespace
+}  // namespace netvmo
