@@ -1,6 +1,6 @@
 // netvmo launch --mode async: nodes paced on their cameras' timestamps, latest value of each
-// neighbour, staleness bound, and injected faults (drops and delays at the receiver, a killed
-// and restarted node), on a 30-frame render of paper5_render.yaml with k_e = 10, k_s = 100.
+// neighbour, staleness bound, and injected faults (30 % drops and 50 ms delays at the receiver,
+// a killed and restarted node), on a 30-frame render of paper5_render.yaml, k_e = 10, k_s = 100.
 #include "net_test_util.hpp"
 
 using namespace netvmo;
@@ -41,16 +41,19 @@ TEST(Async, NodesConvergeWithDropsDelaysAndARestartedNode) {
     ASSERT_EQ(a.code, 0) << a.out << a.err;
     expect_converged(net_test::read_json(dir / "a" / "summary.json"), "async");
   }
-  {  // 20 % of the received messages dropped (seeded), the others 10 ms late.
+  {  // 30 % of the received messages dropped (seeded), the others 50 ms (wall) late: 12.5 ms of
+     // camera time at --speed 0.25, ~8 rounds of h = 1/630 s. A constant delay of the
+     // neighbours' values does not move the equilibrium of a static target and drops only slow
+     // the consensus (README, "Asynchronous operation"), so the same bound applies once settled.
     const auto b = net_test::netvmo_bounded(
-        common + " --drop 0.2 --delay 10 --seed 7 --out " + (dir / "b").string(), dir, 90);
+        common + " --drop 0.3 --delay 50 --seed 7 --out " + (dir / "b").string(), dir, 90);
     ASSERT_EQ(b.code, 0) << b.out << b.err;
-    expect_converged(net_test::read_json(dir / "b" / "summary.json"), "drop 0.2, delay 10 ms");
+    expect_converged(net_test::read_json(dir / "b" / "summary.json"), "drop 0.3, delay 50 ms");
     const auto m = net_test::read_json(dir / "b" / "messages.json");
     for (const auto& [id, s] : m.items()) {
       const double f = s["dropped"].get<double>() / s["received"].get<double>();
-      EXPECT_GT(f, 0.15) << "camera " << id;
-      EXPECT_LT(f, 0.25) << "camera " << id;
+      EXPECT_GT(f, 0.25) << "camera " << id;
+      EXPECT_LT(f, 0.35) << "camera " << id;
     }
   }
   {  // Camera 3's node killed 1 s in and restarted at once: it joins at the current frame with
