@@ -1,5 +1,6 @@
 // netvmo launch (one process per camera, lock-step over Cyclone DDS) against netvmo run on a
 // dataset rendered at test time: the merged outputs must be those of the in-process run.
+#include <yaml-cpp/yaml.h>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -235,4 +236,50 @@ TEST_F(Launch, ANodeNamesItsSilentNeighbour) {
   EXPECT_NE(r.err.find("netvmo node: error: camera 4: no message of round 1 from neighbour camera"),
             std::string::npos)
       << r.err;
+}
+
+TEST_F(Launch, NodesWhoseGraphsDifferStopNamingBothCameras) {
+  // Cameras 4 and 5 are neighbours; camera 5's copy of network.yaml has one more edge (2, 5).
+  const fs::path other = *dir_ / "ds_graph";
+  fs::copy(*dir_ / "ds", other, fs::copy_options::recursive);
+  YAML::Node net = YAML::LoadFile((other / "network.yaml").string());
+  ASSERT_TRUE(net["edges"].IsSequence());
+  YAML::Node edge(YAML::NodeType::Sequence);
+  edge.push_back(2);
+  edge.push_back(5);
+  net["edges"].push_back(edge);
+  std::ofstream(other / "network.yaml") << YAML::Dump(net) << "\n";
+  const int domain = net_test::loopback_domain(*dir_);
+  const auto node = [&](const fs::path& ds, int camera) {
+    return std::vector<std::string>{std::string(NETVMO_BINARY_DIR) + "/netvmo",
+                                    "node",
+                                    ds.string(),
+                                    "--camera",
+                                    std::to_string(camera),
+                                    "--out",
+                                    (*dir_ / ("graph_" + std::to_string(camera))).string(),
+                                    "--domain",
+                                    std::to_string(domain),
+                                    "--timeout",
+                                    "3"};
+  };
+  // Not stopped when the first fails: each must stop on its own (bounded: killed after 40 s).
+  const std::vector<pid_t> pids = {net::spawn(node(*dir_ / "ds", 4), *dir_ / "graph_4.log"),
+                                   net::spawn(node(other, 5), *dir_ / "graph_5.log")};
+  const auto res = net::supervise(pids, 40.0, false);
+  int named = 0;
+  for (int k = 0; k < 2; ++k) {
+    const int me = 4 + k, them = 5 - k;
+    EXPECT_TRUE(res[static_cast<size_t>(k)].finished) << net::describe(res[static_cast<size_t>(k)]);
+    EXPECT_NE(res[static_cast<size_t>(k)].exit_code, 0);
+    const std::string log = test::slurp(*dir_ / ("graph_" + std::to_string(me) + ".log"));
+    const std::string line = "netvmo node: error: camera " + std::to_string(me) + " and camera " +
+                             std::to_string(them) + ": their network.yaml graphs differ";
+    if (log.find(line) != std::string::npos)
+      ++named;
+    else
+      std::printf("camera %d:\n%s\n", me, log.c_str());
+  }
+  // The first to stop may leave before its message reaches the other (which then times out).
+  EXPECT_GE(named, 1);
 }

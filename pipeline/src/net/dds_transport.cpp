@@ -23,6 +23,28 @@ const char* to_string(Mode m) {
   return m == Mode::lockstep ? "lockstep" : "async";
 }
 
+std::uint64_t graph_digest(const std::vector<int>& camera_ids,
+                           const std::vector<std::pair<int, int>>& edges_by_id) {
+  std::uint64_t h = 14695981039346656037ull;  // FNV-1a 64
+  const auto add = [&h](std::int64_t v) {
+    for (int b = 0; b < 8; ++b) {
+      h ^= static_cast<std::uint64_t>(v >> (8 * b)) & 0xffu;
+      h *= 1099511628211ull;
+    }
+  };
+  add(static_cast<std::int64_t>(camera_ids.size()));
+  for (int id : camera_ids) add(id);
+  std::vector<std::pair<int, int>> e;
+  for (const auto& [a, b] : edges_by_id) e.emplace_back(std::min(a, b), std::max(a, b));
+  std::sort(e.begin(), e.end());
+  add(static_cast<std::int64_t>(e.size()));
+  for (const auto& [a, b] : e) {
+    add(a);
+    add(b);
+  }
+  return h == 0 ? 1 : h;
+}
+
 namespace {
 
 constexpr int kMaxTake = 64;
@@ -137,7 +159,8 @@ DdsTransport::~DdsTransport() {
 }
 
 void DdsTransport::send(const obs::EstimateMessage& m) {
-  const netvmo_msg_Estimate s = to_sample(m);
+  netvmo_msg_Estimate s = to_sample(m);
+  s.graph = settings_.graph_digest;
   check(dds_write(writer_, &s), "write estimate");
   round_ = m.round;
   ++stats_.sent;
@@ -156,6 +179,14 @@ void DdsTransport::take_all() {
       if (infos[k].publication_handle == own_writer_handle_) continue;
       const auto& s = *static_cast<const netvmo_msg_Estimate*>(samples[k]);
       ++stats_.received;
+      if (settings_.graph_digest != 0 && s.graph != 0 && s.graph != settings_.graph_digest) {
+        const std::string other = label(labels_, s.sender), me = label(labels_, self_);
+        dds_return_loan(reader_, samples, n);
+        throw GraphMismatch("camera " + me + " and camera " + other +
+                            ": their network.yaml graphs differ (camera " + other +
+                            "'s message carries another graph digest; every node of a run "
+                            "needs the same network.yaml)");
+      }
       pending_.push_back(from_sample(s));
     }
     if (n > 0) dds_return_loan(reader_, samples, n);

@@ -128,7 +128,9 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   int frames = o.frames ? *o.frames : provider->frame_count();
   if (o.run.max_frames) frames = std::min(frames, *o.run.max_frames);
 
-  DdsTransport transport(self, graph.neighbors(self), labels, o.dds);
+  DdsSettings dds = o.dds;
+  dds.graph_digest = graph_digest(labels, netcfg.edges);
+  DdsTransport transport(self, graph.neighbors(self), labels, dds);
   transport.wait_for_writers(1 + static_cast<int>(graph.neighbors(self).size()), o.dds.timeout_s);
 
   io::ensure_directory(out_dir);

@@ -16,6 +16,7 @@
 #include <deque>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "netvmo/observer/lie.hpp"
@@ -32,6 +33,19 @@ struct DdsSettings {
   Mode mode = Mode::lockstep;
   double timeout_s = 20.0;  ///< lock-step: longest wait for a neighbour's message of a round
   std::string topic = "netvmo_estimates";
+  /// This camera's graph_digest() of network.yaml, sent with every estimate; a received estimate
+  /// carrying another non-zero digest throws GraphMismatch. 0: none sent, nothing checked.
+  std::uint64_t graph_digest = 0;
+};
+
+/// 64-bit FNV-1a digest of a communication graph: the camera ids in network.yaml order, then the
+/// edges as sorted (smaller id, larger id) pairs. Never 0.
+std::uint64_t graph_digest(const std::vector<int>& camera_ids,
+                           const std::vector<std::pair<int, int>>& edges_by_id);
+
+/// A neighbour's network.yaml graph differs from this camera's.
+struct GraphMismatch : std::runtime_error {
+  using std::runtime_error::runtime_error;
 };
 
 /// A neighbour stayed silent past the lock-step timeout.
