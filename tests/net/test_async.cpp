@@ -2,6 +2,9 @@
 // neighbour, staleness bound, and injected faults (30 % drops and 50 ms delays at the receiver,
 // a killed and restarted node), on a render of paper5_render.yaml (30 frames, 60 with drops and
 // delays), k_e = 10, k_s = 100.
+#include <algorithm>
+#include <sstream>
+
 #include "net_test_util.hpp"
 
 using namespace netvmo;
@@ -95,5 +98,22 @@ TEST(Async, NodesConvergeWithDropsDelaysAndARestartedNode) {
     for (const char* id : {"1", "2", "4"})
       EXPECT_GE(m[id]["forgotten_stale"].get<int>(), 1) << "camera " << id;
     EXPECT_EQ(m["5"]["forgotten_stale"].get<int>(), 0);  // not a neighbour of camera 3
+    // The effective graph each node logged: camera 3 is in camera 1's mutual term before the
+    // kill and out of it at the last frame (forgotten); camera 5 keeps both its neighbours.
+    auto links = [&](int camera) {
+      std::istringstream in(netvmo::test::slurp(dir / "d" / "nodes" /
+                                                ("node_" + std::to_string(camera) + "_links.csv")));
+      std::vector<std::string> sets;  // the neighbours field of every frame
+      std::string l;
+      std::getline(in, l);  // header
+      while (std::getline(in, l)) sets.push_back(l.substr(l.rfind(',') + 1));
+      return sets;
+    };
+    const auto l1 = links(1), l5 = links(5);
+    ASSERT_GE(l1.size(), 2u);
+    ASSERT_GE(l5.size(), 2u);
+    EXPECT_NE(std::find(l1.begin(), l1.end(), "2 3 5"), l1.end());
+    EXPECT_EQ(l1.back(), "2 5");
+    EXPECT_EQ(l5.back(), "1 4");
   }
 }

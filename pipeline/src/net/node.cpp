@@ -137,6 +137,10 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   const std::string stem = "node_" + std::to_string(o.camera_id);
   io::AtomicFile csv(out_dir / (stem + ".csv"));
   csv << kHeader << "\n";
+  // The effective graph as this camera sees it: after each frame, the neighbours whose estimate
+  // is in its mutual term (heard, initialised, not forgotten as stale).
+  io::AtomicFile links(out_dir / (stem + "_links.csv"));
+  links << "frame,t,neighbours\n";
   NodeSummary summary;
   summary.substeps = N;
   std::vector<obs::EstimateMessage> inbox;
@@ -214,6 +218,12 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
     }
     for (int r = 0; r < N_ind; ++r) ind.step(h_ind);
     csv << frame_row(k, t, cam, net, ind);
+    std::string in_term;
+    for (size_t a = 0; a < net.latest().size(); ++a)
+      if (net.latest()[a] && net.latest()[a]->initialized)
+        in_term += (in_term.empty() ? "" : " ") +
+                   std::to_string(labels[static_cast<size_t>(net.neighbours()[a])]);
+    links << k << "," << t << "," << in_term << "\n";
     if (o.publish_ros_pose && net.initialized())
       transport.publish_average_pose(net.estimate_world(), t);
   }
@@ -221,6 +231,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   // killed neighbour would never acknowledge).
   transport.flush(async ? 0.2 : 5.0);
   csv.commit();
+  links.commit();
   summary.frames = frames;
   const auto dropped = summary.stats.dropped;
   summary.stats = transport.stats();
