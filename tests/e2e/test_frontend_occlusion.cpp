@@ -21,15 +21,6 @@ using namespace netvmo;
 namespace {
 const fs::path kSource = NETVMO_SOURCE_DIR;
 
-io::Calibration calibration(const render::Intrinsics& k) {
-  io::Calibration c;
-  c.width = k.width;
-  c.height = k.height;
-  c.K = cv::Matx33d(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1);
-  for (int j = 0; j < 5; ++j) c.dist[j] = k.dist[static_cast<size_t>(j)];
-  return c;
-}
-
 /// Largest distance of a detected corner from the truth [px] (infinite without truth).
 double max_corner_error(const std::array<cv::Point2d, 4>& c, const render::FrameTruth& t) {
   double e = 0.0;
@@ -137,7 +128,7 @@ TEST(FrontEndOcclusion, OccluderSweepNoCornerOffAndEveryVisibleTagKept) {
   Tally s;
   for (int k = 0; k < r.frame_count(); ++k)
     for (int i = 0; i < r.camera_count(); ++i)
-      observe(r.render(i, k), calibration(scene.cameras[static_cast<size_t>(i)].intrinsics),
+      observe(r.render(i, k), io::scene_calibration(scene.cameras[static_cast<size_t>(i)]),
               r.truth(i, k), checked, unchecked, s);
   print("occluder_sweep", s);
   EXPECT_EQ(s.off_by_more_than_1px, 0);
@@ -160,7 +151,7 @@ TEST(FrontEndOcclusion, MovingTargetNoCornerOffOnPartlyVisibleTags) {
     for (int i = 0; i < r.camera_count(); ++i) {
       const auto t = r.truth(i, k);
       if (t.visible_fraction == 0.0 || (t.in_fov && t.visible_fraction >= 0.999)) continue;
-      observe(r.render(i, k), calibration(scene.cameras[static_cast<size_t>(i)].intrinsics), t,
+      observe(r.render(i, k), io::scene_calibration(scene.cameras[static_cast<size_t>(i)]), t,
               checked, unchecked, s);
     }
   print("moving_target, partly visible", s);

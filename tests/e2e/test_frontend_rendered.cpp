@@ -16,15 +16,6 @@ using namespace netvmo;
 namespace {
 const fs::path kSource = NETVMO_SOURCE_DIR;
 
-io::Calibration calibration(const render::Intrinsics& k) {
-  io::Calibration c;
-  c.width = k.width;
-  c.height = k.height;
-  c.K = cv::Matx33d(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1);
-  for (int j = 0; j < 5; ++j) c.dist[j] = k.dist[static_cast<size_t>(j)];
-  return c;
-}
-
 // RMS corner error [px] of the front end over the cameras and frames where the tag is detected
 // and its corners are known; also counts the detections.
 struct CornerStats {
@@ -40,8 +31,8 @@ CornerStats corner_rms(render::SceneDescription scene, int frames) {
   CornerStats s;
   for (int k = 0; k < frames; ++k) {
     for (int i = 0; i < r.camera_count(); ++i) {
-      const auto obs = fe.observe(
-          r.render(i, k), calibration(r.scene().cameras[static_cast<size_t>(i)].intrinsics));
+      const auto obs = fe.observe(r.render(i, k),
+                                  io::scene_calibration(r.scene().cameras[static_cast<size_t>(i)]));
       const auto truth = r.truth(i, k);
       if (!obs.delta) continue;
       ++s.detections;
@@ -107,7 +98,8 @@ TEST(FrontEndOnRenderedImages, PnpOfATwentyCentimetreTagAtTwoMetres) {
   frontend::FrontEnd fe(ds);
   const auto model = obs::FeatureModel::square(scene.target.tag.size);
   for (int i = 0; i < 3; ++i) {
-    const auto obs = fe.observe(r.render(i, 0), calibration(intrinsics));
+    const auto obs =
+        fe.observe(r.render(i, 0), io::scene_calibration(scene.cameras[static_cast<size_t>(i)]));
     ASSERT_TRUE(obs.delta) << "camera " << i + 1;
     const auto pose = frontend::pnp_pose(obs.f_normalized, model);
     ASSERT_TRUE(pose.has_value());
@@ -151,7 +143,7 @@ TEST(FrontEndOnRenderedImages, DetectionAgreesWithGeometricVisibility) {
       const bool hidden = t.visible_fraction == 0.0;
       if (!fully_visible && !hidden) continue;  // partly visible: either outcome is allowed
       const auto obs =
-          fe.observe(r.render(i, k), calibration(scene.cameras[static_cast<size_t>(i)].intrinsics));
+          fe.observe(r.render(i, k), io::scene_calibration(scene.cameras[static_cast<size_t>(i)]));
       const bool detected = obs.delta;
       if (fully_visible) {
         ++must;
@@ -184,7 +176,7 @@ TEST(FrontEndOnRenderedImages, TrackingWindowFindsTheTagWithFullFrameCorners) {
   frontend::DetectorSettings ds;
   ds.target_id = scene.target.tag.id;
   frontend::FrontEnd tracked(ds), full(ds, frontend::TrackingSettings{false});
-  const auto calib = calibration(scene.cameras[0].intrinsics);
+  const auto calib = io::scene_calibration(scene.cameras[0]);
   frontend::TrackState track;
   for (int k = 0; k < 4; ++k) {
     const cv::Mat img = r.render(0, k);

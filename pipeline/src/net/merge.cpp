@@ -122,14 +122,8 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
   result.substeps =
       os.substeps > 0 ? os.substeps : obs::stable_substeps(dt, os, graph.max_degree());
   result.step_factor = dt / result.substeps * (rs.k_e + 2.0 * rs.k_s * graph.max_degree());
-  if (result.step_factor >= 2.0) {
-    char b[200];
-    std::snprintf(b, sizeof b,
-                  "%d exchange rounds per frame give h (k_e + 2 k_s d_max) = %.2f >= 2: the "
-                  "discrete observer is unstable; use more rounds",
-                  result.substeps, result.step_factor);
-    result.warnings.emplace_back(b);
-  }
+  if (auto w = run::step_factor_warning(result.substeps, result.step_factor))
+    result.warnings.push_back(*w);
   std::vector<std::optional<SE3>> true_wi(n);
   for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth(i);
   for (int k = 0; k < frames; ++k) {

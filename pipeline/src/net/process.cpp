@@ -53,6 +53,21 @@ std::vector<ChildResult> supervise(const std::vector<pid_t>& pids_in, double tim
   bool killing = false;
   double kill_time = 0.0;
   for (size_t i = 0; i < pids.size(); ++i) res[i].pid = pids[i];
+  // Stops every child still running (SIGTERM now, SIGKILL two seconds later, below).
+  const auto stop_all = [&] {
+    killing = true;
+    kill_time = elapsed();
+    if (awaiting) {  // the planned victim was never restarted: nothing to kill there
+      done[plan->index] = true;
+      --left;
+      awaiting = false;
+    }
+    for (size_t k = 0; k < pids.size(); ++k)
+      if (!done[k]) {
+        res[k].killed = true;
+        ::kill(pids[k], SIGTERM);
+      }
+  };
   while (left > 0) {
     for (size_t i = 0; i < pids.size(); ++i) {
       if (done[i] || (awaiting && i == plan->index)) continue;
@@ -78,20 +93,7 @@ std::vector<ChildResult> supervise(const std::vector<pid_t>& pids_in, double tim
         continue;
       }
       const bool failed = !res[i].finished || res[i].exit_code != 0;
-      if (failed && kill_on_failure && !killing) {
-        killing = true;
-        kill_time = elapsed();
-        if (awaiting) {  // never restarted: nothing to kill there
-          done[plan->index] = true;
-          --left;
-          awaiting = false;
-        }
-        for (size_t k = 0; k < pids.size(); ++k)
-          if (!done[k]) {
-            res[k].killed = true;
-            ::kill(pids[k], SIGTERM);
-          }
-      }
+      if (failed && kill_on_failure && !killing) stop_all();
     }
     if (left == 0) break;
     if (plan && !killing && plan->index < pids.size()) {
@@ -109,20 +111,7 @@ std::vector<ChildResult> supervise(const std::vector<pid_t>& pids_in, double tim
         awaiting = false;
       }
     }
-    if (!killing && elapsed() > timeout_s) {
-      killing = true;
-      kill_time = elapsed();
-      if (awaiting) {
-        done[plan->index] = true;
-        --left;
-        awaiting = false;
-      }
-      for (size_t k = 0; k < pids.size(); ++k)
-        if (!done[k]) {
-          res[k].killed = true;
-          ::kill(pids[k], SIGTERM);
-        }
-    }
+    if (!killing && elapsed() > timeout_s) stop_all();
     if (killing && elapsed() > kill_time + 2.0)
       for (size_t k = 0; k < pids.size(); ++k)
         if (!done[k]) ::kill(pids[k], SIGKILL);

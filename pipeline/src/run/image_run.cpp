@@ -33,6 +33,16 @@ obs::Graph network_graph(const io::NetworkConfig& net) {
   return g;
 }
 
+std::optional<std::string> step_factor_warning(int substeps, double step_factor) {
+  if (step_factor < 2.0) return std::nullopt;
+  char b[200];
+  std::snprintf(b, sizeof b,
+                "%d exchange rounds per frame give h (k_e + 2 k_s d_max) = %.2f >= 2: the "
+                "discrete observer is unstable; use more rounds",
+                substeps, step_factor);
+  return std::string(b);
+}
+
 ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOptions& options,
                           const FrameHook& hook) {
   const io::NetworkConfig& net = provider.network();
@@ -66,14 +76,8 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
   const double dt = 1.0 / net.fps;
   result.substeps = runner.substeps(dt);
   result.step_factor = runner.step_factor(dt);
-  if (result.step_factor >= 2.0) {
-    char b[200];
-    std::snprintf(b, sizeof b,
-                  "%d exchange rounds per frame give h (k_e + 2 k_s d_max) = %.2f >= 2: the "
-                  "discrete observer is unstable; use more rounds",
-                  result.substeps, result.step_factor);
-    result.warnings.emplace_back(b);
-  }
+  if (auto w = step_factor_warning(result.substeps, result.step_factor))
+    result.warnings.push_back(*w);
   int frames = provider.frame_count();
   if (options.max_frames) frames = std::min(frames, *options.max_frames);
 

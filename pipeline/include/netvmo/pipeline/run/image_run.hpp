@@ -55,6 +55,10 @@ struct ImageRunResult {
 /// naming network.yaml when it is disconnected (Assumption 1).
 obs::Graph network_graph(const io::NetworkConfig& net);
 
+/// The warning a run gives when h (k_e + 2 k_s d_max) = step_factor reaches 2 (the forward-Euler
+/// stability limit), or none.
+std::optional<std::string> step_factor_warning(int substeps, double step_factor);
+
 /// Runs the whole network over the provider's frames. Throws InputError for bad input (an
 /// unreadable image without keep_going, a disconnected graph, an unknown camera id).
 ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOptions& options,
