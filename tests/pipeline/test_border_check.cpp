@@ -17,10 +17,6 @@ namespace netvmo {
 namespace {
 using namespace io;
 using namespace frontend;
-using testing::facing_pose;
-using testing::project_corners;
-using testing::render_tags;
-using testing::SynthOptions;
 
 constexpr double kSize = 0.2;
 
@@ -74,15 +70,15 @@ TEST(BorderCheck, QuadOnAnOccludersOutlineRejected) {
     double level, roll, edge_cells;  // occluder gray level, tag roll, its edge from the left side
   };
   for (const Case& c : {Case{20, 0.03, -0.4}, Case{90, 0.06, -0.4}, Case{200, 0.06, 0.2}}) {
-    const obs::SE3 g = facing_pose(1.5, 0.0, 0.0, {0.0, 0.0, c.roll});
-    const auto truth = project_corners(calib, g, kSize);
+    const obs::SE3 g = testing::facing_pose(1.5, 0.0, 0.0, {0.0, 0.0, c.roll});
+    const auto truth = testing::project_corners(calib, g, kSize);
     const double left = 0.5 * (truth[0].x + truth[3].x), cell = cv::norm(truth[1] - truth[0]) / 8;
-    SynthOptions opt;
+    testing::SynthOptions opt;
     opt.noise_sigma = 2.0;
     opt.occluder_level = c.level;
     opt.occluders = {
         cv::Rect(0, 0, static_cast<int>(std::lround(left + c.edge_cells * cell)), 480)};
-    const cv::Mat img = render_tags(calib, {{0, kSize, g, {}}}, opt);
+    const cv::Mat img = testing::render_tags(calib, {{0, kSize, g, {}}}, opt);
     const std::string what = "occluder level " + std::to_string(c.level);
 
     const auto unchecked = TagDetector(with_check(false)).detect(img, &calib);
@@ -109,11 +105,11 @@ TEST(BorderCheck, QuadOnAnOccludersOutlineRejected) {
 // border (corners ~7 px off). The quiet zone beyond that side is outside the image: rejected.
 TEST(BorderCheck, QuadOnTheImageBorderRejected) {
   const auto calib = testing::test_calibration();
-  const obs::SE3 g = facing_pose(1.2, 0.5175, 0.0, {0.0, 0.0, 0.05});
-  const auto truth = project_corners(calib, g, kSize);
-  SynthOptions opt;
+  const obs::SE3 g = testing::facing_pose(1.2, 0.5175, 0.0, {0.0, 0.0, 0.05});
+  const auto truth = testing::project_corners(calib, g, kSize);
+  testing::SynthOptions opt;
   opt.noise_sigma = 2.0;
-  const cv::Mat img = render_tags(calib, {{0, kSize, g, {}}}, opt);
+  const cv::Mat img = testing::render_tags(calib, {{0, kSize, g, {}}}, opt);
   const auto unchecked = TagDetector(with_check(false)).detect(img, &calib);
   ASSERT_EQ(unchecked.status, TargetStatus::detected);
   ASSERT_GT(max_corner_error(unchecked.target()->corners, truth), 1.5);
@@ -129,12 +125,12 @@ TEST(BorderCheck, QuadOnTheImageBorderRejected) {
 // light), all with noise sigma 2. Every one is decoded without the check (so only the check
 // is tested), the check runs on it (`checked`) and accepts it.
 TEST(BorderCheck, CleanBlurredAndShadowedTagsKept) {
-  const std::vector<obs::SE3> poses = {facing_pose(1.0, 0.05, -0.03, {0.3, -0.2, 0.4}),
-                                       facing_pose(1.5, -0.2, 0.1, {-0.4, 0.1, 1.2}),
-                                       facing_pose(2.0, 0.3, 0.2, {0.2, 0.5, -2.5}),
-                                       facing_pose(0.8, -0.1, -0.15, {0.6, 0.0, 0.1}),
-                                       facing_pose(2.0, -0.1, 0.05, {-0.3, -0.35, 0.8}),
-                                       facing_pose(3.0, 0.1, -0.1, {0.5, 0.3, 0.2})};
+  const std::vector<obs::SE3> poses = {testing::facing_pose(1.0, 0.05, -0.03, {0.3, -0.2, 0.4}),
+                                       testing::facing_pose(1.5, -0.2, 0.1, {-0.4, 0.1, 1.2}),
+                                       testing::facing_pose(2.0, 0.3, 0.2, {0.2, 0.5, -2.5}),
+                                       testing::facing_pose(0.8, -0.1, -0.15, {0.6, 0.0, 0.1}),
+                                       testing::facing_pose(2.0, -0.1, 0.05, {-0.3, -0.35, 0.8}),
+                                       testing::facing_pose(3.0, 0.1, -0.1, {0.5, 0.3, 0.2})};
   TagDetector unchecked(with_check(false)), checked(with_check(true));
   const cv::Mat pattern = tag_pattern("tag36h11", 0);
   int n = 0;
@@ -142,9 +138,9 @@ TEST(BorderCheck, CleanBlurredAndShadowedTagsKept) {
   for (bool distortion : {false, true}) {
     const auto calib = testing::test_calibration(distortion);
     for (size_t p = 0; p < poses.size(); ++p) {
-      const auto truth = project_corners(calib, poses[p], kSize);
+      const auto truth = testing::project_corners(calib, poses[p], kSize);
       const cv::Point2d centre = 0.25 * (truth[0] + truth[1] + truth[2] + truth[3]);
-      const cv::Mat clean = render_tags(calib, {{0, kSize, poses[p], {}}});
+      const cv::Mat clean = testing::render_tags(calib, {{0, kSize, poses[p], {}}});
       for (int v = 0; v < 6; ++v) {
         cv::Mat img = clean.clone();
         std::string what = "clean";
@@ -190,10 +186,11 @@ TEST(BorderCheck, PointSampledTagsKept) {
   for (int supersample : {1, 4})
     for (double z : {1.0, 1.5, 2.0, 2.5})
       for (double dx : {0.0, 0.013, 0.027, 0.041}) {
-        SynthOptions opt;
+        testing::SynthOptions opt;
         opt.supersample = supersample;
         opt.noise_sigma = 2.0;
-        const cv::Mat img = render_tags(calib, {{0, kSize, facing_pose(z, dx, 0.011), {}}}, opt);
+        const cv::Mat img =
+            testing::render_tags(calib, {{0, kSize, testing::facing_pose(z, dx, 0.011), {}}}, opt);
         const std::string what = std::to_string(supersample) + " samples per pixel side, z " +
                                  std::to_string(z) + ", dx " + std::to_string(dx);
         const auto a = unchecked.detect(img, &calib);

@@ -74,6 +74,16 @@ dds_qos_t* estimate_qos(Mode mode, bool writer) {
   return q;
 }
 
+// A read condition on `reader` and a waitset attached to it, for blocking reads.
+void make_waitset(dds_entity_t participant, dds_entity_t reader, dds_entity_t& readcond,
+                  dds_entity_t& waitset) {
+  readcond = dds_create_readcondition(reader, DDS_ANY_STATE);
+  check(readcond, "create read condition");
+  waitset = dds_create_waitset(participant);
+  check(waitset, "create waitset");
+  check(dds_waitset_attach(waitset, readcond, 0), "attach read condition");
+}
+
 obs::EstimateMessage from_sample(const netvmo_msg_Estimate& s) {
   obs::EstimateMessage m;
   m.sender = s.sender;
@@ -133,11 +143,7 @@ DdsTransport::DdsTransport(int self, std::vector<int> neighbours, std::vector<in
     reader_ = dds_create_reader(participant_, topic_, rq, nullptr);
     dds_delete_qos(rq);
     check(reader_, "create reader");
-    readcond_ = dds_create_readcondition(reader_, DDS_ANY_STATE);
-    check(readcond_, "create read condition");
-    waitset_ = dds_create_waitset(participant_);
-    check(waitset_, "create waitset");
-    check(dds_waitset_attach(waitset_, readcond_, 0), "attach read condition");
+    make_waitset(participant_, reader_, readcond_, waitset_);
     const std::string pose_topic = "rt/netvmo/camera_" + label(labels_, self_) + "/average_pose";
     pose_topic_ = dds_create_topic(participant_, &geometry_msgs_msg_dds__PoseStamped__desc,
                                    pose_topic.c_str(), nullptr, nullptr);
@@ -330,11 +336,7 @@ PoseStampedReader::PoseStampedReader(int domain, int camera_id) {
     reader_ = dds_create_reader(participant_, topic_, q, nullptr);
     dds_delete_qos(q);
     check(reader_, "create pose reader");
-    readcond_ = dds_create_readcondition(reader_, DDS_ANY_STATE);
-    check(readcond_, "create read condition");
-    waitset_ = dds_create_waitset(participant_);
-    check(waitset_, "create waitset");
-    check(dds_waitset_attach(waitset_, readcond_, 0), "attach read condition");
+    make_waitset(participant_, reader_, readcond_, waitset_);
   } catch (...) {
     dds_delete(participant_);
     throw;
