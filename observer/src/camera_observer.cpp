@@ -42,6 +42,10 @@ SE3 integrate(const SE3& g_bar, const Vec6& V_wi, const Vec6& u, double h) {
   return g;
 }
 
+int frame_substeps(double dt, const ObserverSettings& s, int max_degree) {
+  return s.substeps > 0 ? s.substeps : stable_substeps(dt, s, max_degree);
+}
+
 int stable_substeps(double dt, const ObserverSettings& s, int max_degree) {
   const double lambda_max = s.k_e + 2.0 * s.k_s * max_degree;
   return std::max(1, static_cast<int>(std::ceil(dt * lambda_max / s.step_factor - 1e-12)));

@@ -53,8 +53,7 @@ void NetworkedObserver::set_transport(std::unique_ptr<Transport> transport) {
 }
 
 int NetworkedObserver::substeps(double dt) const {
-  return settings_.substeps > 0 ? settings_.substeps
-                                : stable_substeps(dt, settings_, graph_.max_degree());
+  return frame_substeps(dt, settings_, graph_.max_degree());
 }
 
 void NetworkedObserver::step(double dt, const std::vector<Measurement>& z) {

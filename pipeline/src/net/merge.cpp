@@ -119,8 +119,7 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
   const double dt = 1.0 / net.fps;
   run::ImageRunResult result;
   result.warnings = provider.warnings();
-  result.substeps =
-      os.substeps > 0 ? os.substeps : obs::stable_substeps(dt, os, graph.max_degree());
+  result.substeps = obs::frame_substeps(dt, os, graph.max_degree());
   result.step_factor = dt / result.substeps * (rs.k_e + 2.0 * rs.k_s * graph.max_degree());
   if (auto w = run::step_factor_warning(result.substeps, result.step_factor))
     result.warnings.push_back(*w);

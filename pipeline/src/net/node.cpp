@@ -108,11 +108,8 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   net.set_incarnation(incarnation);
   const double dt = 1.0 / netcfg.fps;
   // Sub-steps as NetworkedObserver::substeps: the independent baseline (k_s = 0) needs fewer.
-  const auto substeps = [&](const obs::CameraObserver& c) {
-    return c.settings().substeps > 0 ? c.settings().substeps
-                                     : obs::stable_substeps(dt, c.settings(), graph.max_degree());
-  };
-  const int N = substeps(net), N_ind = substeps(ind);
+  const int N = obs::frame_substeps(dt, net.settings(), graph.max_degree());
+  const int N_ind = obs::frame_substeps(dt, ind.settings(), graph.max_degree());
   const double h = dt / N, h_ind = dt / N_ind;
 
   frontend::DetectorSettings ds = o.run.detector;

@@ -80,6 +80,9 @@ SE3 integrate(const SE3& g_bar, const Vec6& V_wi, const Vec6& u, double h);
 
 /// Smallest N with (dt/N) (k_e + 2 k_s d_max) <= step_factor.
 int stable_substeps(double dt, const ObserverSettings& s, int max_degree);
+/// Sub-steps (exchange rounds) of a frame of length dt: s.substeps when set, else
+/// stable_substeps(dt, s, max_degree).
+int frame_substeps(double dt, const ObserverSettings& s, int max_degree);
 
 class CameraObserver {
  public:
