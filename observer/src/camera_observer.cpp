@@ -5,8 +5,6 @@
 #include <stdexcept>
 #include <string>
 
-#include "netvmo/observer/metrics.hpp"
-
 namespace netvmo::obs {
 
 const char* to_string(MessageVerdict v) {
@@ -47,15 +45,18 @@ int frame_substeps(double dt, const ObserverSettings& s, int max_degree) {
 }
 
 int stable_substeps(double dt, const ObserverSettings& s, int max_degree) {
-  const double lambda_max = s.k_e + 2.0 * s.k_s * max_degree;
+  const double lambda_max = find_estimator(s.estimator).rate_bound(s, max_degree);
   return std::max(1, static_cast<int>(std::ceil(dt * lambda_max / s.step_factor - 1e-12)));
 }
 
-CameraObserver::CameraObserver(int index, std::vector<int> neighbours, ObserverSettings settings)
+CameraObserver::CameraObserver(int index, std::vector<int> neighbours, ObserverSettings settings,
+                               int network_size)
     : index_(index),
       neighbours_(std::move(neighbours)),
       settings_(std::move(settings)),
-      model_(&find_error_model(settings_.error_model)) {
+      model_(&find_error_model(settings_.error_model)),
+      estimator_(&find_estimator(settings_.estimator)),
+      network_size_(network_size) {
   if (!(settings_.k_e >= 0.0) || !(settings_.k_s >= 0.0))
     throw std::invalid_argument("gains k_e and k_s must be non-negative");
   if (!(settings_.step_factor > 0.0 && settings_.step_factor < 2.0))
@@ -68,6 +69,7 @@ CameraObserver::CameraObserver(int index, std::vector<int> neighbours, ObserverS
       throw std::invalid_argument("camera " + std::to_string(index_) + " lists neighbour " +
                                   std::to_string(neighbours_[a]) + " twice");
   }
+  estimator_->check(settings_, *model_, network_size_);
   latest_.resize(neighbours_.size());
   refused_.assign(5, 0);
 }
@@ -77,9 +79,11 @@ EstimateMessage CameraObserver::publish(double stamp) {
   m.sender = index_;
   m.round = ++round_;
   m.stamp = stamp;
-  m.initialized = initialized_;
+  m.initialized = st_.initialized;
   m.incarnation = incarnation_;
-  m.g_w = g_wi_ * g_bar_;
+  m.g_w = g_wi_ * st_.g_bar;
+  const auto k = static_cast<size_t>(estimator_->state_size());
+  std::copy(st_.consensus.begin(), st_.consensus.begin() + k, m.state.begin());
   return m;
 }
 
@@ -95,6 +99,9 @@ MessageVerdict check_pose(const SE3& g) {
 MessageVerdict CameraObserver::receive(const EstimateMessage& m) {
   const auto it = std::find(neighbours_.begin(), neighbours_.end(), m.sender);
   MessageVerdict v = it == neighbours_.end() ? MessageVerdict::not_a_neighbour : check_pose(m.g_w);
+  if (v == MessageVerdict::accepted &&
+      !std::all_of(m.state.begin(), m.state.end(), [](double x) { return std::isfinite(x); }))
+    v = MessageVerdict::not_finite;
   auto* slot = v == MessageVerdict::accepted
                    ? &latest_[static_cast<size_t>(it - neighbours_.begin())]
                    : nullptr;
@@ -115,46 +122,13 @@ void CameraObserver::forget(int j) {
   if (it != neighbours_.end()) latest_[static_cast<size_t>(it - neighbours_.begin())].reset();
 }
 
-namespace {
-// Smallest depth of the target's feature points under an estimate (camera frame).
-double min_depth(const SE3& g_bar, const FeatureModel& m) {
-  double z = 1e300;
-  for (const auto& p : m.points_o) z = std::min(z, (g_bar * p).z());
-  return z;
-}
-}  // namespace
-
 void CameraObserver::set_measurement(const Measurement& z) {
   z_ = z;
-  if (!settings_.init_from_measurement || !z.delta || !z.g_io_pnp) return;
-  // An estimate of the image-feature model must keep the tag in front of the camera.
-  const bool unusable = initialized_ && model_->input() == MeasurementInput::features &&
-                        min_depth(g_bar_, settings_.features) < settings_.min_feature_depth;
-  if (!initialized_ || unusable) {
-    g_bar_ = *z.g_io_pnp;
-    initialized_ = true;
-  }
+  estimator_->measured(view(), st_);
 }
 
 void CameraObserver::step(double h) {
-  if (!initialized_ && settings_.init_from_neighbours) {
-    std::vector<SE3> nb;
-    for (const auto& m : latest_)
-      if (m && m->initialized) nb.push_back(m->g_w);
-    if (!nb.empty()) {
-      g_bar_ = g_wi_.inverse() * average_pose(nb);
-      initialized_ = true;
-    }
-  }
-  if (!initialized_) return;
-  const SE3 own_w = g_wi_ * g_bar_;
-  Vec6 mutual = Vec6::Zero();
-  for (const auto& m : latest_)
-    if (m && m->initialized) mutual += mutual_error(own_w, m->g_w);
-  Vec6 u = settings_.k_s * mutual;  // (eq:input_f-)
-  if (model_->usable(z_)) u += settings_.k_e * model_->error(g_bar_, z_, settings_.features);
-  u_ = u;
-  g_bar_ = integrate(g_bar_, V_wi_, u_, h);  // (eq:EsRRBM)
+  estimator_->step(view(), st_, h);
 }
 
 }  // namespace netvmo::obs

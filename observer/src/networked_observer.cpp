@@ -11,7 +11,8 @@ NetworkedObserver::NetworkedObserver(Graph graph, ObserverSettings settings)
     throw std::invalid_argument("communication graph is disconnected (Assumption 1); components: " +
                                 describe_components(graph_.components(), {}));
   cameras_.reserve(static_cast<size_t>(graph_.size()));
-  for (int i = 0; i < graph_.size(); ++i) cameras_.emplace_back(i, graph_.neighbors(i), settings_);
+  for (int i = 0; i < graph_.size(); ++i)
+    cameras_.emplace_back(i, graph_.neighbors(i), settings_, graph_.size());
   transport_ = std::make_unique<InProcessTransport>(graph_);
 }
 

@@ -1,10 +1,11 @@
-// One camera's networked visual motion observer: the unit of the paper's distributed
-// estimator. Camera i owns exactly
+// One camera's networked estimator: the unit of the paper's distributed estimator (and of the
+// zero-offset estimator, estimator.hpp). Camera i owns exactly
 //   - its estimate g_bar_i of g*_i = g_wi^-1 g* (in its own frame),
 //   - its believed pose g_wi and body velocity V_wi (the -hat(V_wi) g_bar_i term),
 //   - its latest measurement (delta_i, features or a pose), held until the next one,
 //   - the latest estimate each neighbour j in N_i published, g_wj g_bar_j,
-// and advances by an elapsed time h with one Lie-group Euler step of
+// and advances by an elapsed time h with one step of its estimator (estimator.hpp); the paper's
+// (`vmo`, the default) is one Lie-group Euler step of
 //   (eq:EsRRBM)   d/dt g_bar_i = -hat(V_wi) g_bar_i + g_bar_i hat(u_ei)
 //   (eq:input_f-) u_ei = delta_i k_e e_ei + k_s sum_{j in N_i} E_R(g_bar_i^-1 g_ij g_bar_j).
 // The same class runs in process (NetworkedObserver composes n of them with a Transport), in a
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "netvmo/observer/error_model.hpp"
+#include "netvmo/observer/estimator.hpp"
 #include "netvmo/observer/jacobian.hpp"
 #include "netvmo/observer/lie.hpp"
 #include "netvmo/observer/measurement.hpp"
@@ -26,8 +28,10 @@ namespace netvmo::obs {
 
 /// Gains and discretisation of the observer. Defaults are the paper's Section 5 gains.
 struct ObserverSettings {
-  double k_e = 1.0;   ///< visual feedback gain k_e > 0
-  double k_s = 50.0;  ///< mutual feedback gain k_s >= 0 (0: independent observers)
+  /// The estimator, by its registry name (estimator.hpp): vmo (the paper's) or zero-offset.
+  std::string estimator = "vmo";
+  double k_e = 1.0;   ///< visual feedback gain k_e > 0 (zero-offset: alpha, the input gain)
+  double k_s = 50.0;  ///< mutual feedback gain k_s >= 0 (0: independent; zero-offset: beta)
   /// Visual error model, by its registry name (error_model.hpp): exact, jacobian or pnp.
   std::string error_model = "exact";
   FeatureModel features = FeatureModel::square(0.2);  ///< the target's feature points
@@ -43,6 +47,9 @@ struct ObserverSettings {
   /// g_bar_i = g_wi^-1 average_pose(g_wj g_bar_j).
   bool init_from_neighbours = false;
   double min_feature_depth = 0.05;  ///< [m], see init_from_measurement
+  /// zero-offset: the output is held while the camera's estimate x_delta,i of the fraction of
+  /// cameras that see the target is below this; 0 = 1/(2n), half the smallest non-zero fraction.
+  double hold_threshold = 0.0;
 };
 
 /// What a camera publishes to its neighbours once per exchange round.
@@ -55,13 +62,16 @@ struct EstimateMessage {
   /// message of a newer incarnation is accepted whatever its round, one of an older is not.
   std::uint64_t incarnation = 0;
   SE3 g_w = SE3::Identity();  ///< g_wi g_bar_i: the sender's estimate in the world frame
+  /// The sender's consensus state (Estimator::state_size() values, the rest zero): zero-offset's
+  /// x_i and eta_i. Unused by vmo.
+  ConsensusState state{};
 };
 
 /// Why receive() refused a message (it is then counted and otherwise ignored).
 enum class MessageVerdict {
   accepted,
   not_a_neighbour,  ///< the sender is not in N_i (or is the receiver itself)
-  not_finite,       ///< NaN or infinity in the pose
+  not_finite,       ///< NaN or infinity in the pose or the consensus state
   not_a_rotation,   ///< the rotation block is not orthonormal with determinant +1
   out_of_order      ///< a round not newer than the last one accepted from that sender
 };
@@ -78,7 +88,8 @@ Vec6 mutual_error(const SE3& g_bar_w_i, const SE3& g_bar_w_j);
 /// One Lie-group Euler step of (eq:EsRRBM): exp(-h hat(V_wi)) g_bar exp(h hat(u)).
 SE3 integrate(const SE3& g_bar, const Vec6& V_wi, const Vec6& u, double h);
 
-/// Smallest N with (dt/N) (k_e + 2 k_s d_max) <= step_factor.
+/// Smallest N with (dt/N) * rate_bound <= step_factor, rate_bound the estimator's
+/// (vmo: k_e + 2 k_s d_max).
 int stable_substeps(double dt, const ObserverSettings& s, int max_degree);
 /// Sub-steps (exchange rounds) of a frame of length dt: s.substeps when set, else
 /// stable_substeps(dt, s, max_degree).
@@ -87,23 +98,27 @@ int frame_substeps(double dt, const ObserverSettings& s, int max_degree);
 class CameraObserver {
  public:
   /// `index`: this camera's index in the network (the sender of its messages); `neighbours`:
-  /// N_i as indices. Throws std::invalid_argument on a negative gain, a step factor outside
-  /// (0, 2), an unknown error model or a neighbour list that contains `index` or repeats.
-  CameraObserver(int index, std::vector<int> neighbours, ObserverSettings settings);
+  /// N_i as indices; `network_size`: n (0 = unknown; zero-offset needs it unless
+  /// hold_threshold is set). Throws std::invalid_argument on a negative gain, a step factor
+  /// outside (0, 2), an unknown error model or estimator, settings the estimator cannot run
+  /// with, or a neighbour list that contains `index` or repeats.
+  CameraObserver(int index, std::vector<int> neighbours, ObserverSettings settings,
+                 int network_size = 0);
 
   int index() const { return index_; }
   const std::vector<int>& neighbours() const { return neighbours_; }
   const ObserverSettings& settings() const { return settings_; }
   const ErrorModel& error_model() const { return *model_; }
+  const Estimator& estimator() const { return *estimator_; }
   /// This camera's incarnation, carried by its messages (default 0).
   void set_incarnation(std::uint64_t k) { incarnation_ = k; }
 
   /// Sets g_bar_i (in the camera's frame). Does not change initialized().
-  void reset(const SE3& g_bar) { g_bar_ = g_bar; }
+  void reset(const SE3& g_bar) { st_.g_bar = g_bar; }
   /// An uninitialised camera keeps its estimate, and its neighbours leave it out of their
   /// mutual term (used while a camera has no estimate yet). Default: initialised.
-  void set_initialized(bool on) { initialized_ = on; }
-  bool initialized() const { return initialized_; }
+  void set_initialized(bool on) { st_.initialized = on; }
+  bool initialized() const { return st_.initialized; }
   /// Believed camera pose g_wi (the source of g_ij = g_wi^-1 g_wj). Default: identity.
   void set_camera_pose(const SE3& g_wi) { g_wi_ = g_wi; }
   const SE3& camera_pose() const { return g_wi_; }
@@ -126,33 +141,37 @@ class CameraObserver {
   /// Messages refused so far, by verdict (index = MessageVerdict value).
   const std::vector<std::uint64_t>& refused() const { return refused_; }
 
-  /// Advances g_bar_i by h with the held measurement and the latest neighbour estimates
-  /// (with init_from_neighbours an uninitialised camera first tries to start from its
-  /// neighbours; nothing happens while uninitialised). Throws std::domain_error from the error
-  /// model.
+  /// Advances g_bar_i by h with the held measurement and the latest neighbour estimates (one
+  /// step of the estimator; vmo: with init_from_neighbours an uninitialised camera first tries
+  /// to start from its neighbours, and nothing happens while uninitialised). Throws
+  /// std::domain_error from the error model.
   void step(double h);
 
-  const SE3& estimate() const { return g_bar_; }
+  const SE3& estimate() const { return st_.g_bar; }
   /// g_bar_w,i = g_wi g_bar_i: the estimate in the world frame.
-  SE3 estimate_world() const { return g_wi_ * g_bar_; }
-  /// The input u_ei of the last step (diagnostics).
-  const Vec6& input() const { return u_; }
+  SE3 estimate_world() const { return g_wi_ * st_.g_bar; }
+  /// The input u_ei of the last step (vmo, diagnostics).
+  const Vec6& input() const { return st_.u; }
+  /// The estimator's whole state (consensus state, hold flag).
+  const EstimatorState& state() const { return st_; }
 
  private:
   int index_;
   std::vector<int> neighbours_;
   ObserverSettings settings_;
   const ErrorModel* model_;
-  SE3 g_bar_ = SE3::Identity();
+  const Estimator* estimator_;
+  int network_size_ = 0;
+  EstimatorState st_;
   SE3 g_wi_ = SE3::Identity();
   Vec6 V_wi_ = Vec6::Zero();
-  Vec6 u_ = Vec6::Zero();
-  bool initialized_ = true;
   Measurement z_;
   std::uint64_t round_ = 0;
   std::uint64_t incarnation_ = 0;
   std::vector<std::optional<EstimateMessage>> latest_;
   std::vector<std::uint64_t> refused_;
+
+  CameraView view() const { return {settings_, *model_, g_wi_, V_wi_, z_, latest_, network_size_}; }
 };
 
 }  // namespace netvmo::obs
