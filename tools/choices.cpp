@@ -3,6 +3,7 @@
 #include <vector>
 
 #include "netvmo/observer/error_model.hpp"
+#include "netvmo/observer/estimator.hpp"
 #include "netvmo/pipeline/sim/simulation.hpp"
 
 namespace netvmo::tools {
@@ -18,6 +19,16 @@ CLI::Option* add_error_model_option(CLI::App& cmd, std::string& value, ErrorMode
     help += "\n" + name + ": " + std::string(m->description());
   }
   return cmd.add_option("--error", value, help)->check(CLI::IsMember(names));
+}
+
+CLI::Option* add_estimator_option(CLI::App& cmd, std::string& value) {
+  std::vector<std::string> names;
+  std::string help = "Networked estimator:";
+  for (const auto* e : obs::estimators()) {
+    names.emplace_back(e->name());
+    help += "\n" + names.back() + ": " + std::string(e->description());
+  }
+  return cmd.add_option("--estimator", value, help)->check(CLI::IsMember(names));
 }
 
 void add_transport_options(CLI::App& cmd, run::TransportSettings& s) {

@@ -15,6 +15,9 @@ enum class ErrorModelUse { images, simulation };
 /// per model.
 CLI::Option* add_error_model_option(CLI::App& cmd, std::string& value, ErrorModelUse use);
 
+/// Adds --estimator, restricted to the registered estimators, with one help line each.
+CLI::Option* add_estimator_option(CLI::App& cmd, std::string& value);
+
 /// Adds --transport (the registered kinds, one help line each), --drop and --seed.
 void add_transport_options(CLI::App& cmd, run::TransportSettings& s);
 

@@ -102,6 +102,7 @@ void add_launch(CLI::App& app, int& exit_code) {
   cmd->callback([o, &exit_code] {
     exit_code = guarded("launch", [&] {
       const auto options = to_image_run_options(o->run);
+      require_paper_observer(options);
       auto provider = sources::open_dataset_source(o->dataset);
       const auto& netcfg = provider->network();
       for (const auto& w : provider->warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());

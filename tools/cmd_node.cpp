@@ -85,6 +85,7 @@ void add_node(CLI::App& app, int& exit_code) {
       }
       net::NodeOptions no;
       no.run = to_image_run_options(o->run);
+      require_paper_observer(no.run);
       no.run.progress = false;
       no.camera_id = o->camera;
       no.dds.domain = o->domain;

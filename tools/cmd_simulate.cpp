@@ -18,7 +18,7 @@ struct SimulateOptions {
   std::string scenario;
   std::string out = "results/simulate";
   std::optional<double> k_e, k_s, duration, compare_ks;
-  std::string error;
+  std::string error, estimator;
   bool no_plots = false;
 };
 
@@ -77,6 +77,7 @@ void add_simulate(CLI::App& app, int& exit_code) {
   cmd->add_option("--ks", o->k_s, "Mutual feedback gain k_s")->default_str("from scenario");
   cmd->add_option("--duration", o->duration, "Simulated time [s]")->default_str("from scenario");
   add_error_model_option(*cmd, o->error, ErrorModelUse::simulation)->default_str("from scenario");
+  add_estimator_option(*cmd, o->estimator)->default_str("from scenario");
   cmd->add_option(
       "--compare-ks", o->compare_ks,
       "Also run with this k_s (into OUT/compare_ks) and draw it dashed in energies.png");
@@ -92,6 +93,7 @@ void add_simulate(CLI::App& app, int& exit_code) {
         if (!problem.empty()) throw InputError("--error: " + problem);
         s.error_model = o->error;
       }
+      if (!o->estimator.empty()) s.estimator = o->estimator;
       if (!(s.k_e > 0) || !(s.k_s >= 0) || !(s.duration > 0))
         throw InputError("--ke must be > 0, --ks >= 0 and --duration > 0");
       const fs::path dir = o->out;
@@ -104,9 +106,10 @@ void add_simulate(CLI::App& app, int& exit_code) {
         sim::write_outputs(s2, sim::simulate(s2), dir / "compare_ks");
         compare = std::make_pair(s2.k_s, dir / "compare_ks");
       }
-      std::printf("scenario %s: %zu cameras, error %s, k_e = %g, k_s = %g, %d sub-steps/frame\n",
-                  s.name.c_str(), s.cameras.size(), s.error_model.c_str(), s.k_e, s.k_s,
-                  r.substeps);
+      std::printf(
+          "scenario %s: %zu cameras, %s, error %s, k_e = %g, k_s = %g, %d sub-steps/frame\n",
+          s.name.c_str(), s.cameras.size(), s.estimator.c_str(), s.error_model.c_str(), s.k_e,
+          s.k_s, r.substeps);
       std::printf("  g*: p* = %s  xi theta* = %s\n", fmt3(r.g_star.translation()).c_str(),
                   fmt3(obs::rotvec(r.g_star)).c_str());
       std::printf("  final: U_p = %.3e  U_R = %.3e  eps_p = %.3g  eps_R = %.3g\n",

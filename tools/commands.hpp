@@ -34,6 +34,7 @@ void add_simulate(CLI::App& app, int& exit_code);
 void add_render(CLI::App& app, int& exit_code);
 void add_detect(CLI::App& app, int& exit_code);
 void add_run(CLI::App& app, int& exit_code);
+void add_sweep(CLI::App& app, int& exit_code);
 void add_demo(CLI::App& app, int& exit_code);
 void add_bench(CLI::App& app, int& exit_code);
 void add_node(CLI::App& app, int& exit_code);

@@ -41,10 +41,11 @@ void panels_figure(const std::vector<Panel>& panels, const fs::path& png,
   s << "set terminal pngcairo size " << width << ",480 enhanced font 'Sans,10'\n"
     << "set output " << quoted(partial_path(png)) << "\n"
     << "set datafile separator ','\nset grid\nset key top right\n"
-    << "set multiplot layout 1," << panels.size() << " title " << quoted(title) << "\n"
-    << "set xlabel 'time [s]'\n";
+    << "set multiplot layout 1," << panels.size() << " title " << quoted(title) << "\n";
   for (const auto& p : panels) {
-    s << "set title " << quoted(p.title) << "\nset ylabel " << quoted(p.ylabel) << "\n";
+    s << "set title " << quoted(p.title) << "\nset ylabel " << quoted(p.ylabel) << "\n"
+      << "set xlabel " << quoted(p.xlabel) << "\n"
+      << (p.log_x ? "set logscale x\n" : "unset logscale x\n");
     if (p.log_y)
       s << "set logscale y\nset format y '10^{%L}'\n";
     else

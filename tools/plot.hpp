@@ -31,9 +31,11 @@ struct Panel {
   bool log_y = false;
   std::vector<Series> series;
   std::optional<std::pair<std::string, double>> reference;  ///< dashed horizontal line
+  std::string xlabel = "time [s]";
+  bool log_x = false;
 };
 
-/// Panels side by side, time on the x axis.
+/// Panels side by side (time on the x axis unless a panel says otherwise).
 void panels_figure(const std::vector<Panel>& panels, const std::filesystem::path& png,
                    const std::string& title);
 

@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "choices.hpp"
+#include "netvmo/observer/estimator.hpp"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/run/overlay.hpp"
 #include "netvmo/pipeline/run/run_report.hpp"
@@ -13,6 +14,15 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 void add_run_options(CLI::App& cmd, RunCliOptions& o, bool in_process_transport) {
+  add_estimator_option(cmd, o.estimator)->capture_default_str();
+  if (in_process_transport) {
+    std::vector<std::string> names;
+    for (const auto* e : obs::estimators()) names.emplace_back(e->name());
+    cmd.add_option("--compare-estimator", o.compare,
+                   "Also run this networked estimator on the same measurements with the same "
+                   "gains and report it in summary.json (cameras[].compared, final)")
+        ->check(CLI::IsMember(names));
+  }
   cmd.add_option("--ke", o.k_e, "Visual feedback gain k_e")->capture_default_str();
   cmd.add_option("--ks", o.k_s, "Mutual feedback gain k_s (0: independent observers)")
       ->capture_default_str();
@@ -49,6 +59,8 @@ void add_run_options(CLI::App& cmd, RunCliOptions& o, bool in_process_transport)
 run::ImageRunOptions to_image_run_options(const RunCliOptions& o) {
   if (!(o.k_e > 0) || !(o.k_s >= 0)) throw InputError("--ke must be > 0 and --ks >= 0");
   run::ImageRunOptions r;
+  r.runner.estimator = o.estimator;
+  r.runner.compare_estimators = o.compare;
   r.runner.k_e = o.k_e;
   r.runner.k_s = o.k_s;
   r.runner.error_model = o.error;
@@ -61,6 +73,13 @@ run::ImageRunOptions to_image_run_options(const RunCliOptions& o) {
   r.tracking.enabled = !o.no_track;
   r.transport = o.transport;
   return r;
+}
+
+void require_paper_observer(const run::ImageRunOptions& o) {
+  if (o.runner.estimator != "vmo")
+    throw InputError("--estimator " + o.runner.estimator +
+                     ": cameras as processes run the paper's observer (vmo) only; the DDS "
+                     "Estimate type does not carry the consensus state yet (use netvmo run)");
 }
 
 json run_and_report(sources::NetworkSource& provider, const RunCliOptions& o, const fs::path& dir) {
@@ -97,12 +116,12 @@ std::string cell(const json& stats, const char* key, double scale, const char* f
 
 void print_run_summary(const json& s, const fs::path& dir) {
   std::printf(
-      "%s: %d frames, k_e = %g, k_s = %g, error %s, init %s, %d rounds/frame, %.1f network "
+      "%s: %d frames, %s, k_e = %g, k_s = %g, error %s, init %s, %d rounds/frame, %.1f network "
       "frames/s\n",
-      s["dataset"].get<std::string>().c_str(), s["frames"].get<int>(), s["k_e"].get<double>(),
-      s["k_s"].get<double>(), s["error"].get<std::string>().c_str(),
-      s["init"].get<std::string>().c_str(), s["rounds_per_frame"].get<int>(),
-      s["timing"]["network_frames_per_second"].get<double>());
+      s["dataset"].get<std::string>().c_str(), s["frames"].get<int>(),
+      s["estimator"].get<std::string>().c_str(), s["k_e"].get<double>(), s["k_s"].get<double>(),
+      s["error"].get<std::string>().c_str(), s["init"].get<std::string>().c_str(),
+      s["rounds_per_frame"].get<int>(), s["timing"]["network_frames_per_second"].get<double>());
   const bool truth = !s["final"].is_null();
   std::printf("camera  seen   %s\n",
               truth ? "final error to g*: networked | independent | PnP   [mm, deg]"

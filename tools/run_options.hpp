@@ -13,6 +13,8 @@ namespace netvmo::tools {
 
 /// The command line's view of run::ImageRunOptions: every default is the library's own.
 struct RunCliOptions {
+  std::string estimator = run::RunnerSettings{}.estimator;
+  std::vector<std::string> compare;  ///< --compare-estimator
   double k_e = run::RunnerSettings{}.k_e;
   double k_s = run::RunnerSettings{}.k_s;
   std::string error = run::RunnerSettings{}.error_model;
@@ -32,6 +34,9 @@ struct RunCliOptions {
 /// (not for node and launch, whose transport is DDS with faults of their own).
 void add_run_options(CLI::App& cmd, RunCliOptions& o, bool in_process_transport = true);
 run::ImageRunOptions to_image_run_options(const RunCliOptions& o);
+/// Throws InputError unless the options run the paper's observer alone (`node`, `launch`: the
+/// DDS Estimate type carries no consensus state).
+void require_paper_observer(const run::ImageRunOptions& o);
 
 /// Runs the provider, writes the outputs, overlays and plots into dir; returns the summary.
 nlohmann::json run_and_report(sources::NetworkSource& provider, const RunCliOptions& o,

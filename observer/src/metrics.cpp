@@ -59,4 +59,17 @@ double theorem1_orientation_offset(const Spread& s) {
   return std::sqrt(2.0 * s.phi_m);
 }
 
+Theorem1Bound theorem1_bound(double k, const Spread& s, double W, int diameter, int n_visible) {
+  const double inf = std::numeric_limits<double>::infinity();
+  // (sqrt(alpha |V_f| / rho) + sqrt(eps'))^2 with alpha = k rho diam / (2 beta) and
+  // eps' = 1 - (sqrt(beta) - sqrt(k W))^2 (Appendix, eps -> 0).
+  const auto bound = [&](double beta) {
+    if (!(beta > 0.0) || !(k * W < beta)) return inf;
+    const double a = std::sqrt(k * diameter * n_visible / (2.0 * beta));
+    const double b = std::sqrt(beta) - std::sqrt(k * W);
+    return std::pow(a + std::sqrt(1.0 - b * b), 2);
+  };
+  return {bound(1.0), bound(1.0 - std::sqrt(2.0 * s.phi_m))};
+}
+
 }  // namespace netvmo::obs

@@ -62,3 +62,17 @@ TEST(Metrics, EnergiesAndLevelsMatchClosedForms) {
   EXPECT_NEAR(l.eps_p, (0.04 / 2) / (0.02 / 2), 1e-12);
   EXPECT_NEAR(l.eps_R, (e.U_R / 2) / (s.rho_R / 2), 1e-12);
 }
+
+TEST(Metrics, Theorem1BoundTendsToTheOffsetAndGrowsWithK) {
+  Spread s;
+  s.phi_m = 0.02;  // beta = 1 - sqrt(0.04) = 0.8
+  const double W = 3, diam = 2;
+  EXPECT_NEAR(theorem1_bound(1e-14, s, W, diam, 3).eps_R, theorem1_orientation_offset(s), 1e-6);
+  EXPECT_NEAR(theorem1_bound(1e-14, s, W, diam, 3).eps_p, 0.0, 1e-6);
+  // A closed form at k = 0.01: eps_p = (sqrt(0.03) + sqrt(1 - (1 - sqrt(0.03))^2))^2.
+  const double a = std::sqrt(0.01 * diam * 3 / 2), b = 1 - std::sqrt(0.03);
+  EXPECT_NEAR(theorem1_bound(0.01, s, W, diam, 3).eps_p, std::pow(a + std::sqrt(1 - b * b), 2),
+              1e-12);
+  EXPECT_LT(theorem1_bound(0.01, s, W, diam, 3).eps_R, theorem1_bound(0.02, s, W, diam, 3).eps_R);
+  EXPECT_TRUE(std::isinf(theorem1_bound(0.8 / 3, s, W, diam, 3).eps_R));  // k W = beta
+}

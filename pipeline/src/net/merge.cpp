@@ -120,7 +120,7 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
   run::ImageRunResult result;
   result.warnings = provider.warnings();
   result.substeps = obs::frame_substeps(dt, os, graph.max_degree());
-  result.step_factor = dt / result.substeps * (rs.k_e + 2.0 * rs.k_s * graph.max_degree());
+  result.step_factor = run::step_factor(os, dt, result.substeps, graph.max_degree());
   if (auto w = run::step_factor_warning(result.substeps, result.step_factor))
     result.warnings.push_back(*w);
   std::vector<std::optional<SE3>> true_wi(n);

@@ -33,12 +33,27 @@ obs::Graph network_graph(const io::NetworkConfig& net) {
   return g;
 }
 
+std::vector<CameraInput> camera_inputs(const std::vector<CameraFrame>& cams,
+                                       const std::optional<obs::SE3>& target,
+                                       const std::vector<std::optional<obs::SE3>>& true_wi) {
+  std::vector<CameraInput> in(cams.size());
+  for (size_t i = 0; i < cams.size(); ++i) {
+    in[i].delta = cams[i].obs.delta;
+    in[i].f = cams[i].obs.f_normalized;  // (eq:visual_mea) with lambda = 1
+    in[i].g_io_pnp = cams[i].g_io_pnp;
+    if (target && true_wi[i])
+      in[i].g_io_true = true_wi[i]->inverse() * *target;  // g_io = g_wi^-1 g_wo
+  }
+  return in;
+}
+
 std::optional<std::string> step_factor_warning(int substeps, double step_factor) {
   if (step_factor < 2.0) return std::nullopt;
   char b[200];
   std::snprintf(b, sizeof b,
-                "%d exchange rounds per frame give h (k_e + 2 k_s d_max) = %.2f >= 2: the "
-                "discrete observer is unstable; use more rounds",
+                "%d exchange rounds per frame give h * (the estimator's rate bound; vmo: "
+                "k_e + 2 k_s d_max) = %.2f >= 2: the discrete observer is unstable; use more "
+                "rounds",
                 substeps, step_factor);
   return std::string(b);
 }
@@ -130,17 +145,8 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
     result.seconds_front_end += seconds_since(t_fe);
 
     const auto t_obs = Clock::now();
-    std::vector<run::CameraInput> in(n);
-    for (size_t i = 0; i < n; ++i) {
-      in[i].delta = cams[i].obs.delta;
-      in[i].f = cams[i].obs.f_normalized;  // (eq:visual_mea) with lambda = 1
-      in[i].g_io_pnp = cams[i].g_io_pnp;
-    }
     const auto target = provider.target_truth(k);
-    if (target) {
-      for (size_t i = 0; i < n; ++i)
-        if (true_wi[i]) in[i].g_io_true = true_wi[i]->inverse() * *target;  // g_io = g_wi^-1 g_wo
-    }
+    const auto in = camera_inputs(cams, target, true_wi);
     const auto& record = runner.process(k, k * dt, dt, in, target);
     result.seconds_observer += seconds_since(t_obs);
     if (hook) hook(k, images, cams, record);

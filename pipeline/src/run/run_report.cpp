@@ -55,6 +55,7 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
   s["dataset"] = provider.name();
   s["frames"] = h.size();
   s["fps"] = net.fps;
+  s["estimator"] = options.runner.estimator;
   s["k_e"] = options.runner.k_e;
   s["k_s"] = options.runner.k_s;
   s["error"] = options.runner.error_model;
@@ -71,6 +72,9 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
 
   std::vector<ErrorStats> net_star(n), net_true(n), ind_star(n), ind_true(n), pnp_star(n),
       pnp_true(n), pnp_own(n);
+  const auto& compared = options.runner.compare_estimators;
+  std::vector<std::vector<ErrorStats>> cmp_star(n, std::vector<ErrorStats>(compared.size())),
+      cmp_true = cmp_star;
   ErrorStats central_star, central_true;
   std::vector<int> seen(n, 0), failed(n, 0);
   for (size_t k = 0; k < h.size(); ++k) {
@@ -88,6 +92,10 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
       pnp_star[i].add(c.pnp_w, r.g_star);
       pnp_true[i].add(c.pnp_w, r.g_wo_true);
       pnp_own[i].add(c.pnp_w, c.fictitious_w);  // measurement error: PnP vs the true g_io
+      for (size_t e = 0; e < c.compare_w.size(); ++e) {
+        cmp_star[i][e].add(c.compare_w[e], r.g_star);
+        cmp_true[i][e].add(c.compare_w[e], r.g_wo_true);
+      }
     }
     central_star.add(r.central_w, r.g_star);
     central_true.add(r.central_w, r.g_wo_true);
@@ -103,6 +111,9 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
     c["pnp"] = {{"vs_g_star", pnp_star[i].to_json()},
                 {"vs_true", pnp_true[i].to_json()},
                 {"vs_own_fictitious_target", pnp_own[i].to_json()}};
+    for (size_t e = 0; e < compared.size(); ++e)  // further networked estimators, same gains
+      c["compared"][compared[e]] = {{"vs_g_star", cmp_star[i][e].to_json()},
+                                    {"vs_true", cmp_true[i][e].to_json()}};
     if (!h.empty()) {
       const auto& last = h.back().cameras[i];
       c["final_estimate"] = {{"p", vec3(last.est_w.translation())},
@@ -128,6 +139,11 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
       energy["U_p_independent_observers"] = h[k].energies_indep->U_p;
       energy["U_R_independent_observers"] = h[k].energies_indep->U_R;
     }
+    for (size_t e = 0; e < h[k].energies_compare.size(); ++e)
+      if (h[k].energies_compare[e]) {
+        energy["U_p_" + compared[e]] = h[k].energies_compare[e]->U_p;
+        energy["U_R_" + compared[e]] = h[k].energies_compare[e]->U_R;
+      }
     if (k >= h.size() - h.size() / 4) {
       eps_p_tail = std::max(eps_p_tail, h[k].eps->eps_p);
       eps_R_tail = std::max(eps_R_tail, h[k].eps->eps_R);

@@ -25,6 +25,7 @@ SE3 paper_initial_estimate() {
 
 obs::ObserverSettings camera_observer_settings(const RunnerSettings& s, bool independent) {
   obs::ObserverSettings o;
+  o.estimator = independent ? std::string("vmo") : s.estimator;
   o.k_e = s.k_e;
   o.k_s = independent ? 0.0 : s.k_s;
   o.error_model = s.error_model;
@@ -36,6 +37,10 @@ obs::ObserverSettings camera_observer_settings(const RunnerSettings& s, bool ind
   return o;
 }
 
+double step_factor(const obs::ObserverSettings& s, double dt, int substeps, int max_degree) {
+  return dt / substeps * obs::find_estimator(s.estimator).rate_bound(s, max_degree);
+}
+
 NetworkRunner::NetworkRunner(const obs::Graph& graph, std::vector<SE3> g_wi,
                              RunnerSettings settings)
     : graph_(graph),
@@ -45,14 +50,24 @@ NetworkRunner::NetworkRunner(const obs::Graph& graph, std::vector<SE3> g_wi,
       indep_(graph, camera_observer_settings(settings, true)) {
   const auto n = static_cast<size_t>(graph_.size());
   if (g_wi_.size() != n) throw std::invalid_argument("one believed pose per camera is required");
-  net_.set_camera_poses(g_wi_);
-  indep_.set_camera_poses(g_wi_);
+  for (const auto& name : settings_.compare_estimators) {
+    RunnerSettings c = settings_;
+    c.estimator = name;
+    compare_.emplace_back(graph, camera_observer_settings(c, false));
+  }
   // Under InitMode::Pnp each camera initialises itself (ObserverSettings::init_from_*).
   const std::vector<bool> paper(n, settings_.init == InitMode::Paper);
-  net_.reset(std::vector<SE3>(n, paper_initial_estimate()));
-  indep_.reset(std::vector<SE3>(n, paper_initial_estimate()));
-  net_.set_active(paper);
-  indep_.set_active(paper);
+  for (auto* o : observers()) {
+    o->set_camera_poses(g_wi_);
+    o->reset(std::vector<SE3>(n, paper_initial_estimate()));
+    o->set_active(paper);
+  }
+}
+
+std::vector<obs::NetworkedObserver*> NetworkRunner::observers() {
+  std::vector<obs::NetworkedObserver*> all{&net_, &indep_};
+  for (auto& c : compare_) all.push_back(&c);
+  return all;
 }
 
 void NetworkRunner::set_camera_motion(const std::vector<SE3>& g_wi,
@@ -60,15 +75,14 @@ void NetworkRunner::set_camera_motion(const std::vector<SE3>& g_wi,
   if (g_wi.size() != g_wi_.size() || V_wi.size() != g_wi_.size())
     throw std::invalid_argument("camera motion: one pose and one velocity per camera");
   g_wi_ = g_wi;
-  for (auto* o : {&net_, &indep_}) {
+  for (auto* o : observers()) {
     o->set_camera_poses(g_wi_);
     o->set_camera_velocities(V_wi);
   }
 }
 
 double NetworkRunner::step_factor(double dt) const {
-  const double h = dt / net_.substeps(dt);
-  return h * (settings_.k_e + 2.0 * settings_.k_s * graph_.max_degree());
+  return run::step_factor(net_.settings(), dt, net_.substeps(dt), graph_.max_degree());
 }
 
 void evaluate_frame(FrameRecord& r) {
@@ -95,6 +109,14 @@ void evaluate_frame(FrameRecord& r) {
                               static_cast<int>(fict_w.size()));
     }
     if (!ind_ready.empty()) r.energies_indep = obs::energies(ind_ready, *r.g_star);
+    const size_t nc = n ? r.cameras[0].compare_w.size() : 0;
+    r.energies_compare.assign(nc, std::nullopt);
+    for (size_t e = 0; e < nc; ++e) {
+      std::vector<SE3> ready;
+      for (const auto& c : r.cameras)
+        if (c.compare_w[e]) ready.push_back(*c.compare_w[e]);
+      if (ready.size() == n) r.energies_compare[e] = obs::energies(ready, *r.g_star);
+    }
   }
 }
 
@@ -109,8 +131,7 @@ const FrameRecord& NetworkRunner::process(int frame, double t, double dt,
       if (c.delta && !c.g_io_true)
         throw std::invalid_argument("the " + std::string(model.name()) +
                                     " error model needs ground truth (rendered data)");
-  net_.step(dt, in);
-  indep_.step(dt, in);
+  for (auto* o : observers()) o->step(dt, in);
 
   FrameRecord r;
   r.frame = frame;
@@ -125,6 +146,10 @@ const FrameRecord& NetworkRunner::process(int frame, double t, double dt,
     c.initialized = net_.camera(static_cast<int>(i)).initialized();
     c.est_w = est[i];
     if (indep_.camera(static_cast<int>(i)).initialized()) c.indep_w = ind[i];
+    for (const auto& o : compare_)
+      c.compare_w.push_back(o.camera(static_cast<int>(i)).initialized()
+                                ? std::optional<SE3>(o.camera(static_cast<int>(i)).estimate_world())
+                                : std::nullopt);
     if (in[i].delta && in[i].g_io_pnp) c.pnp_w = g_wi_[i] * *in[i].g_io_pnp;
     if (in[i].delta && in[i].g_io_true)
       c.fictitious_w = g_wi_[i] * *in[i].g_io_true;  // g_wo_i = g_wi g_io_i

@@ -41,6 +41,7 @@ obs::ObserverSettings observer_settings(const SimScenario& s) {
   o.k_e = s.k_e;
   o.k_s = s.k_s;
   o.error_model = s.error_model;
+  o.estimator = s.estimator;
   o.features = obs::FeatureModel::square(s.square_side);
   return o;
 }
@@ -64,6 +65,12 @@ SimScenario load_scenario(const fs::path& file) {
     g.finish();
   }
   s.error_model = root.get_or("error", s.error_model);
+  s.estimator = root.get_or("estimator", s.estimator);
+  try {
+    obs::find_estimator(s.estimator);
+  } catch (const std::invalid_argument& e) {
+    root.get("estimator").fail(e.what());
+  }
   const std::string problem = simulation_error_model_problem(s.error_model);
   if (!problem.empty()) root.get("error").fail(problem);
   s.square_side = root.get_or("square_side", s.square_side);
@@ -205,6 +212,7 @@ void write_outputs(const SimScenario& s, const SimResult& r, const fs::path& dir
   nlohmann::json j;
   j["scenario"] = s.name;
   j["error"] = s.error_model;
+  j["estimator"] = s.estimator;
   j["k_e"] = s.k_e;
   j["k_s"] = s.k_s;
   j["fps"] = s.fps;

@@ -45,4 +45,17 @@ EpsLevels eps_levels(const std::vector<SE3>& g_bar_w, const SE3& g_star, const S
 /// beta = 1 - sqrt(2 zeta), zeta > phi_m; returns the infimum sqrt(2 phi_m) (valid when < 1).
 double theorem1_orientation_offset(const Spread& s);
 
+/// Theorem 1's guarantee for a gain ratio k = k_e/k_s, as its proof (Appendix) bounds it with
+/// zeta -> phi_m and the position level epsilon -> 0: with beta = 1 - sqrt(2 phi_m),
+///   eps_R <= (sqrt(k diam |V_f| / (2 beta)) + sqrt(1 - (sqrt(beta) - sqrt(k W))^2))^2,
+/// and, by the same argument with beta = 1 (the paper: "the position part in the same way"),
+///   eps_p <= (sqrt(k diam |V_f| / 2) + sqrt(1 - (1 - sqrt(k W))^2))^2.
+/// Infinite where the proof gives no bound (k W >= beta, resp. k W >= 1). As k -> 0 eps_R tends
+/// to 1 - beta = theorem1_orientation_offset(s) and eps_p to 0.
+struct Theorem1Bound {
+  double eps_p = 0.0;
+  double eps_R = 0.0;
+};
+Theorem1Bound theorem1_bound(double k, const Spread& s, double W, int diameter, int n_visible);
+
 }  // namespace netvmo::obs

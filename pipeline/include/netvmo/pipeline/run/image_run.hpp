@@ -55,6 +55,13 @@ struct ImageRunResult {
 /// naming network.yaml when it is disconnected (Assumption 1).
 obs::Graph network_graph(const io::NetworkConfig& net);
 
+/// One frame's observer inputs: delta, the normalized corners and the PnP pose from the front
+/// end, and on data with truth the true relative pose g_io = g_wi^-1 g_wo (true_wi: the
+/// cameras' true poses, when known).
+std::vector<CameraInput> camera_inputs(const std::vector<CameraFrame>& cams,
+                                       const std::optional<obs::SE3>& target,
+                                       const std::vector<std::optional<obs::SE3>>& true_wi);
+
 /// The warning a run gives when h (k_e + 2 k_s d_max) = step_factor reaches 2 (the forward-Euler
 /// stability limit), or none.
 std::optional<std::string> step_factor_warning(int substeps, double step_factor);

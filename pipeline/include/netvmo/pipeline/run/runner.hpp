@@ -24,6 +24,12 @@ InitMode parse_init_mode(const std::string& s);
 const char* to_string(InitMode m);
 
 struct RunnerSettings {
+  /// The networked estimator, by its registry name (observer/estimator.hpp): vmo (the paper's)
+  /// or zero-offset.
+  std::string estimator = "vmo";
+  /// Further networked estimators run on the same measurements with the same gains, reported
+  /// as baselines (empty by default).
+  std::vector<std::string> compare_estimators;
   double k_e = 1.0;   ///< visual feedback gain
   double k_s = 50.0;  ///< mutual feedback gain
   /// Visual error model of (eq:input_f-), by its registry name (observer/error_model.hpp):
@@ -54,6 +60,8 @@ struct CameraRecord {
   std::optional<SE3> indep_w;       ///< independent observer (k_s = 0), once it has seen the tag
   std::optional<SE3> pnp_w;         ///< g_wi g_io,PnP (when delta)
   std::optional<SE3> fictitious_w;  ///< g_wi g_io,true: the fictitious target o_i (with truth)
+  /// Each RunnerSettings::compare_estimators' estimate, once it has one.
+  std::vector<std::optional<SE3>> compare_w;
 };
 
 struct FrameRecord {
@@ -66,6 +74,8 @@ struct FrameRecord {
   std::optional<obs::Energies> energies;        ///< networked, against g_star
   std::optional<obs::Energies> energies_indep;  ///< independent observers (initialised ones)
   std::optional<obs::EpsLevels> eps;            ///< networked, Definition 1 at this frame
+  /// Each compared estimator's energies against g_star, when every camera has an estimate.
+  std::vector<std::optional<obs::Energies>> energies_compare;
 };
 
 /// Completes a frame's record from its cameras' records (delta, initialized, est_w, indep_w,
@@ -73,10 +83,14 @@ struct FrameRecord {
 /// epsilon-levels. The in-process runner and the merge of per-camera processes both use it.
 void evaluate_frame(FrameRecord& r);
 
-/// The observer settings of one camera of a run: its networked observer (k_s = settings.k_s,
+/// The observer settings of one camera of a run: its networked estimator (k_s = settings.k_s,
 /// initialised from PnP and from its neighbours under InitMode::Pnp) or its independent
-/// baseline (k_s = 0, initialised from PnP only).
+/// baseline (the paper's observer with k_s = 0, initialised from PnP only).
 obs::ObserverSettings camera_observer_settings(const RunnerSettings& s, bool independent);
+
+/// h times the estimator's rate bound (vmo: h (k_e + 2 k_s d_max)) for `substeps` sub-steps of a
+/// frame of dt: < 2 stable, <= 1 non-oscillating.
+double step_factor(const obs::ObserverSettings& s, double dt, int substeps, int max_degree);
 
 class NetworkRunner {
  public:
@@ -95,7 +109,7 @@ class NetworkRunner {
   const RunnerSettings& settings() const { return settings_; }
   const obs::Graph& graph() const { return graph_; }
   const std::vector<SE3>& camera_poses() const { return g_wi_; }
-  /// h (k_e + 2 k_s d_max) for a frame of dt: < 2 stable, <= 1 non-oscillating.
+  /// h times the estimator's rate bound for a frame of dt: < 2 stable, <= 1 non-oscillating.
   double step_factor(double dt) const;
   /// Moving cameras: believed poses g_wi and body velocities V_wi = [v; w] for the coming frame
   /// (the -hat(V_wi) g_bar term of (eq:EsRRBM) and g_ij = g_wi^-1 g_wj). Call before process().
@@ -104,11 +118,14 @@ class NetworkRunner {
   void set_transport(std::unique_ptr<obs::Transport> t) { net_.set_transport(std::move(t)); }
 
  private:
+  std::vector<obs::NetworkedObserver*> observers();  ///< networked, independent, compared
+
   obs::Graph graph_;
   std::vector<SE3> g_wi_;
   RunnerSettings settings_;
   obs::NetworkedObserver net_;
   obs::NetworkedObserver indep_;
+  std::vector<obs::NetworkedObserver> compare_;
   std::vector<FrameRecord> history_;
 };
 

@@ -32,6 +32,8 @@ struct SimScenario {
   /// Visual error model (observer/error_model.hpp): exact or jacobian. A simulation gives every
   /// camera its true relative pose and its projected features, not a PnP pose.
   std::string error_model = "exact";
+  /// The networked estimator (observer/estimator.hpp): vmo (the paper's) or zero-offset.
+  std::string estimator = "vmo";
   double square_side = 0.2;       ///< side of the m = 4 point square used by the jacobian model (m)
   SE3 initial = SE3::Identity();  ///< g_bar_i(0), the same in every camera's frame
   std::vector<SimCamera> cameras;

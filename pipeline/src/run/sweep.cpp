@@ -1,0 +1,225 @@
+#include "netvmo/pipeline/run/sweep.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+
+#include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/run/run_report.hpp"
+
+namespace netvmo::run {
+namespace fs = std::filesystem;
+
+RecordedInputs record_inputs(sources::NetworkSource& provider, const ImageRunOptions& options) {
+  const auto result = run_images(provider, options);
+  const size_t n = provider.network().cameras.size();
+  std::vector<std::optional<SE3>> true_wi(n);
+  for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth(i);
+  RecordedInputs in;
+  in.dt = 1.0 / provider.network().fps;
+  for (size_t k = 0; k < result.frames.size(); ++k) {
+    in.targets.push_back(provider.target_truth(static_cast<int>(k)));
+    in.frames.push_back(camera_inputs(result.frames[k], in.targets.back(), true_wi));
+  }
+  return in;
+}
+
+namespace {
+
+std::string cache_header(const sources::NetworkSource& provider, const ImageRunOptions& o,
+                         size_t frames) {
+  char b[512];
+  std::snprintf(b, sizeof b,
+                "# netvmo inputs v1: dataset %s, %zu frames, %zu cameras, decimate %g, refine %s, "
+                "track %d",
+                provider.name().c_str(), frames, provider.network().cameras.size(),
+                o.detector.quad_decimate, frontend::to_string(o.detector.refinement),
+                o.tracking.enabled ? 1 : 0);
+  return b;
+}
+
+size_t expected_frames(const sources::NetworkSource& provider, const ImageRunOptions& o) {
+  int frames = provider.frame_count();
+  if (o.max_frames) frames = std::min(frames, *o.max_frames);
+  return static_cast<size_t>(frames);
+}
+
+}  // namespace
+
+void write_inputs_cache(const fs::path& file, const sources::NetworkSource& provider,
+                        const ImageRunOptions& options, const RecordedInputs& in) {
+  io::AtomicFile f(file);
+  f << cache_header(provider, options, in.frames.size()) << '\n';
+  f << "frame,camera_index,delta,f0,f1,f2,f3,f4,f5,f6,f7,pnp,px,py,pz,r00,r01,r02,r10,r11,r12,"
+       "r20,r21,r22\n";
+  char b[64];
+  const auto num = [&](double v) {
+    std::snprintf(b, sizeof b, ",%.17g", v);
+    f << b;
+  };
+  for (size_t k = 0; k < in.frames.size(); ++k)
+    for (size_t i = 0; i < in.frames[k].size(); ++i) {
+      const auto& z = in.frames[k][i];
+      f << k << ',' << i << ',' << (z.delta ? 1 : 0);
+      for (int j = 0; j < 8; ++j) num(z.f.size() == 8 ? z.f[j] : 0.0);
+      f << ',' << (z.g_io_pnp ? 1 : 0);
+      const SE3 g = z.g_io_pnp ? *z.g_io_pnp : SE3::Identity();
+      for (int j = 0; j < 3; ++j) num(g.translation()[j]);
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) num(g.linear()(r, c));
+      f << '\n';
+    }
+  f.commit();
+}
+
+std::optional<RecordedInputs> read_inputs_cache(const fs::path& file,
+                                                const sources::NetworkSource& provider,
+                                                const ImageRunOptions& options) {
+  std::ifstream f(file);
+  if (!f) return std::nullopt;
+  const size_t frames = expected_frames(provider, options);
+  const size_t n = provider.network().cameras.size();
+  std::string line;
+  if (!std::getline(f, line) || line != cache_header(provider, options, frames))
+    return std::nullopt;
+  std::getline(f, line);  // column names
+  RecordedInputs in;
+  in.dt = 1.0 / provider.network().fps;
+  in.frames.assign(frames, std::vector<CameraInput>(n));
+  std::vector<std::optional<SE3>> true_wi(n);
+  for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth(i);
+  size_t rows = 0;
+  for (int lineno = 3; std::getline(f, line); ++lineno) {
+    std::vector<double> v;
+    std::stringstream ss(line);
+    for (std::string cell; std::getline(ss, cell, ',');) {
+      char* end = nullptr;
+      v.push_back(std::strtod(cell.c_str(), &end));
+      if (cell.empty() || *end) v.push_back(std::nan(""));
+    }
+    const bool ok = v.size() == 24 &&
+                    std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); }) &&
+                    v[0] >= 0 && v[0] < frames && v[1] >= 0 && v[1] < n;
+    if (!ok)
+      throw InputError(file.string() + ": line " + std::to_string(lineno) +
+                       ": malformed row (delete the file to detect again)");
+    auto& z = in.frames[static_cast<size_t>(v[0])][static_cast<size_t>(v[1])];
+    z.delta = v[2] != 0;
+    if (z.delta) z.f = Eigen::Map<const Eigen::VectorXd>(&v[3], 8);
+    if (v[11] != 0) {
+      SE3 g = SE3::Identity();
+      g.translation() = obs::Vec3(v[12], v[13], v[14]);
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) g.linear()(r, c) = v[15 + 3 * r + c];
+      z.g_io_pnp = g;
+    }
+    ++rows;
+  }
+  if (rows != frames * n)
+    throw InputError(file.string() + ": " + std::to_string(rows) + " rows for " +
+                     std::to_string(frames * n) + " (delete the file to detect again)");
+  for (size_t k = 0; k < frames; ++k) {
+    in.targets.push_back(provider.target_truth(static_cast<int>(k)));
+    for (size_t i = 0; i < n; ++i)
+      if (in.targets.back() && true_wi[i])
+        in.frames[k][i].g_io_true = true_wi[i]->inverse() * *in.targets.back();
+  }
+  return in;
+}
+
+SweepContext sweep_context(const io::NetworkConfig& net, const RecordedInputs& in) {
+  SweepContext c{network_graph(net), {}, 0.0, 0, {}, 0};
+  for (const auto& cam : net.cameras) c.g_wi.push_back(cam.g_wi);
+  c.W = obs::paper_W(c.graph).value;
+  c.diameter = c.graph.diameter();
+  if (!in.frames.empty()) {  // the visible set of the last frame, through the true g_io
+    std::vector<SE3> fict;
+    for (size_t i = 0; i < in.frames.back().size(); ++i) {
+      const auto& z = in.frames.back()[i];
+      if (z.delta && z.g_io_true) fict.push_back(c.g_wi[i] * *z.g_io_true);
+    }
+    if (!fict.empty()) c.spread = obs::spread(fict, obs::average_pose(fict));
+    c.n_visible = static_cast<int>(fict.size());
+  }
+  return c;
+}
+
+SweepPoint sweep_point(const SweepContext& c, RunnerSettings settings, const RecordedInputs& in) {
+  NetworkRunner runner(c.graph, c.g_wi, settings);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  SweepPoint p;
+  p.k_e = settings.k_e;
+  p.k_s = settings.k_s;
+  p.rounds = runner.substeps(in.dt);
+  p.step_factor = runner.step_factor(in.dt);
+  p.eps_p = p.eps_R = p.U_p = p.U_R = p.worst_position_m = p.worst_orientation_deg = nan;
+  for (size_t k = 0; k < in.frames.size(); ++k)
+    runner.process(static_cast<int>(k), k * in.dt, in.dt, in.frames[k], in.targets[k]);
+  const auto& h = runner.history();
+  const size_t tail = h.size() - h.size() / 4;
+  for (size_t k = 0; k < h.size(); ++k) {
+    if (!h[k].energies) continue;
+    p.eps_p = h[k].eps->eps_p;
+    p.eps_R = h[k].eps->eps_R;
+    p.U_p = h[k].energies->U_p;
+    p.U_R = h[k].energies->U_R;
+    if (k >= tail) {
+      p.eps_p_tail = std::max(p.eps_p_tail, p.eps_p);
+      p.eps_R_tail = std::max(p.eps_R_tail, p.eps_R);
+    }
+    p.worst_position_m = p.worst_orientation_deg = 0.0;
+    for (const auto& cam : h[k].cameras) {
+      const auto e = pose_error(cam.est_w, *h[k].g_star);
+      p.worst_position_m = std::max(p.worst_position_m, e.position);
+      p.worst_orientation_deg = std::max(p.worst_orientation_deg, e.orientation_deg);
+    }
+  }
+  const double k_ratio =
+      settings.k_s > 0 ? settings.k_e / settings.k_s : std::numeric_limits<double>::infinity();
+  p.bound = obs::theorem1_bound(k_ratio, c.spread, c.W, c.diameter, c.n_visible);
+  return p;
+}
+
+std::vector<double> parse_gain_list(const std::string& option, const std::string& text,
+                                    bool allow_zero) {
+  std::vector<double> out;
+  std::set<double> seen;
+  std::stringstream ss(text);
+  for (std::string item; std::getline(ss, item, ',');) {
+    char* end = nullptr;
+    const double v = std::strtod(item.c_str(), &end);
+    const auto fail = [&](const std::string& why) {
+      throw InputError(option + ": '" + item + "' " + why + " (expected e.g. " + option +
+                       " 0,1,2,5)");
+    };
+    if (item.empty() || *end || !std::isfinite(v)) fail("is not a number");
+    if (v < 0 || (!allow_zero && v == 0)) fail(allow_zero ? "is negative" : "must be positive");
+    if (!seen.insert(v).second) fail("is listed twice");
+    out.push_back(v);
+  }
+  if (out.empty() || text.back() == ',')
+    throw InputError(option + ": an empty list or item (expected e.g. " + option + " 0,1,2,5)");
+  return out;
+}
+
+void write_sweep_csv(const fs::path& file, const std::vector<SweepPoint>& points) {
+  io::AtomicFile f(file);
+  f << "k_e,k_s,k,rounds,step_factor,eps_p,eps_R,eps_p_last_quarter,eps_R_last_quarter,U_p,U_R,"
+       "worst_position_mm,worst_orientation_deg,theorem1_eps_p,theorem1_eps_R\n";
+  char b[512];
+  for (const auto& p : points) {
+    std::snprintf(
+        b, sizeof b, "%g,%g,%.9g,%d,%.4g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,%.9g,%.9g\n",
+        p.k_e, p.k_s, p.k_s > 0 ? p.k_e / p.k_s : std::numeric_limits<double>::infinity(), p.rounds,
+        p.step_factor, p.eps_p, p.eps_R, p.eps_p_tail, p.eps_R_tail, p.U_p, p.U_R,
+        p.worst_position_m * 1000.0, p.worst_orientation_deg, p.bound.eps_p, p.bound.eps_R);
+    f << b;
+  }
+  f.commit();
+}
+
+}  // namespace netvmo::run
