@@ -17,7 +17,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-void plot_sweep(const fs::path& dir, const std::string& title) {
+void plot_sweep(const fs::path& dir, std::string title) {
+  for (size_t at = title.find('_'); at != std::string::npos; at = title.find('_', at + 2))
+    title.insert(at, "\\");  // a literal underscore in gnuplot's enhanced text
   const fs::path csv = dir / "sweep.csv";
   const auto s = [&](const char* t, int y, const char* style) {
     return plot::Series{csv, t, y, 3, style};
@@ -120,8 +122,8 @@ void add_sweep(CLI::App& app, int& exit_code) {
       const double secs = std::chrono::duration<double>(Clock::now() - t0).count();
       run::write_sweep_csv(dir / "sweep.csv", points);
       if (!o->no_plot)
-        plot_sweep(dir, provider->name() + ": " + o->runner.estimator + ", error " +
-                            o->runner.error_model);
+        plot_sweep(dir, fs::path(o->dataset).filename().string() + ": " + o->runner.estimator +
+                            ", error " + o->runner.error_model);
       std::printf("%zu grid points in %.2f s (observer only); results in %s/\n", points.size(),
                   secs, dir.string().c_str());
       return 0;

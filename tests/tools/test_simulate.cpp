@@ -201,3 +201,23 @@ TEST(SimulationErrors, FailedRunLeavesEarlierResultsIntact) {
   EXPECT_EQ(slurp(dir / "out" / "summary.json"), before);
   fs::remove_all(dir);
 }
+
+// `estimator:` in a scenario (or --estimator) picks the zero-offset estimator: g* itself.
+TEST(Simulation, ZeroOffsetEstimatorEndsOnGStarAndAnUnknownOneIsNamed) {
+  auto s = sim::load_scenario(kSource / "datasets/paper5.yaml");
+  s.estimator = "zero-offset";
+  const auto r = sim::simulate(s);
+  for (const auto& g : r.estimates_world.back()) {
+    EXPECT_LT((g.translation() - r.g_star.translation()).norm(), 1e-9);
+    EXPECT_LT(orientation_error(g, r.g_star), 1e-9);
+  }
+  const auto dir = test::scratch_dir("sim_estimator");
+  std::string yaml = slurp(kSource / "datasets/paper5.yaml");
+  const auto at = yaml.find("estimator: vmo");
+  ASSERT_NE(at, std::string::npos);
+  yaml.replace(at, 14, "estimator: nope");
+  std::ofstream(dir / "bad.yaml") << yaml;
+  test::expect_input_error([&] { sim::load_scenario(dir / "bad.yaml"); },
+                           {"bad.yaml", "estimator", "unknown estimator 'nope'"});
+  fs::remove_all(dir);
+}

@@ -211,7 +211,9 @@ void write_sweep_csv(const fs::path& file, const std::vector<SweepPoint>& points
   f << "k_e,k_s,k,rounds,step_factor,eps_p,eps_R,eps_p_last_quarter,eps_R_last_quarter,U_p,U_R,"
        "worst_position_mm,worst_orientation_deg,theorem1_eps_p,theorem1_eps_R\n";
   char b[512];
-  for (const auto& p : points) {
+  for (size_t i = 0; i < points.size(); ++i) {
+    const auto& p = points[i];
+    if (i && p.k_e != points[i - 1].k_e) f << '\n';  // one block per k_e (gnuplot's lines)
     std::snprintf(
         b, sizeof b, "%g,%g,%.9g,%d,%.4g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,%.9g,%.9g\n",
         p.k_e, p.k_s, p.k_s > 0 ? p.k_e / p.k_s : std::numeric_limits<double>::infinity(), p.rounds,

@@ -66,7 +66,8 @@ SweepPoint sweep_point(const SweepContext& c, RunnerSettings settings, const Rec
 std::vector<double> parse_gain_list(const std::string& option, const std::string& text,
                                     bool allow_zero);
 
-/// Writes sweep.csv (one row per point, the bound next to the measurement) atomically.
+/// Writes sweep.csv (one row per point, the bound next to the measurement; a blank line between
+/// runs of different k_e, so gnuplot draws one line per k_e) atomically.
 void write_sweep_csv(const std::filesystem::path& file, const std::vector<SweepPoint>& points);
 
 }  // namespace netvmo::run
