@@ -82,6 +82,8 @@ void add_sweep(CLI::App& app, int& exit_code) {
     exit_code = guarded("sweep", [&] {
       const auto ks = run::parse_gain_list("--ks", o->ks, true);
       const auto ke = run::parse_gain_list("--ke", o->ke, false);
+      // An estimator that cannot run with this error model fails here, before any detection.
+      obs::CameraObserver(0, {}, run::camera_observer_settings(o->runner, false), 1);
       auto provider = sources::open_dataset_source(o->dataset);
       run::ImageRunOptions options;
       options.runner = o->runner;

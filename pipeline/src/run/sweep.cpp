@@ -194,7 +194,7 @@ std::vector<double> parse_gain_list(const std::string& option, const std::string
     const double v = std::strtod(item.c_str(), &end);
     const auto fail = [&](const std::string& why) {
       throw InputError(option + ": '" + item + "' " + why + " (expected e.g. " + option +
-                       " 0,1,2,5)");
+                       " 1,2,5)");
     };
     if (item.empty() || *end || !std::isfinite(v)) fail("is not a number");
     if (v < 0 || (!allow_zero && v == 0)) fail(allow_zero ? "is negative" : "must be positive");
@@ -202,7 +202,7 @@ std::vector<double> parse_gain_list(const std::string& option, const std::string
     out.push_back(v);
   }
   if (out.empty() || text.back() == ',')
-    throw InputError(option + ": an empty list or item (expected e.g. " + option + " 0,1,2,5)");
+    throw InputError(option + ": an empty list or item (expected e.g. " + option + " 1,2,5)");
   return out;
 }
 
