@@ -108,9 +108,13 @@ void add_launch(CLI::App& app, int& exit_code) {
       int frames = provider->frame_count();
       if (options.max_frames) frames = std::min(frames, *options.max_frames);
 
+      for (const auto& note : provider->notes()) std::printf("note: %s\n", note.c_str());
       const bool async = o->mode == "async";
       if (!async && (o->drop > 0 || o->delay > 0 || !o->kill.empty() || o->restart_after >= 0))
         throw InputError("--drop, --delay, --kill and --restart-after need --mode async");
+      if (!async)
+        if (auto m = sources::clock_mismatch(*provider))
+          throw InputError(*m + ": lock-step needs one clock for every camera (use --mode async)");
       net::KillPlan plan;
       bool have_plan = false;
       if (!o->kill.empty()) {
@@ -185,13 +189,30 @@ void add_launch(CLI::App& app, int& exit_code) {
         const fs::path log = nodes / ("node_" + std::to_string(c.id) + ".log");
         fs::remove(log);
         fs::remove(nodes / ("node_" + std::to_string(c.id) + ".csv"));
+        fs::remove(net::partial_path(nodes / ("node_" + std::to_string(c.id) + ".csv")));
+        fs::remove(net::partial_path(nodes / ("node_" + std::to_string(c.id) + "_links.csv")));
         if (have_plan && pids.size() == plan.index) {
           plan.argv = argv;
+          plan.argv.push_back("--resume");  // keeps the rows it finished before the kill
           plan.log = log;
         }
         pids.push_back(net::spawn(argv, log));
       }
       const auto res = net::supervise(pids, o->timeout, true, have_plan ? &plan : nullptr);
+      json events = json::object();  // the injected fault, in wall and camera time
+      if (have_plan) {
+        const auto& r = res[plan.index];
+        const auto cam_time = [&](double epoch) { return (epoch - start_at) * o->speed; };
+        events["camera"] = netcfg.cameras[plan.index].id;
+        events["start_epoch"] = start_at;
+        events["speed"] = o->speed;
+        if (r.kill_epoch > 0)
+          events["kill"] = {{"epoch", r.kill_epoch}, {"camera_time", cam_time(r.kill_epoch)}};
+        if (r.restart_epoch > 0)
+          events["restart"] = {{"epoch", r.restart_epoch},
+                               {"camera_time", cam_time(r.restart_epoch)}};
+        io::write_file_atomic(nodes / "events.json", events.dump(2) + "\n");
+      }
       // Report the nodes that failed on their own first; the others were stopped because of
       // them, or by the timeout.
       std::vector<int> stopped;
@@ -245,7 +266,10 @@ void add_launch(CLI::App& app, int& exit_code) {
           std::vector<cv::Mat> images(n);
           for (size_t i = 0; i < n; ++i) {
             if (result.frames[static_cast<size_t>(k)][i].read_failed) continue;
-            images[i] = provider->read(i, k);
+            // Cameras on their own clocks: the image each camera held at this grid time.
+            const int own =
+                result.source_frames.empty() ? k : result.source_frames[static_cast<size_t>(k)][i];
+            if (own >= 0) images[i] = provider->read(i, own);
           }
           overlays(k, images, result.frames[static_cast<size_t>(k)],
                    result.history[static_cast<size_t>(k)]);

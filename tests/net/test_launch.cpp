@@ -15,23 +15,10 @@ using namespace netvmo;
 namespace fs = std::filesystem;
 
 namespace {
+using net_test::pose_at;
+using net_test::read_csv;
 
 constexpr int kFrames = 8;
-
-std::vector<std::vector<std::string>> read_csv(const fs::path& f) {
-  std::ifstream in(f);
-  std::vector<std::vector<std::string>> rows;
-  std::string line;
-  while (std::getline(in, line)) {
-    std::vector<std::string> row;
-    std::stringstream s(line);
-    std::string cell;
-    while (std::getline(s, cell, ',')) row.push_back(cell);
-    if (!line.empty() && line.back() == ',') row.emplace_back();
-    rows.push_back(row);
-  }
-  return rows;
-}
 
 // Largest difference between two CSVs of the same shape (numbers compared as numbers, other
 // cells exactly); infinity when shapes or texts differ.
@@ -70,14 +57,6 @@ double json_difference(const nlohmann::json& a, const nlohmann::json& b) {
     return d;
   }
   return a == b ? 0.0 : INFINITY;
-}
-
-obs::SE3 pose_at(const std::vector<std::string>& row, size_t first) {
-  obs::SE3 g = obs::SE3::Identity();
-  for (int r = 0; r < 3; ++r) g.translation()(r) = std::stod(row[first + r]);
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) g.linear()(r, c) = std::stod(row[first + 3 + 3 * r + c]);
-  return g;
 }
 
 class Launch : public ::testing::Test {

@@ -1,5 +1,7 @@
 #include "netvmo/pipeline/sources/network_source.hpp"
 
+#include <cmath>
+#include <cstdio>
 #include <map>
 
 #include "netvmo/pipeline/error.hpp"
@@ -9,6 +11,12 @@ namespace netvmo::sources {
 namespace fs = std::filesystem;
 
 namespace {
+
+std::string fmt(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.9g", v);
+  return b;
+}
 
 class DatasetProvider final : public NetworkSource {
  public:
@@ -42,6 +50,9 @@ class DatasetProvider final : public NetworkSource {
     return camera_truth_[i];
   }
   std::vector<std::string> warnings() const override { return ds_.warnings; }
+  std::vector<std::string> notes() const override { return ds_.notes; }
+  int camera_frame_count(size_t i) const override { return ds_.camera_frame_count(i); }
+  double frame_time(size_t i, int frame) const override { return ds_.frame_time(i, frame); }
   std::string name() const override { return ds_.dir.string(); }
 
  private:
@@ -51,6 +62,23 @@ class DatasetProvider final : public NetworkSource {
 };
 
 }  // namespace
+
+std::optional<std::string> clock_mismatch(const NetworkSource& source) {
+  const io::NetworkConfig& net = source.network();
+  for (size_t i = 0; i < net.cameras.size(); ++i)
+    if (net.camera_fps(i) != net.fps)
+      return "camera " + std::to_string(net.cameras[i].id) + " runs at " + fmt(net.camera_fps(i)) +
+             " frames/s, the dataset at " + fmt(net.fps) + " (" + net.source + ")";
+  for (int k = 0; k < source.frame_count(); ++k)
+    for (size_t i = 1; i < net.cameras.size(); ++i) {
+      const double a = source.frame_time(0, k), b = source.frame_time(i, k);
+      if (std::abs(a - b) > 1e-9)
+        return "frame " + std::to_string(k) + " is at t = " + fmt(a) + " s for camera " +
+               std::to_string(net.cameras[0].id) + " but " + fmt(b) + " s for camera " +
+               std::to_string(net.cameras[i].id) + " (timestamps.csv)";
+    }
+  return std::nullopt;
+}
 
 std::unique_ptr<NetworkSource> open_dataset_source(const fs::path& dir,
                                                    std::optional<int> only_camera) {

@@ -27,6 +27,9 @@ struct ChildResult {
   bool planned_kill = false;  ///< killed by a KillPlan (and not restarted)
   bool restarted = false;     ///< killed by a KillPlan and started again
   double seconds = 0.0;       ///< wall time until it ended
+  /// A KillPlan's victim: when it was killed and restarted (wall clock, seconds since the
+  /// epoch; 0 = not).
+  double kill_epoch = 0.0, restart_epoch = 0.0;
 };
 
 /// A fault to inject: child `index` is killed (SIGKILL) `kill_at` seconds after supervision
