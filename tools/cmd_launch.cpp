@@ -54,6 +54,88 @@ std::string last_line(const fs::path& log) {
   return last;
 }
 
+// Reads a node's statistics (node_<id>.json); throws InputError naming it when unreadable.
+json read_node_json(const fs::path& f) {
+  if (!fs::exists(f)) throw InputError(f.string() + ": node statistics not found");
+  std::ifstream in(f);
+  json j;
+  try {
+    in >> j;
+  } catch (const std::exception&) {
+    throw InputError(f.string() + ": unreadable node statistics");
+  }
+  return j;
+}
+
+// The merge of `launch` and `merge`: every node's node_<id>.csv in `nodes` into the outputs of
+// `netvmo run` in `dir` (the same result structure as run_images, the same writers), plus
+// messages.json from the nodes' statistics; prints the message and result tables. A node
+// without statistics (killed for good) is listed as such.
+void merge_and_report(sources::NetworkSource& provider, const run::ImageRunOptions& options,
+                      const RunCliOptions& cli, const fs::path& nodes, const fs::path& dir,
+                      int frames, bool allow_gaps) {
+  const auto& netcfg = provider.network();
+  auto result = net::merge_nodes(provider, options, nodes, frames, allow_gaps);
+  json messages = json::object();
+  for (const auto& c : netcfg.cameras) {
+    const fs::path f = nodes / ("node_" + std::to_string(c.id) + ".json");
+    if (allow_gaps && !fs::exists(f)) {  // killed and not restarted: it never finished
+      messages[std::to_string(c.id)] = nullptr;
+      continue;
+    }
+    const json j = read_node_json(f);
+    messages[std::to_string(c.id)] = j["messages"];
+    for (const auto& w : j["warnings"]) result.warnings.push_back(w.get<std::string>());
+    result.seconds = std::max(result.seconds, j["seconds"].get<double>());
+  }
+  io::ensure_directory(dir);
+  io::write_file_atomic(dir / "messages.json", messages.dump(2) + "\n");
+  if (!cli.no_overlays) {
+    run::OverlayWriter overlays(dir, provider);
+    const size_t n = netcfg.cameras.size();
+    for (int k = 0; k < frames; ++k) {
+      std::vector<cv::Mat> images(n);
+      for (size_t i = 0; i < n; ++i) {
+        if (result.frames[static_cast<size_t>(k)][i].read_failed) continue;
+        // Cameras on their own clocks: the image each camera held at this grid time.
+        const int own =
+            result.source_frames.empty() ? k : result.source_frames[static_cast<size_t>(k)][i];
+        if (own >= 0) images[i] = provider.read(i, own);
+      }
+      overlays(k, images, result.frames[static_cast<size_t>(k)],
+               result.history[static_cast<size_t>(k)]);
+    }
+    overlays.finish();
+  }
+  for (size_t k = provider.warnings().size(); k < result.warnings.size(); ++k)
+    std::fprintf(stderr, "warning: %s\n", result.warnings[k].c_str());
+  const json s = run::write_run_outputs(dir, provider, options, result);
+  if (!cli.no_plots) {
+    std::vector<int> ids;
+    for (const auto& c : netcfg.cameras) ids.push_back(c.id);
+    plot_run(dir, ids);
+  }
+  // Every node reads the one estimates topic: messages of non-neighbours are ignored (and
+  // counted apart from those refused as malformed or out of order).
+  std::printf("messages: camera    sent  received  dropped  late  non-neighbour  rejected\n");
+  for (const auto& c : netcfg.cameras) {
+    const auto& m = messages[std::to_string(c.id)];
+    if (m.is_null()) {
+      std::printf("          %6d  (killed, no statistics)\n", c.id);
+      continue;
+    }
+    unsigned long long rejected = 0, foreign = 0;
+    for (const auto& [k, v] : m["rejected"].items())
+      (k == obs::to_string(obs::MessageVerdict::not_a_neighbour) ? foreign : rejected) +=
+          v.get<unsigned long long>();
+    std::printf("          %6d  %6llu  %8llu  %7llu  %4llu  %13llu  %8llu\n", c.id,
+                m["sent"].get<unsigned long long>(), m["received"].get<unsigned long long>(),
+                m["dropped"].get<unsigned long long>(), m["late"].get<unsigned long long>(),
+                foreign, rejected);
+  }
+  print_run_summary(s, dir);
+}
+
 }  // namespace
 
 void add_launch(CLI::App& app, int& exit_code) {
@@ -238,71 +320,82 @@ void add_launch(CLI::App& app, int& exit_code) {
                                  nodes.string());
       }
 
-      // Merge: the same result structure as run_images, then the same writers as `netvmo run`.
-      auto result = net::merge_nodes(*provider, options, nodes, frames, async);
-      json messages = json::object();
+      merge_and_report(*provider, options, o->run, nodes, dir, frames, async);
+      return 0;
+    });
+  });
+}
+
+void add_merge(CLI::App& app, int& exit_code) {
+  struct Options {
+    std::string nodes, dataset, out;
+    bool no_overlays = false, no_plots = false;
+  };
+  auto o = std::make_shared<Options>();
+  auto* cmd = app.add_subcommand(
+      "merge", "Merge node outputs gathered into one folder (e.g. from several machines)");
+  cmd->footer(
+      "NODES holds node_<id>.csv and node_<id>.json of every camera of the dataset's\n"
+      "network.yaml, as `netvmo node` writes them (a node killed for good: its\n"
+      "node_<id>.csv.partial). The gains, error model, initialisation, rounds, mode and frame\n"
+      "count are read from the nodes' statistics and must agree. Writes the outputs of\n"
+      "`netvmo launch` into OUT: estimates.csv, energies.csv, errors.csv, summary.json,\n"
+      "messages.json, plots and overlays/.");
+  cmd->add_option("NODES", o->nodes, "Folder of the nodes' outputs")->required();
+  cmd->add_option("--dataset", o->dataset, "The dataset the nodes ran on")->required();
+  cmd->add_option("--out", o->out, "Output directory")->required();
+  cmd->add_flag("--no-overlays", o->no_overlays, "Do not write overlays/");
+  cmd->add_flag("--no-plots", o->no_plots, "Do not draw energies.png and errors.png");
+  cmd->callback([o, &exit_code] {
+    exit_code = guarded("merge", [&] {
+      auto provider = sources::open_dataset_source(o->dataset);
+      const auto& netcfg = provider->network();
+      for (const auto& w : provider->warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
+      // The run's settings, from the nodes' statistics: every node must have run the same.
+      const fs::path nodes = o->nodes;
+      json ref;
+      fs::path ref_file;
       for (const auto& c : netcfg.cameras) {
+        const fs::path csv = nodes / ("node_" + std::to_string(c.id) + ".csv");
+        if (!fs::exists(csv) && !fs::exists(net::partial_path(csv)))
+          throw InputError(csv.string() + ": not found (nor " +
+                           net::partial_path(csv).filename().string() + "): camera " +
+                           std::to_string(c.id) + "'s node output");
         const fs::path f = nodes / ("node_" + std::to_string(c.id) + ".json");
-        if (async && !fs::exists(f)) {  // killed and not restarted: it never finished
-          messages[std::to_string(c.id)] = nullptr;
+        if (!fs::exists(f)) continue;  // checked by the merge (a node killed for good has none)
+        const json j = read_node_json(f);
+        json run = {{"options", j["options"]},
+                    {"mode", j["mode"]},
+                    {"dataset_frames", j["dataset_frames"]}};
+        if (ref.is_null()) {
+          ref = run;
+          ref_file = f;
           continue;
         }
-        std::ifstream in(f);
-        json j;
-        try {
-          in >> j;
-        } catch (const std::exception&) {
-          throw InputError(f.string() + ": unreadable node statistics");
-        }
-        messages[std::to_string(c.id)] = j["messages"];
-        for (const auto& w : j["warnings"]) result.warnings.push_back(w.get<std::string>());
-        result.seconds = std::max(result.seconds, j["seconds"].get<double>());
+        for (const auto& [key, v] : run.items())
+          if (v != ref[key])
+            throw InputError(f.string() + ": " + key + ": " + v.dump() + " differs from " +
+                             ref_file.filename().string() + "'s " + ref[key].dump() +
+                             " (every node of a run needs the same)");
       }
-      io::write_file_atomic(dir / "messages.json", messages.dump(2) + "\n");
-      if (!o->run.no_overlays) {
-        run::OverlayWriter overlays(dir, *provider);
-        const size_t n = netcfg.cameras.size();
-        for (int k = 0; k < frames; ++k) {
-          std::vector<cv::Mat> images(n);
-          for (size_t i = 0; i < n; ++i) {
-            if (result.frames[static_cast<size_t>(k)][i].read_failed) continue;
-            // Cameras on their own clocks: the image each camera held at this grid time.
-            const int own =
-                result.source_frames.empty() ? k : result.source_frames[static_cast<size_t>(k)][i];
-            if (own >= 0) images[i] = provider->read(i, own);
-          }
-          overlays(k, images, result.frames[static_cast<size_t>(k)],
-                   result.history[static_cast<size_t>(k)]);
-        }
-        overlays.finish();
+      if (ref.is_null() || ref["options"].is_null() || ref["dataset_frames"].is_null())
+        throw InputError((nodes / "node_<id>.json").string() +
+                         ": no node statistics with the run's options in " + nodes.string());
+      RunCliOptions cli;
+      try {
+        cli.k_e = ref["options"]["k_e"].get<double>();
+        cli.k_s = ref["options"]["k_s"].get<double>();
+        cli.error = ref["options"]["error"].get<std::string>();
+        cli.init = ref["options"]["init"].get<std::string>();
+        cli.rounds = ref["options"]["rounds"].get<int>();
+      } catch (const std::exception& e) {
+        throw InputError(ref_file.string() + ": options: " + e.what());
       }
-      for (size_t k = provider->warnings().size(); k < result.warnings.size(); ++k)
-        std::fprintf(stderr, "warning: %s\n", result.warnings[k].c_str());
-      const json s = run::write_run_outputs(dir, *provider, options, result);
-      if (!o->run.no_plots) {
-        std::vector<int> ids;
-        for (const auto& c : netcfg.cameras) ids.push_back(c.id);
-        plot_run(dir, ids);
-      }
-      // Every node reads the one estimates topic: messages of non-neighbours are ignored (and
-      // counted apart from those refused as malformed or out of order).
-      std::printf("messages: camera    sent  received  dropped  late  non-neighbour  rejected\n");
-      for (const auto& c : netcfg.cameras) {
-        const auto& m = messages[std::to_string(c.id)];
-        if (m.is_null()) {
-          std::printf("          %6d  (killed, no statistics)\n", c.id);
-          continue;
-        }
-        unsigned long long rejected = 0, foreign = 0;
-        for (const auto& [k, v] : m["rejected"].items())
-          (k == obs::to_string(obs::MessageVerdict::not_a_neighbour) ? foreign : rejected) +=
-              v.get<unsigned long long>();
-        std::printf("          %6d  %6llu  %8llu  %7llu  %4llu  %13llu  %8llu\n", c.id,
-                    m["sent"].get<unsigned long long>(), m["received"].get<unsigned long long>(),
-                    m["dropped"].get<unsigned long long>(), m["late"].get<unsigned long long>(),
-                    foreign, rejected);
-      }
-      print_run_summary(s, dir);
+      cli.no_overlays = o->no_overlays;
+      cli.no_plots = o->no_plots;
+      const bool async = ref["mode"] == "async";
+      merge_and_report(*provider, to_image_run_options(cli), cli, nodes, o->out,
+                       ref["dataset_frames"].get<int>(), async);
       return 0;
     });
   });

@@ -178,6 +178,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
 
   int frames = o.frames ? *o.frames : provider->frame_count();
   if (o.run.max_frames) frames = std::min(frames, *o.run.max_frames);
+  const int dataset_frames = frames;  // the run's, on the dataset's clock
   // Async: the run covers `frames` frames of the dataset's clock from the earliest camera's
   // first image (t0); this camera runs its own images within that span.
   double t0 = 0.0;
@@ -324,6 +325,13 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   j["mode"] = to_string(o.dds.mode);
   j["domain"] = o.dds.domain;
   j["frames"] = frames;
+  j["dataset_frames"] = dataset_frames;
+  // What the merge of the run's outputs needs (netvmo merge): the same for every node of a run.
+  j["options"] = {{"k_e", o.run.runner.k_e},
+                  {"k_s", o.run.runner.k_s},
+                  {"error", o.run.runner.error_model},
+                  {"init", run::to_string(o.run.runner.init)},
+                  {"rounds", o.run.runner.rounds}};
   j["rounds_per_frame"] = summary.substeps;
   j["seconds"] = summary.seconds;
   j["messages"] = {{"sent", summary.stats.sent},
