@@ -332,9 +332,8 @@ void add_merge(CLI::App& app, int& exit_code) {
     bool no_overlays = false, no_plots = false;
   };
   auto o = std::make_shared<Options>();
-  auto* cmd = app.add_subcommand(
-      "merge", "Merge node outputs gathered into one folder (e.g. from several machines)");
-  cmd->footer(
+  auto* cmd = add_command(
+      app, "merge", "Merge node outputs gathered into one folder (e.g. from several machines)",
       "NODES holds node_<id>.csv and node_<id>.json of every camera of the dataset's\n"
       "network.yaml, as `netvmo node` writes them (a node killed for good: its\n"
       "node_<id>.csv.partial). The gains, error model, initialisation, rounds, mode and frame\n"
