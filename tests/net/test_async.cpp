@@ -150,8 +150,8 @@ TEST_F(Async, NodesConvergeWithDropsDelaysAndAKilledNode) {
 //
 // No gap. estimates.csv and errors.csv have a row for every frame and camera; camera 3's rows
 // are blind and uninitialised exactly from the frame it was killed in (the kill's camera time
-// from nodes/events.json, within the wall-clock tolerance of one frame) to the frame before
-// the one it joined at after the restart, and normal (initialised) everywhere else.
+// from nodes/events.json, within two frames: 267 ms of wall-clock lag at --speed 0.25) to the frame
+// before the one it joined at after the restart, and normal (initialised) everywhere else.
 TEST_F(Async, ARestartedNodeMovesNoNeighbourAndLeavesNoGap) {
   const fs::path dir = *dir_, out = dir / "restart";
   const auto c = net_test::netvmo_bounded(
@@ -201,7 +201,7 @@ TEST_F(Async, ARestartedNodeMovesNoNeighbourAndLeavesNoGap) {
     }
   }
   ASSERT_GE(down, 0) << "camera 3 never down";
-  EXPECT_LE(std::abs(down - kill_frame), 1.0) << "the kill's frame";
+  EXPECT_LE(std::abs(down - kill_frame), 2.0) << "the kill's frame";
   for (int k = 0; k < kRestartFrames; ++k)
     EXPECT_EQ(normal[static_cast<size_t>(k)], k < down || k >= joined) << "camera 3, frame " << k;
   // errors.csv: a row per frame (cameras 1 and 2 always see the tag), camera 3's cells empty
