@@ -8,6 +8,7 @@
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
@@ -26,8 +27,13 @@ using nlohmann::json;
 
 namespace {
 
-// Async: the common start is this many seconds after the launch, time for every node to start.
-constexpr double kStartMargin = 2.5;
+// Async: the common start is this many seconds after every node is ready (set up and matched
+// with its neighbours).
+constexpr double kStartMargin = 0.25;
+
+double now_epoch() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
 
 std::string num(double v) {
   char b[40];
@@ -214,7 +220,7 @@ void add_launch(CLI::App& app, int& exit_code) {
           throw InputError("--kill " + o->kill + ": expected ID@SECONDS with a camera id of " +
                            netcfg.source);
         plan.index = static_cast<size_t>(netcfg.index_of(id));
-        plan.kill_at = t + kStartMargin;  // after the common start
+        plan.kill_at = t;  // after the common start (made relative to it below)
         plan.restart_after = o->restart_after;
         have_plan = true;
       } else if (o->restart_after >= 0) {
@@ -230,19 +236,8 @@ void add_launch(CLI::App& app, int& exit_code) {
                   netcfg.cameras.size(), domain, (dir / "cyclonedds.xml").string().c_str());
       std::fflush(stdout);
 
-      double start_at = 0.0;
-      if (async) {
-        // A common start, late enough for every node to be up; printed for the record.
-        start_at =
-            std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
-                .count() +
-            kStartMargin;
-        std::printf(
-            "netvmo launch: async, speed %g, staleness %g s, drop %g, delay %g ms, seed %llu, "
-            "start at %.3f (epoch)\n",
-            o->speed, o->stale, o->drop, o->delay, static_cast<unsigned long long>(o->seed),
-            start_at);
-      }
+      const fs::path start_file = nodes / "start.txt";  // async: the common start
+      fs::remove(start_file);
       std::fflush(stdout);  // before the children inherit the buffer
       const std::string exe = net::self_exe().string();
       std::vector<pid_t> pids;
@@ -266,10 +261,11 @@ void add_launch(CLI::App& app, int& exit_code) {
                {std::string("--mode"), std::string("async"), std::string("--speed"), num(o->speed),
                 std::string("--stale"), num(o->stale), std::string("--drop"), num(o->drop),
                 std::string("--delay"), num(o->delay), std::string("--seed"),
-                std::to_string(o->seed), std::string("--start-at"), num(start_at)})
+                std::to_string(o->seed), std::string("--start-file"), start_file.string()})
             argv.push_back(a);
         const fs::path log = nodes / ("node_" + std::to_string(c.id) + ".log");
         fs::remove(log);
+        fs::remove(nodes / ("node_" + std::to_string(c.id) + ".ready"));
         fs::remove(nodes / ("node_" + std::to_string(c.id) + ".csv"));
         fs::remove(net::partial_path(nodes / ("node_" + std::to_string(c.id) + ".csv")));
         fs::remove(net::partial_path(nodes / ("node_" + std::to_string(c.id) + "_links.csv")));
@@ -279,6 +275,31 @@ void add_launch(CLI::App& app, int& exit_code) {
           plan.log = log;
         }
         pids.push_back(net::spawn(argv, log));
+      }
+      double start_at = 0.0;
+      if (async) {
+        // The common start, once every node is ready (or one has ended, or --node-timeout has
+        // passed: then supervise reports it); printed for the record.
+        const double give_up = now_epoch() + o->node_timeout;
+        for (;;) {
+          bool ready = true, ended = false;
+          for (size_t i = 0; i < pids.size(); ++i) {
+            ready = ready &&
+                    fs::exists(nodes / ("node_" + std::to_string(netcfg.cameras[i].id) + ".ready"));
+            ended = ended || net::has_exited(pids[i]);
+          }
+          if (ready || ended || now_epoch() > give_up) break;
+          std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        }
+        start_at = now_epoch() + kStartMargin;
+        io::write_file_atomic(start_file, num(start_at) + "\n");
+        plan.kill_at += start_at - now_epoch();  // supervision starts now
+        std::printf(
+            "netvmo launch: async, speed %g, staleness %g s, drop %g, delay %g ms, seed %llu, "
+            "start at %.3f (epoch)\n",
+            o->speed, o->stale, o->drop, o->delay, static_cast<unsigned long long>(o->seed),
+            start_at);
+        std::fflush(stdout);
       }
       const auto res = net::supervise(pids, o->timeout, true, have_plan ? &plan : nullptr);
       json events = json::object();  // the injected fault, in wall and camera time

@@ -12,6 +12,7 @@
 
 #include "net_test_util.hpp"
 #include "netvmo/observer/camera_observer.hpp"
+#include "netvmo/observer/metrics.hpp"
 #include "netvmo/pipeline/io/network_config.hpp"
 
 using namespace netvmo;
@@ -137,16 +138,19 @@ TEST_F(Async, NodesConvergeWithDropsDelaysAndAKilledNode) {
 //
 // No jump. In the forward-Euler step every estimate moves to a convex combination of itself,
 // its measurement and its neighbours' latest estimates (h (k_e + 2 k_s d_max) <= 1, README
-// "Asynchronous operation"), so over a frame it moves at most
-//   dt (k_e delta_i |x_oi - x_i| + k_s sum_j |x_j - x_i|)   (the largest distances in the frame).
-// A node that leaves freezes at its last value, inside that hull, and one that returns starts at
-// its neighbours' average, inside it too: neither event enlarges any distance in the bound, so a
-// neighbour moves no more per frame around either event than at the same spread elsewhere, and
-// the spread is largest at the start of the run. Bound checked, factor 1: each neighbour's
-// largest per-frame change (position and angle, full precision, nodes/node_<id>.csv) in the
-// frames around the kill and around the return is at most its largest per-frame change in the
-// other frames. (A restarted node that started from its own PnP pose, 10-15 cm from the
-// consensus, moved its neighbours by ~20 mm in one frame, 3.5x the largest change elsewhere.)
+// "Asynchronous operation"): no step takes an estimate outside the hull of those values. A node
+// that leaves freezes at its last value, inside its neighbours' hull, so they move no more than
+// they would anyway. A node that returns starts at its neighbours' average x_bar; from there its
+// own measurement x_o pulls it, against the mutual term of its d neighbours, to the quasi-static
+// offset e = k_e / (k_e + k_s d) |x_o - x_bar| (the offset a seeing camera keeps in consensus;
+// 3.2 % of the distance to its fictitious target with d = 3), and its neighbours, convex
+// combinations, follow it by at most that much. So each neighbour's largest per-frame change
+// (position and angle, full precision, nodes/node_<id>.csv) in the four frames from the kill
+// and from the return must not exceed its largest per-frame change in the other frames plus e
+// (e in position and in angle, from camera 3's PnP pose at its return and its neighbours'
+// average). A restarted node that started from its own PnP pose instead (10-15 cm from the
+// consensus) moved its neighbours by 20-22 mm in one frame, against at most 5.8 mm elsewhere and
+// e = 3.7 mm (one run).
 //
 // No gap. estimates.csv and errors.csv have a row for every frame and camera; camera 3's rows
 // are blind and uninitialised exactly from the frame it was killed in (the kill's camera time
@@ -218,17 +222,37 @@ TEST_F(Async, ARestartedNodeMovesNoNeighbourAndLeavesNoGap) {
     }
   }
 
-  // No jump: per-frame changes of camera 3's neighbours around the events against elsewhere.
+  // No jump: per-frame changes of camera 3's neighbours around the events against elsewhere,
+  // plus the restarted camera's quasi-static offset e.
+  const auto node_rows = [&](int id) {
+    const auto rows = net_test::read_csv(out / "nodes" / ("node_" + std::to_string(id) + ".csv"));
+    std::map<int, std::vector<std::string>> by_frame;
+    for (size_t r = 1; r < rows.size(); ++r) by_frame[std::stoi(rows[r][0])] = rows[r];
+    return by_frame;
+  };
+  const auto cam3 = node_rows(3);
+  ASSERT_TRUE(cam3.count(joined));
+  ASSERT_EQ(cam3.at(joined)[24], "1") << "camera 3 has no PnP pose at its return";
+  const auto netcfg = io::load_network_config(dir / "ds" / "network.yaml");
+  const obs::SE3 g_o3 = netcfg.cameras[static_cast<size_t>(netcfg.index_of(3))].g_wi *
+                        net_test::pose_at(cam3.at(joined), 25);  // its fictitious target, measured
+  std::vector<obs::SE3> before;  // the neighbours just before the return
+  for (int id : {1, 2, 4}) before.push_back(net_test::pose_at(node_rows(id).at(joined - 1), 38));
+  const obs::SE3 g_bar = obs::average_pose(before);
+  const double share = 10.0 / (10.0 + 100.0 * 3);  // k_e / (k_e + k_s d_3)
+  const double e_p = share * (g_o3.translation() - g_bar.translation()).norm();
+  const double e_r = share * obs::log_so3(g_bar.linear().transpose() * g_o3.linear()).norm();
+  std::printf("restart offset e: %.3f mm / %.4f deg\n", e_p * 1e3, e_r * 180 / M_PI);
   const auto near_event = [&](int k) {
     return (k >= down && k <= down + 3) || (k >= joined && k <= joined + 3);
   };
   for (int id : {1, 2, 4}) {
-    const auto rows = net_test::read_csv(out / "nodes" / ("node_" + std::to_string(id) + ".csv"));
-    ASSERT_EQ(rows.size(), 1u + kRestartFrames);
+    const auto rows = node_rows(id);
+    ASSERT_EQ(rows.size(), static_cast<size_t>(kRestartFrames));
     double event_p = 0, event_r = 0, else_p = 0, else_r = 0;
     for (int k = 1; k < kRestartFrames; ++k) {
-      const auto& a = rows[static_cast<size_t>(k)];
-      const auto& b = rows[static_cast<size_t>(k + 1)];
+      const auto& a = rows.at(k - 1);
+      const auto& b = rows.at(k);
       ASSERT_EQ(a[37], "1");
       const obs::SE3 ga = net_test::pose_at(a, 38), gb = net_test::pose_at(b, 38);
       const double dp = (gb.translation() - ga.translation()).norm();
@@ -240,8 +264,8 @@ TEST_F(Async, ARestartedNodeMovesNoNeighbourAndLeavesNoGap) {
         "camera %d: largest per-frame change around the events %.3f mm / %.4f deg, elsewhere "
         "%.3f mm / %.4f deg\n",
         id, event_p * 1e3, event_r * 180 / M_PI, else_p * 1e3, else_r * 180 / M_PI);
-    EXPECT_LE(event_p, else_p) << "camera " << id << " jumps in position";
-    EXPECT_LE(event_r, else_r) << "camera " << id << " jumps in orientation";
+    EXPECT_LE(event_p, else_p + e_p) << "camera " << id << " jumps in position";
+    EXPECT_LE(event_r, else_r + e_r) << "camera " << id << " jumps in orientation";
   }
 }
 

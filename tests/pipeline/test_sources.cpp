@@ -11,6 +11,7 @@
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/frontend/front_end.hpp"
 #include "netvmo/pipeline/sources/dataset.hpp"
+#include "netvmo/pipeline/sources/network_source.hpp"
 #include "synth.hpp"
 #include "test_util.hpp"
 
@@ -228,6 +229,36 @@ TEST(Sources, TimestampsAndPerCameraFps) {
   EXPECT_NE(ds.notes[0].find("lists no image of camera 2"), std::string::npos);
   // A camera's process reads the other cameras' times too (without their images).
   EXPECT_DOUBLE_EQ(open_dataset(dir, 2).frame_time(0, 2), 10.6);
+}
+
+// One clock or not (what `run` and lock-step need): frame / fps everywhere; the same listed
+// times, a camera blind after its last image included; a time that differs; an own fps.
+TEST(Sources, ClockMismatchNamesTheCameras) {
+  const auto dir = testing::fresh_dir("src_clock");
+  testing::write_synth_dataset(dir, testing::simple_dataset_spec(2, 3));
+  EXPECT_FALSE(clock_mismatch(*open_dataset_source(dir)));
+  fs::remove(dir / "cam_2" / "000002.png");  // camera 2 is blind at frame 2
+  {
+    std::ofstream(dir / "timestamps.csv")
+        << "camera,frame,t\n1,0,5\n1,1,5.1\n1,2,5.2\n2,0,5\n2,1,5.1\n";
+  }
+  EXPECT_FALSE(clock_mismatch(*open_dataset_source(dir)));
+  {
+    std::ofstream(dir / "timestamps.csv")
+        << "camera,frame,t\n1,0,5\n1,1,5.1\n1,2,5.2\n2,0,5\n2,1,5.15\n";
+  }
+  const auto m = clock_mismatch(*open_dataset_source(dir));
+  ASSERT_TRUE(m);
+  EXPECT_NE(m->find("frame 1 is at t = 5.1 s for camera 1 but 5.15 s for camera 2"),
+            std::string::npos)
+      << *m;
+  fs::remove(dir / "timestamps.csv");  // camera 1 on frame / fps, camera 2 on its own
+  auto net = load_network_config(dir / "network.yaml");
+  net.cameras[1].fps = 2 * net.fps;
+  { std::ofstream(dir / "network.yaml") << network_yaml(net); }
+  const auto f = clock_mismatch(*open_dataset_source(dir));
+  ASSERT_TRUE(f);
+  EXPECT_NE(f->find("camera 2 runs at"), std::string::npos) << *f;
 }
 
 // Bad timestamps.csv and per-camera fps: one line naming the file, the line and the column.

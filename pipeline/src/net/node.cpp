@@ -75,6 +75,21 @@ void sleep_until_epoch(double t) {
   if (wait > 0) std::this_thread::sleep_for(std::chrono::duration<double>(wait));
 }
 
+// The common start from `file` (one number, seconds since the epoch), waiting for it to
+// appear for at most timeout_s.
+double read_start(const fs::path& file, double timeout_s) {
+  const double give_up = now_epoch() + timeout_s;
+  for (;;) {
+    std::ifstream in(file);
+    double t = 0;
+    if (in >> t) return t;
+    if (now_epoch() > give_up)
+      throw std::runtime_error(file.string() + ": no common start within " +
+                               std::to_string(timeout_s) + " s");
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+}
+
 // A node's CSV output, written as it goes into <file>.partial (flushed after every frame, so a
 // node killed mid-run leaves every frame it finished) and renamed to <file> when the node ends.
 // With `resume` (a restarted node), a killed predecessor's finished rows of frames before
@@ -198,15 +213,20 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
 
   io::ensure_directory(out_dir);
   const std::string stem = "node_" + std::to_string(o.camera_id);
+  std::optional<double> start_epoch = o.start_epoch;
+  if (async && o.start_file) {  // ready: tell the launcher, then wait for the common start
+    io::write_file_atomic(out_dir / (stem + ".ready"), "ready\n");
+    start_epoch = read_start(*o.start_file, o.dds.timeout_s);
+  }
   NodeSummary summary;
   summary.notes = provider->notes();
   summary.substeps = substeps(dt_own, net);
   std::vector<obs::EstimateMessage> inbox;
-  const double start = o.start_epoch ? *o.start_epoch : now_epoch();
+  const double start = start_epoch ? *start_epoch : now_epoch();
   if (async && !(o.speed > 0)) throw InputError("--speed must be > 0");
   // A node started after the common start (a restart) joins at its next image, on schedule.
   int first = 0;
-  if (async && o.start_epoch) {
+  if (async && start_epoch) {
     const double now_cam = t0 + (now_epoch() - start) * o.speed;
     while (first < frames && frame_time(first) < now_cam) ++first;
   }

@@ -39,6 +39,12 @@ pid_t spawn(const std::vector<std::string>& argv, const fs::path& log) {
   return pid;
 }
 
+bool has_exited(pid_t pid) {
+  siginfo_t info{};
+  return ::waitid(P_PID, static_cast<id_t>(pid), &info, WEXITED | WNOHANG | WNOWAIT) == 0 &&
+         info.si_pid == pid;
+}
+
 std::vector<ChildResult> supervise(const std::vector<pid_t>& pids_in, double timeout_s,
                                    bool kill_on_failure, const KillPlan* plan) {
   std::vector<pid_t> pids = pids_in;

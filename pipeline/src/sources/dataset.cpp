@@ -84,12 +84,16 @@ int Dataset::camera_frame_count(size_t camera_index) const {
   return cam.source ? cam.source->frame_count() : 0;
 }
 
-double Dataset::frame_time(size_t camera_index, int frame) const {
+std::optional<double> Dataset::listed_time(size_t camera_index, int frame) const {
   const DatasetCamera& cam = cameras.at(camera_index);
-  if (frame >= 0 && static_cast<size_t>(frame) < cam.times.size() &&
-      !std::isnan(cam.times[static_cast<size_t>(frame)]))
-    return cam.times[static_cast<size_t>(frame)];
-  return frame / network.camera_fps(camera_index);
+  if (frame < 0 || static_cast<size_t>(frame) >= cam.times.size() ||
+      std::isnan(cam.times[static_cast<size_t>(frame)]))
+    return std::nullopt;
+  return cam.times[static_cast<size_t>(frame)];
+}
+
+double Dataset::frame_time(size_t camera_index, int frame) const {
+  return listed_time(camera_index, frame).value_or(frame / network.camera_fps(camera_index));
 }
 
 cv::Mat Dataset::read(size_t camera_index, int frame) {

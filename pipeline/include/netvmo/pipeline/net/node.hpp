@@ -37,6 +37,11 @@ struct NodeOptions {
   /// The common start (seconds since the epoch, wall clock); default: the node's own start. A
   /// node started after it (a restart) joins at the current frame.
   std::optional<double> start_epoch;
+  /// Instead of start_epoch: once set up and matched with its neighbours, the node writes
+  /// node_<id>.ready into its output folder and waits (at most dds.timeout_s) for this file to
+  /// hold the common start (seconds since the epoch); `launch` writes it when every node is
+  /// ready. A restarted node finds it there and joins late.
+  std::optional<std::filesystem::path> start_file;
   /// Staleness bound [s of camera time]: a neighbour whose latest accepted estimate is older
   /// than this (by its stamp) is forgotten (CameraObserver::forget) until heard again.
   double stale_s = 0.25;

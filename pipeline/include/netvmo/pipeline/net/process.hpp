@@ -18,6 +18,9 @@ std::filesystem::path self_exe();
 /// stderr appended to `log`. Throws std::runtime_error when fork fails.
 pid_t spawn(const std::vector<std::string>& argv, const std::filesystem::path& log);
 
+/// True when the child has ended (it is not reaped: supervise() still sees it).
+bool has_exited(pid_t pid);
+
 struct ChildResult {
   pid_t pid = 0;
   bool finished = false;  ///< exited on its own (exit_code valid)

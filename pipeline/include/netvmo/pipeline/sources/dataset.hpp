@@ -71,6 +71,8 @@ struct Dataset {
   /// The time [s] of camera `camera_index`'s image `frame`: timestamps.csv's, else
   /// frame / the camera's fps (also for frames past its last image).
   double frame_time(size_t camera_index, int frame) const;
+  /// timestamps.csv's time of that image, when the file gives one.
+  std::optional<double> listed_time(size_t camera_index, int frame) const;
 };
 
 /// Opens a dataset folder: network.yaml, then for every camera its calibration and its image

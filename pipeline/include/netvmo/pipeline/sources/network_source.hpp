@@ -42,14 +42,21 @@ class NetworkSource {
   /// The time [s] of a camera's image (timestamps.csv for dataset folders), by default
   /// frame / the camera's fps.
   virtual double frame_time(size_t camera_index, int frame) const {
-    return frame / network().camera_fps(camera_index);
+    return listed_time(camera_index, frame).value_or(frame / network().camera_fps(camera_index));
+  }
+  /// The time a dataset's timestamps.csv gives that image, if any (none by default).
+  virtual std::optional<double> listed_time(size_t camera_index, int frame) const {
+    (void)camera_index;
+    (void)frame;
+    return std::nullopt;
   }
   /// A name for messages and summaries.
   virtual std::string name() const = 0;
 };
 
 /// Why the cameras do not share one clock (a camera at its own fps, or two cameras whose images
-/// of the same frame index have different times), or nothing when they do. `netvmo run` and
+/// of the same frame index have different times: listed in timestamps.csv for both, or for one
+/// and frame / fps for the other), or nothing when they do. `netvmo run` and
 /// lock-step processes need a common clock.
 std::optional<std::string> clock_mismatch(const NetworkSource& source);
 
