@@ -8,6 +8,7 @@
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
@@ -26,8 +27,13 @@ using nlohmann::json;
 
 namespace {
 
-// Async: the common start is this many seconds after the launch, time for every node to start.
-constexpr double kStartMargin = 2.5;
+// Async: the common start is this many seconds after every node is ready (set up and matched
+// with its neighbours).
+constexpr double kStartMargin = 0.25;
+
+double now_epoch() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
 
 std::string num(double v) {
   char b[40];
@@ -52,6 +58,88 @@ std::string last_line(const fs::path& log) {
   while (std::getline(f, line))
     if (!line.empty()) last = line;
   return last;
+}
+
+// Reads a node's statistics (node_<id>.json); throws InputError naming it when unreadable.
+json read_node_json(const fs::path& f) {
+  if (!fs::exists(f)) throw InputError(f.string() + ": node statistics not found");
+  std::ifstream in(f);
+  json j;
+  try {
+    in >> j;
+  } catch (const std::exception&) {
+    throw InputError(f.string() + ": unreadable node statistics");
+  }
+  return j;
+}
+
+// The merge of `launch` and `merge`: every node's node_<id>.csv in `nodes` into the outputs of
+// `netvmo run` in `dir` (the same result structure as run_images, the same writers), plus
+// messages.json from the nodes' statistics; prints the message and result tables. A node
+// without statistics (killed for good) is listed as such.
+void merge_and_report(sources::NetworkSource& provider, const run::ImageRunOptions& options,
+                      const RunCliOptions& cli, const fs::path& nodes, const fs::path& dir,
+                      int frames, bool allow_gaps) {
+  const auto& netcfg = provider.network();
+  auto result = net::merge_nodes(provider, options, nodes, frames, allow_gaps);
+  json messages = json::object();
+  for (const auto& c : netcfg.cameras) {
+    const fs::path f = nodes / ("node_" + std::to_string(c.id) + ".json");
+    if (allow_gaps && !fs::exists(f)) {  // killed and not restarted: it never finished
+      messages[std::to_string(c.id)] = nullptr;
+      continue;
+    }
+    const json j = read_node_json(f);
+    messages[std::to_string(c.id)] = j["messages"];
+    for (const auto& w : j["warnings"]) result.warnings.push_back(w.get<std::string>());
+    result.seconds = std::max(result.seconds, j["seconds"].get<double>());
+  }
+  io::ensure_directory(dir);
+  io::write_file_atomic(dir / "messages.json", messages.dump(2) + "\n");
+  if (!cli.no_overlays) {
+    run::OverlayWriter overlays(dir, provider);
+    const size_t n = netcfg.cameras.size();
+    for (int k = 0; k < frames; ++k) {
+      std::vector<cv::Mat> images(n);
+      for (size_t i = 0; i < n; ++i) {
+        if (result.frames[static_cast<size_t>(k)][i].read_failed) continue;
+        // Cameras on their own clocks: the image each camera held at this grid time.
+        const int own =
+            result.source_frames.empty() ? k : result.source_frames[static_cast<size_t>(k)][i];
+        if (own >= 0) images[i] = provider.read(i, own);
+      }
+      overlays(k, images, result.frames[static_cast<size_t>(k)],
+               result.history[static_cast<size_t>(k)]);
+    }
+    overlays.finish();
+  }
+  for (size_t k = provider.warnings().size(); k < result.warnings.size(); ++k)
+    std::fprintf(stderr, "warning: %s\n", result.warnings[k].c_str());
+  const json s = run::write_run_outputs(dir, provider, options, result);
+  if (!cli.no_plots) {
+    std::vector<int> ids;
+    for (const auto& c : netcfg.cameras) ids.push_back(c.id);
+    plot_run(dir, ids);
+  }
+  // Every node reads the one estimates topic: messages of non-neighbours are ignored (and
+  // counted apart from those refused as malformed or out of order).
+  std::printf("messages: camera    sent  received  dropped  late  non-neighbour  rejected\n");
+  for (const auto& c : netcfg.cameras) {
+    const auto& m = messages[std::to_string(c.id)];
+    if (m.is_null()) {
+      std::printf("          %6d  (killed, no statistics)\n", c.id);
+      continue;
+    }
+    unsigned long long rejected = 0, foreign = 0;
+    for (const auto& [k, v] : m["rejected"].items())
+      (k == obs::to_string(obs::MessageVerdict::not_a_neighbour) ? foreign : rejected) +=
+          v.get<unsigned long long>();
+    std::printf("          %6d  %6llu  %8llu  %7llu  %4llu  %13llu  %8llu\n", c.id,
+                m["sent"].get<unsigned long long>(), m["received"].get<unsigned long long>(),
+                m["dropped"].get<unsigned long long>(), m["late"].get<unsigned long long>(),
+                foreign, rejected);
+  }
+  print_run_summary(s, dir);
 }
 
 }  // namespace
@@ -109,9 +197,13 @@ void add_launch(CLI::App& app, int& exit_code) {
       int frames = provider->frame_count();
       if (options.max_frames) frames = std::min(frames, *options.max_frames);
 
+      for (const auto& note : provider->notes()) std::printf("note: %s\n", note.c_str());
       const bool async = o->mode == "async";
       if (!async && (o->drop > 0 || o->delay > 0 || !o->kill.empty() || o->restart_after >= 0))
         throw InputError("--drop, --delay, --kill and --restart-after need --mode async");
+      if (!async)
+        if (auto m = sources::clock_mismatch(*provider))
+          throw InputError(*m + ": lock-step needs one clock for every camera (use --mode async)");
       net::KillPlan plan;
       bool have_plan = false;
       if (!o->kill.empty()) {
@@ -129,7 +221,7 @@ void add_launch(CLI::App& app, int& exit_code) {
           throw InputError("--kill " + o->kill + ": expected ID@SECONDS with a camera id of " +
                            netcfg.source);
         plan.index = static_cast<size_t>(netcfg.index_of(id));
-        plan.kill_at = t + kStartMargin;  // after the common start
+        plan.kill_at = t;  // after the common start (made relative to it below)
         plan.restart_after = o->restart_after;
         have_plan = true;
       } else if (o->restart_after >= 0) {
@@ -145,19 +237,8 @@ void add_launch(CLI::App& app, int& exit_code) {
                   netcfg.cameras.size(), domain, (dir / "cyclonedds.xml").string().c_str());
       std::fflush(stdout);
 
-      double start_at = 0.0;
-      if (async) {
-        // A common start, late enough for every node to be up; printed for the record.
-        start_at =
-            std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
-                .count() +
-            kStartMargin;
-        std::printf(
-            "netvmo launch: async, speed %g, staleness %g s, drop %g, delay %g ms, seed %llu, "
-            "start at %.3f (epoch)\n",
-            o->speed, o->stale, o->drop, o->delay, static_cast<unsigned long long>(o->seed),
-            start_at);
-      }
+      const fs::path start_file = nodes / "start.txt";  // async: the common start
+      fs::remove(start_file);
       std::fflush(stdout);  // before the children inherit the buffer
       const std::string exe = net::self_exe().string();
       std::vector<pid_t> pids;
@@ -181,18 +262,61 @@ void add_launch(CLI::App& app, int& exit_code) {
                {std::string("--mode"), std::string("async"), std::string("--speed"), num(o->speed),
                 std::string("--stale"), num(o->stale), std::string("--drop"), num(o->drop),
                 std::string("--delay"), num(o->delay), std::string("--seed"),
-                std::to_string(o->seed), std::string("--start-at"), num(start_at)})
+                std::to_string(o->seed), std::string("--start-file"), start_file.string()})
             argv.push_back(a);
         const fs::path log = nodes / ("node_" + std::to_string(c.id) + ".log");
         fs::remove(log);
+        fs::remove(nodes / ("node_" + std::to_string(c.id) + ".ready"));
         fs::remove(nodes / ("node_" + std::to_string(c.id) + ".csv"));
+        fs::remove(net::partial_path(nodes / ("node_" + std::to_string(c.id) + ".csv")));
+        fs::remove(net::partial_path(nodes / ("node_" + std::to_string(c.id) + "_links.csv")));
         if (have_plan && pids.size() == plan.index) {
           plan.argv = argv;
+          plan.argv.push_back("--resume");  // keeps the rows it finished before the kill
           plan.log = log;
         }
         pids.push_back(net::spawn(argv, log));
       }
+      double start_at = 0.0;
+      if (async) {
+        // The common start, once every node is ready (or one has ended, or --node-timeout has
+        // passed: then supervise reports it); printed for the record.
+        const double give_up = now_epoch() + o->node_timeout;
+        for (;;) {
+          bool ready = true, ended = false;
+          for (size_t i = 0; i < pids.size(); ++i) {
+            ready = ready &&
+                    fs::exists(nodes / ("node_" + std::to_string(netcfg.cameras[i].id) + ".ready"));
+            ended = ended || net::has_exited(pids[i]);
+          }
+          if (ready || ended || now_epoch() > give_up) break;
+          std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        }
+        start_at = now_epoch() + kStartMargin;
+        io::write_file_atomic(start_file, num(start_at) + "\n");
+        plan.kill_at += start_at - now_epoch();  // supervision starts now
+        std::printf(
+            "netvmo launch: async, speed %g, staleness %g s, drop %g, delay %g ms, seed %llu, "
+            "start at %.3f (epoch)\n",
+            o->speed, o->stale, o->drop, o->delay, static_cast<unsigned long long>(o->seed),
+            start_at);
+        std::fflush(stdout);
+      }
       const auto res = net::supervise(pids, o->timeout, true, have_plan ? &plan : nullptr);
+      json events = json::object();  // the injected fault, in wall and camera time
+      if (have_plan) {
+        const auto& r = res[plan.index];
+        const auto cam_time = [&](double epoch) { return (epoch - start_at) * o->speed; };
+        events["camera"] = netcfg.cameras[plan.index].id;
+        events["start_epoch"] = start_at;
+        events["speed"] = o->speed;
+        if (r.kill_epoch > 0)
+          events["kill"] = {{"epoch", r.kill_epoch}, {"camera_time", cam_time(r.kill_epoch)}};
+        if (r.restart_epoch > 0)
+          events["restart"] = {{"epoch", r.restart_epoch},
+                               {"camera_time", cam_time(r.restart_epoch)}};
+        io::write_file_atomic(nodes / "events.json", events.dump(2) + "\n");
+      }
       // Report the nodes that failed on their own first; the others were stopped because of
       // them, or by the timeout.
       std::vector<int> stopped;
@@ -218,68 +342,81 @@ void add_launch(CLI::App& app, int& exit_code) {
                                  nodes.string());
       }
 
-      // Merge: the same result structure as run_images, then the same writers as `netvmo run`.
-      auto result = net::merge_nodes(*provider, options, nodes, frames, async);
-      json messages = json::object();
+      merge_and_report(*provider, options, o->run, nodes, dir, frames, async);
+      return 0;
+    });
+  });
+}
+
+void add_merge(CLI::App& app, int& exit_code) {
+  struct Options {
+    std::string nodes, dataset, out;
+    bool no_overlays = false, no_plots = false;
+  };
+  auto o = std::make_shared<Options>();
+  auto* cmd = add_command(
+      app, "merge", "Merge node outputs gathered into one folder (e.g. from several machines)",
+      "NODES holds node_<id>.csv and node_<id>.json of every camera of the dataset's\n"
+      "network.yaml, as `netvmo node` writes them (a node killed for good: its\n"
+      "node_<id>.csv.partial). The gains, error model, initialisation, rounds, mode and frame\n"
+      "count are read from the nodes' statistics and must agree. Writes the outputs of\n"
+      "`netvmo launch` into OUT: estimates.csv, energies.csv, errors.csv, summary.json,\n"
+      "messages.json, plots and overlays/.");
+  cmd->add_option("NODES", o->nodes, "Folder of the nodes' outputs")->required();
+  cmd->add_option("--dataset", o->dataset, "The dataset the nodes ran on")->required();
+  cmd->add_option("--out", o->out, "Output directory")->required();
+  cmd->add_flag("--no-overlays", o->no_overlays, "Do not write overlays/");
+  cmd->add_flag("--no-plots", o->no_plots, "Do not draw energies.png and errors.png");
+  cmd->callback([o, &exit_code] {
+    exit_code = guarded("merge", [&] {
+      auto provider = sources::open_dataset_source(o->dataset);
+      const auto& netcfg = provider->network();
+      for (const auto& w : provider->warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
+      // The run's settings, from the nodes' statistics: every node must have run the same.
+      const fs::path nodes = o->nodes;
+      json ref;
+      fs::path ref_file;
       for (const auto& c : netcfg.cameras) {
+        const fs::path csv = nodes / ("node_" + std::to_string(c.id) + ".csv");
+        if (!fs::exists(csv) && !fs::exists(net::partial_path(csv)))
+          throw InputError(csv.string() + ": not found (nor " +
+                           net::partial_path(csv).filename().string() + "): camera " +
+                           std::to_string(c.id) + "'s node output");
         const fs::path f = nodes / ("node_" + std::to_string(c.id) + ".json");
-        if (async && !fs::exists(f)) {  // killed and not restarted: it never finished
-          messages[std::to_string(c.id)] = nullptr;
+        if (!fs::exists(f)) continue;  // checked by the merge (a node killed for good has none)
+        const json j = read_node_json(f);
+        json run = {{"options", j["options"]},
+                    {"mode", j["mode"]},
+                    {"dataset_frames", j["dataset_frames"]}};
+        if (ref.is_null()) {
+          ref = run;
+          ref_file = f;
           continue;
         }
-        std::ifstream in(f);
-        json j;
-        try {
-          in >> j;
-        } catch (const std::exception&) {
-          throw InputError(f.string() + ": unreadable node statistics");
-        }
-        messages[std::to_string(c.id)] = j["messages"];
-        for (const auto& w : j["warnings"]) result.warnings.push_back(w.get<std::string>());
-        result.seconds = std::max(result.seconds, j["seconds"].get<double>());
+        for (const auto& [key, v] : run.items())
+          if (v != ref[key])
+            throw InputError(f.string() + ": " + key + ": " + v.dump() + " differs from " +
+                             ref_file.filename().string() + "'s " + ref[key].dump() +
+                             " (every node of a run needs the same)");
       }
-      io::write_file_atomic(dir / "messages.json", messages.dump(2) + "\n");
-      if (!o->run.no_overlays) {
-        run::OverlayWriter overlays(dir, *provider);
-        const size_t n = netcfg.cameras.size();
-        for (int k = 0; k < frames; ++k) {
-          std::vector<cv::Mat> images(n);
-          for (size_t i = 0; i < n; ++i) {
-            if (result.frames[static_cast<size_t>(k)][i].read_failed) continue;
-            images[i] = provider->read(i, k);
-          }
-          overlays(k, images, result.frames[static_cast<size_t>(k)],
-                   result.history[static_cast<size_t>(k)]);
-        }
-        overlays.finish();
+      if (ref.is_null() || ref["options"].is_null() || ref["dataset_frames"].is_null())
+        throw InputError((nodes / "node_<id>.json").string() +
+                         ": no node statistics with the run's options in " + nodes.string());
+      RunCliOptions cli;
+      try {
+        cli.k_e = ref["options"]["k_e"].get<double>();
+        cli.k_s = ref["options"]["k_s"].get<double>();
+        cli.error = ref["options"]["error"].get<std::string>();
+        cli.init = ref["options"]["init"].get<std::string>();
+        cli.rounds = ref["options"]["rounds"].get<int>();
+      } catch (const std::exception& e) {
+        throw InputError(ref_file.string() + ": options: " + e.what());
       }
-      for (size_t k = provider->warnings().size(); k < result.warnings.size(); ++k)
-        std::fprintf(stderr, "warning: %s\n", result.warnings[k].c_str());
-      const json s = run::write_run_outputs(dir, *provider, options, result);
-      if (!o->run.no_plots) {
-        std::vector<int> ids;
-        for (const auto& c : netcfg.cameras) ids.push_back(c.id);
-        plot_run(dir, ids);
-      }
-      // Every node reads the one estimates topic: messages of non-neighbours are ignored (and
-      // counted apart from those refused as malformed or out of order).
-      std::printf("messages: camera    sent  received  dropped  late  non-neighbour  rejected\n");
-      for (const auto& c : netcfg.cameras) {
-        const auto& m = messages[std::to_string(c.id)];
-        if (m.is_null()) {
-          std::printf("          %6d  (killed, no statistics)\n", c.id);
-          continue;
-        }
-        unsigned long long rejected = 0, foreign = 0;
-        for (const auto& [k, v] : m["rejected"].items())
-          (k == obs::to_string(obs::MessageVerdict::not_a_neighbour) ? foreign : rejected) +=
-              v.get<unsigned long long>();
-        std::printf("          %6d  %6llu  %8llu  %7llu  %4llu  %13llu  %8llu\n", c.id,
-                    m["sent"].get<unsigned long long>(), m["received"].get<unsigned long long>(),
-                    m["dropped"].get<unsigned long long>(), m["late"].get<unsigned long long>(),
-                    foreign, rejected);
-      }
-      print_run_summary(s, dir);
+      cli.no_overlays = o->no_overlays;
+      cli.no_plots = o->no_plots;
+      const bool async = ref["mode"] == "async";
+      merge_and_report(*provider, to_image_run_options(cli), cli, nodes, o->out,
+                       ref["dataset_frames"].get<int>(), async);
       return 0;
     });
   });

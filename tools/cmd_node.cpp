@@ -40,6 +40,8 @@ void add_node(CLI::App& app, int& exit_code) {
     int camera = 0, domain = -1, frames = 0;
     double timeout = 20.0, speed = 1.0, stale = 0.25, drop = 0.0, delay = 0.0, start_at = 0.0;
     std::uint64_t seed = 0;
+    bool resume = false;
+    std::string start_file;
     RunCliOptions run;
   };
   auto o = std::make_shared<Options>();
@@ -64,6 +66,12 @@ void add_node(CLI::App& app, int& exit_code) {
                   "async: common start, seconds since the epoch (0 = now); a node started later "
                   "joins at the current frame")
       ->capture_default_str();
+  cmd->add_option("--start-file", o->start_file,
+                  "async: instead of --start-at, write OUT/node_<id>.ready once set up, then "
+                  "wait (at most --timeout) for this file to hold the common start");
+  cmd->add_flag("--resume", o->resume,
+                "async restart: keep the rows a killed predecessor finished (OUT/node_<id>.csv"
+                ".partial) before the frame this node joins at");
   cmd->add_option("--domain", o->domain, "DDS domain id (the same for every node of a run)")
       ->required()
       ->check(CLI::Range(0, 230));
@@ -97,11 +105,14 @@ void add_node(CLI::App& app, int& exit_code) {
       no.drop = o->drop;
       no.delay_ms = o->delay;
       no.seed = o->seed;
+      no.resume = o->resume;
+      if (!o->start_file.empty()) no.start_file = o->start_file;
       if (o->start_at > 0) no.start_epoch = o->start_at;
       std::printf("netvmo node: camera %d, DDS domain %d, %s, config %s\n", o->camera, o->domain,
                   o->mode.c_str(), std::getenv("CYCLONEDDS_URI"));
       std::fflush(stdout);
       const auto s = net::run_node(o->dataset, o->out, no);
+      for (const auto& note : s.notes) std::printf("note: %s\n", note.c_str());
       std::printf(
           "netvmo node: camera %d done: %d frames, %d rounds/frame, %llu sent, %llu received, "
           "%llu late, %llu from non-neighbours, %llu dropped, %llu forgotten, %.2f s\n",

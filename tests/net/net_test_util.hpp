@@ -10,9 +10,11 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "netvmo/observer/lie.hpp"
 #include "netvmo/pipeline/net/cyclone_config.hpp"
 #include "netvmo/pipeline/net/process.hpp"
 #include "test_util.hpp"
@@ -47,6 +49,31 @@ inline test::CliResult netvmo_bounded(const std::string& args, const std::filesy
                           out.string() + " 2> " + err.string();
   const int status = std::system(cmd.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, test::slurp(out), test::slurp(err)};
+}
+
+/// A CSV file's rows (header included), cells as text (a trailing empty cell kept).
+inline std::vector<std::vector<std::string>> read_csv(const std::filesystem::path& f) {
+  std::ifstream in(f);
+  std::vector<std::vector<std::string>> rows;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<std::string> row;
+    std::stringstream s(line);
+    std::string cell;
+    while (std::getline(s, cell, ',')) row.push_back(cell);
+    if (!line.empty() && line.back() == ',') row.emplace_back();
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+/// A pose written by a node (position, then the rotation row-major) from cell `first` on.
+inline obs::SE3 pose_at(const std::vector<std::string>& row, size_t first) {
+  obs::SE3 g = obs::SE3::Identity();
+  for (int r = 0; r < 3; ++r) g.translation()(r) = std::stod(row[first + r]);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) g.linear()(r, c) = std::stod(row[first + 3 + 3 * r + c]);
+  return g;
 }
 
 inline nlohmann::json read_json(const std::filesystem::path& f) {

@@ -1,6 +1,7 @@
 // netvmo launch (one process per camera, lock-step over Cyclone DDS) against netvmo run on a
 // dataset rendered at test time: the merged outputs must be those of the in-process run.
 #include <yaml-cpp/yaml.h>
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -15,23 +16,10 @@ using namespace netvmo;
 namespace fs = std::filesystem;
 
 namespace {
+using net_test::pose_at;
+using net_test::read_csv;
 
 constexpr int kFrames = 8;
-
-std::vector<std::vector<std::string>> read_csv(const fs::path& f) {
-  std::ifstream in(f);
-  std::vector<std::vector<std::string>> rows;
-  std::string line;
-  while (std::getline(in, line)) {
-    std::vector<std::string> row;
-    std::stringstream s(line);
-    std::string cell;
-    while (std::getline(s, cell, ',')) row.push_back(cell);
-    if (!line.empty() && line.back() == ',') row.emplace_back();
-    rows.push_back(row);
-  }
-  return rows;
-}
 
 // Largest difference between two CSVs of the same shape (numbers compared as numbers, other
 // cells exactly); infinity when shapes or texts differ.
@@ -70,14 +58,6 @@ double json_difference(const nlohmann::json& a, const nlohmann::json& b) {
     return d;
   }
   return a == b ? 0.0 : INFINITY;
-}
-
-obs::SE3 pose_at(const std::vector<std::string>& row, size_t first) {
-  obs::SE3 g = obs::SE3::Identity();
-  for (int r = 0; r < 3; ++r) g.translation()(r) = std::stod(row[first + r]);
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) g.linear()(r, c) = std::stod(row[first + 3 + 3 * r + c]);
-  return g;
 }
 
 class Launch : public ::testing::Test {
@@ -208,6 +188,52 @@ TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
         EXPECT_EQ(v.get<int>(), 0) << k;
       }
   }
+
+  // `netvmo merge`: the nodes' files gathered into one folder (as from several machines) merge
+  // into the launch's outputs; a missing node output or nodes run with different options give
+  // one line naming the file.
+  const fs::path gathered = *dir_ / "gathered", merged = *dir_ / "merged";
+  fs::create_directories(gathered);
+  for (const auto& c : cams)
+    for (const char* ext : {".csv", ".json"}) {
+      const std::string f = "node_" + std::to_string(c.id) + ext;
+      fs::copy_file(launch / "nodes" / f, gathered / f);
+    }
+  const auto m = net_test::netvmo_bounded(
+      "merge " + gathered.string() + " --dataset " + ds.string() + " --out " + merged.string(),
+      *dir_, 60);
+  ASSERT_EQ(m.code, 0) << m.out << m.err;
+  for (const char* f : {"estimates.csv", "energies.csv", "errors.csv"})
+    EXPECT_EQ(csv_difference(launch / f, merged / f), 0.0) << f;
+  auto s_merged = net_test::read_json(merged / "summary.json");
+  s_merged.erase("timing");
+  s_merged.erase("warnings");
+  EXPECT_EQ(json_difference(s_launch, s_merged), 0.0);
+  EXPECT_EQ(net_test::read_json(merged / "messages.json"), messages);
+  for (const char* f : {"energies.png", "overlays/mosaic.png"})
+    EXPECT_TRUE(fs::exists(merged / f)) << f;
+
+  auto j2 = net_test::read_json(gathered / "node_2.json");
+  j2["options"]["k_s"] = 7.0;
+  std::ofstream(gathered / "node_2.json") << j2.dump();
+  const auto bad = net_test::netvmo_bounded("merge " + gathered.string() + " --dataset " +
+                                                ds.string() + " --out " + (*dir_ / "bad").string(),
+                                            *dir_, 60);
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.err.find((gathered / "node_2.json").string() + ": options:"), std::string::npos)
+      << bad.err;
+  EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+  fs::copy_file(launch / "nodes" / "node_2.json", gathered / "node_2.json",
+                fs::copy_options::overwrite_existing);
+  fs::remove(gathered / "node_3.csv");
+  const auto missing =
+      net_test::netvmo_bounded("merge " + gathered.string() + " --dataset " + ds.string() +
+                                   " --out " + (*dir_ / "bad").string(),
+                               *dir_, 60);
+  EXPECT_NE(missing.code, 0);
+  EXPECT_NE(missing.err.find((gathered / "node_3.csv").string() + ": not found"), std::string::npos)
+      << missing.err;
+  EXPECT_FALSE(fs::exists(*dir_ / "bad" / "estimates.csv"));
 }
 
 TEST_F(Launch, AFailingNodeFailsTheLaunchWithOneClearLine) {

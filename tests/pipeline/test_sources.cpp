@@ -11,6 +11,7 @@
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/frontend/front_end.hpp"
 #include "netvmo/pipeline/sources/dataset.hpp"
+#include "netvmo/pipeline/sources/network_source.hpp"
 #include "synth.hpp"
 #include "test_util.hpp"
 
@@ -195,6 +196,101 @@ TEST(Sources, DatasetErrorsNameTheFile) {
   expect_input_error([&] { open_dataset(dir / "nope"); }, {"nope"});
   fs::remove(dir / "network.yaml");
   expect_input_error([&] { open_dataset(dir); }, {"network.yaml"});
+}
+
+// timestamps.csv gives each image its time; a camera it does not list runs on frame / its own
+// fps (network.yaml's per-camera `fps`), and the dataset says so in a note.
+TEST(Sources, TimestampsAndPerCameraFps) {
+  const auto dir = testing::fresh_dir("src_times");
+  testing::write_synth_dataset(dir, testing::simple_dataset_spec(2, 4));
+  {
+    Dataset ds = open_dataset(dir);
+    ASSERT_EQ(ds.notes.size(), 1u);
+    EXPECT_NE(ds.notes[0].find("no " + (dir / "timestamps.csv").string()), std::string::npos);
+    EXPECT_DOUBLE_EQ(ds.frame_time(1, 3), 3.0 / ds.network.fps);
+  }
+  auto net = load_network_config(dir / "network.yaml");
+  net.cameras[1].fps = net.fps / 2;  // camera 2 at half the rate: its 4 images span 8 frames
+  { std::ofstream(dir / "network.yaml") << network_yaml(net); }
+  {
+    std::ofstream(dir / "timestamps.csv")
+        << "camera,frame,t\n1,0,10.5\n1,2,10.6\n1,1,10.55\n1,3,10.7\n";
+  }
+  Dataset ds = open_dataset(dir);
+  EXPECT_TRUE(ds.warnings.empty());  // camera 2 is not "short": it runs on its own clock
+  EXPECT_EQ(ds.frame_count, 4);
+  EXPECT_EQ(ds.camera_frame_count(0), 4);
+  EXPECT_EQ(ds.camera_frame_count(1), 4);
+  EXPECT_DOUBLE_EQ(ds.frame_time(0, 1), 10.55);  // rows in any order
+  EXPECT_DOUBLE_EQ(ds.frame_time(0, 3), 10.7);
+  EXPECT_DOUBLE_EQ(ds.frame_time(1, 3), 3.0 / (net.fps / 2));
+  EXPECT_EQ(ds.network.camera_fps(1), net.fps / 2);
+  ASSERT_EQ(ds.notes.size(), 1u);
+  EXPECT_NE(ds.notes[0].find("lists no image of camera 2"), std::string::npos);
+  // A camera's process reads the other cameras' times too (without their images).
+  EXPECT_DOUBLE_EQ(open_dataset(dir, 2).frame_time(0, 2), 10.6);
+}
+
+// One clock or not (what `run` and lock-step need): frame / fps everywhere; the same listed
+// times, a camera blind after its last image included; a time that differs; an own fps.
+TEST(Sources, ClockMismatchNamesTheCameras) {
+  const auto dir = testing::fresh_dir("src_clock");
+  testing::write_synth_dataset(dir, testing::simple_dataset_spec(2, 3));
+  EXPECT_FALSE(clock_mismatch(*open_dataset_source(dir)));
+  fs::remove(dir / "cam_2" / "000002.png");  // camera 2 is blind at frame 2
+  {
+    std::ofstream(dir / "timestamps.csv")
+        << "camera,frame,t\n1,0,5\n1,1,5.1\n1,2,5.2\n2,0,5\n2,1,5.1\n";
+  }
+  EXPECT_FALSE(clock_mismatch(*open_dataset_source(dir)));
+  {
+    std::ofstream(dir / "timestamps.csv")
+        << "camera,frame,t\n1,0,5\n1,1,5.1\n1,2,5.2\n2,0,5\n2,1,5.15\n";
+  }
+  const auto m = clock_mismatch(*open_dataset_source(dir));
+  ASSERT_TRUE(m);
+  EXPECT_NE(m->find("frame 1 is at t = 5.1 s for camera 1 but 5.15 s for camera 2"),
+            std::string::npos)
+      << *m;
+  fs::remove(dir / "timestamps.csv");  // camera 1 on frame / fps, camera 2 on its own
+  auto net = load_network_config(dir / "network.yaml");
+  net.cameras[1].fps = 2 * net.fps;
+  { std::ofstream(dir / "network.yaml") << network_yaml(net); }
+  const auto f = clock_mismatch(*open_dataset_source(dir));
+  ASSERT_TRUE(f);
+  EXPECT_NE(f->find("camera 2 runs at"), std::string::npos) << *f;
+}
+
+// Bad timestamps.csv and per-camera fps: one line naming the file, the line and the column.
+TEST(Sources, TimestampErrorsNameFileLineAndColumn) {
+  const auto dir = testing::fresh_dir("src_times_bad");
+  testing::write_synth_dataset(dir, testing::simple_dataset_spec(2, 3));
+  const auto file = (dir / "timestamps.csv").string();
+  const auto with = [&](const std::string& rows) {
+    std::ofstream(dir / "timestamps.csv") << "camera,frame,t\n" << rows;
+  };
+  const std::string cam2 = "2,0,0\n2,1,0.1\n2,2,0.2\n";
+  with("1,0,0\n1,1,abc\n1,2,0.2\n" + cam2);
+  expect_input_error([&] { open_dataset(dir); }, {file + ":3", "t:", "abc"});
+  with("1,0,0\n1,1,0.2\n1,2,0.1\n" + cam2);  // backwards
+  expect_input_error([&] { open_dataset(dir); }, {file + ":4", "t:", "not after its frame 1"});
+  with("1,0,0\n1,1,0.1\n1,1,0.15\n1,2,0.2\n" + cam2);  // a frame twice
+  expect_input_error([&] { open_dataset(dir); }, {file + ":4", "frame:", "second row"});
+  with("1,0,0\n1,1,0.1\n1,2,0.2\n" + cam2 + "7,0,0\n");  // unknown camera
+  expect_input_error([&] { open_dataset(dir); }, {file + ":8", "camera:", "not in network.yaml"});
+  with("1,0,0\n1,1,0.1\n1,2,0.2\n1,3,0.3\n" + cam2);  // past the last image
+  expect_input_error([&] { open_dataset(dir); }, {file + ":5", "frame:", "past the last image"});
+  with("1,0,0\n1,2,0.2\n" + cam2);  // an image without a time
+  expect_input_error([&] { open_dataset(dir); }, {file, "camera 1", "no row for frame 1"});
+  with("1,-1,0\n");
+  expect_input_error([&] { open_dataset(dir); }, {file + ":2", "frame:"});
+  { std::ofstream(dir / "timestamps.csv") << "frame,camera,t\n"; }
+  expect_input_error([&] { open_dataset(dir); }, {file + ":1", "header"});
+  fs::remove(dir / "timestamps.csv");
+  auto net = load_network_config(dir / "network.yaml");
+  net.cameras[0].fps = -2;
+  { std::ofstream(dir / "network.yaml") << network_yaml(net); }
+  expect_input_error([&] { open_dataset(dir); }, {"network.yaml", "cameras[0].fps", "positive"});
 }
 
 TEST(Sources, XmlCalibrationsInDataset) {

@@ -76,6 +76,10 @@ NetworkConfig load_network_config(const std::filesystem::path& file) {
     CameraConfig cam;
     cam.id = read_camera_id(c.get("id"), ids);
     cam.g_wi = obs::make_pose(c.get("p_wi").vec<3>(), c.get("r_wi").vec<3>());
+    if (auto f = c.find("fps")) {
+      cam.fps = f->number();
+      if (!(*cam.fps > 0)) f->fail("must be positive");
+    }
     c.finish();
     net.cameras.push_back(cam);
   }
@@ -106,6 +110,7 @@ std::string network_yaml(const NetworkConfig& net) {
       << std::vector<double>{p.x(), p.y(), p.z()};
     y << YAML::Key << "r_wi" << YAML::Value << YAML::Flow
       << std::vector<double>{r.x(), r.y(), r.z()};
+    if (c.fps) y << YAML::Key << "fps" << YAML::Value << *c.fps;
     y << YAML::EndMap;
   }
   y << YAML::EndSeq;

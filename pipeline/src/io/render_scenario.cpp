@@ -367,7 +367,7 @@ NetworkConfig scene_network_config(const render::SceneDescription& scene, int fr
   net.target.family = scene.target.tag.family;
   net.target.id = scene.target.tag.id;
   net.target.size = scene.target.tag.size;
-  for (const auto& c : scene.cameras) net.cameras.push_back({c.id, c.g_wi_believed});
+  for (const auto& c : scene.cameras) net.cameras.push_back({c.id, c.g_wi_believed, {}});
   net.edges = scene.edges;
   net.source = "the scene";
   return net;

@@ -1,5 +1,6 @@
 #include "netvmo/pipeline/io/truth_io.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -79,6 +80,12 @@ bool flag(const std::vector<std::string>& f, const std::vector<std::string>& nam
   throw InputError(where + ": " + names[i] + ": expected 0 or 1, got '" + f[i] + "'");
 }
 
+std::string fmt_time(double t) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.9g", t);
+  return b;
+}
+
 /// Eight corner fields from index i: all empty -> nullopt, all numbers -> corners.
 std::optional<std::array<cv::Point2d, 4>> corners(const std::vector<std::string>& f,
                                                   const std::vector<std::string>& names, size_t i,
@@ -121,6 +128,45 @@ std::vector<TargetTruthRow> read_target_csv(const fs::path& file) {
     rows.push_back(r);
   });
   return rows;
+}
+
+std::vector<TimestampRow> read_timestamps_csv(const fs::path& file) {
+  std::vector<std::pair<TimestampRow, std::string>> rows;  // with the line, for messages
+  read_csv(
+      file, kTimestampsHeader, [&](const auto& f, const auto& names, const std::string& where) {
+        TimestampRow r;
+        r.camera = integer(f, names, 0, where);
+        if (r.camera <= 0)
+          throw InputError(where + ": camera: expected a positive camera id, got '" + f[0] + "'");
+        r.frame = integer(f, names, 1, where);
+        if (r.frame < 0)
+          throw InputError(where + ": frame: expected a frame index >= 0, got '" + f[1] + "'");
+        r.t = num(f, names, 2, where);
+        r.line = std::stoi(where.substr(where.rfind(':') + 1));
+        rows.emplace_back(r, where);
+      });
+  std::stable_sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) {
+    return std::make_pair(a.first.camera, a.first.frame) <
+           std::make_pair(b.first.camera, b.first.frame);
+  });
+  std::vector<TimestampRow> out;
+  for (size_t k = 0; k < rows.size(); ++k) {
+    const auto& [r, where] = rows[k];
+    if (k > 0 && rows[k - 1].first.camera == r.camera) {
+      const auto& prev = rows[k - 1].first;
+      if (prev.frame == r.frame)
+        throw InputError(where + ": frame: camera " + std::to_string(r.camera) + " frame " +
+                         std::to_string(r.frame) + " has a second row (first at " +
+                         rows[k - 1].second + ")");
+      if (!(r.t > prev.t))
+        throw InputError(where + ": t: camera " + std::to_string(r.camera) + " frame " +
+                         std::to_string(r.frame) + " at t = " + fmt_time(r.t) +
+                         " s is not after its frame " + std::to_string(prev.frame) +
+                         " at t = " + fmt_time(prev.t) + " s (times must increase with the frame)");
+    }
+    out.push_back(r);
+  }
+  return out;
 }
 
 std::vector<DetectionRow> read_detections_csv(const fs::path& file) {

@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -13,6 +14,8 @@ using obs::SE3;
 namespace {
 
 struct Row {
+  int frame = 0;
+  double t = 0.0;
   run::CameraFrame cam;
   bool initialized = false, indep = false;
   SE3 est_w = SE3::Identity(), indep_w = SE3::Identity();
@@ -54,9 +57,14 @@ class Fields {
   int line_no_;
 };
 
-std::vector<Row> read_node_csv(const fs::path& file, int frames, bool allow_gaps) {
+// A node's rows in the order written (frames strictly increasing). A node killed for good never
+// renamed its output: its finished frames are in the .partial file (only with allow_missing).
+std::vector<Row> read_node_csv(fs::path file, bool allow_missing) {
+  if (!fs::exists(file) && allow_missing) {
+    file = partial_path(file);
+    if (!fs::exists(file)) return {};  // never ran a frame
+  }
   std::ifstream in(file);
-  if (!in && allow_gaps) return std::vector<Row>(static_cast<size_t>(frames));  // never finished
   if (!in) throw InputError(file.string() + ": node output not found");
   std::string line;
   std::getline(in, line);  // header
@@ -65,13 +73,13 @@ std::vector<Row> read_node_csv(const fs::path& file, int frames, bool allow_gaps
   while (std::getline(in, line)) {
     ++line_no;
     if (line.empty()) continue;
+    if (in.eof() && allow_missing) break;  // a .partial's last line cut off by the kill
     Fields f(line, file, line_no);
     Row r;
-    const int k = f.integer();
-    if (allow_gaps && k > static_cast<int>(rows.size()) && k < frames)
-      rows.resize(static_cast<size_t>(k));  // frames the node was not running: blind
-    if (k != static_cast<int>(rows.size())) f.fail("frame " + std::to_string(k) + " out of order");
-    f.num();  // t
+    r.frame = f.integer();
+    if (!rows.empty() && r.frame <= rows.back().frame)
+      f.fail("frame " + std::to_string(r.frame) + " out of order");
+    r.t = f.num();
     r.cam.obs.delta = f.integer() != 0;
     r.cam.read_failed = f.integer() != 0;
     r.cam.obs.status = static_cast<frontend::TargetStatus>(f.integer());
@@ -92,12 +100,24 @@ std::vector<Row> read_node_csv(const fs::path& file, int frames, bool allow_gaps
     r.indep_w = f.pose();
     rows.push_back(std::move(r));
   }
-  if (allow_gaps && static_cast<int>(rows.size()) < frames)
-    rows.resize(static_cast<size_t>(frames));
-  if (static_cast<int>(rows.size()) != frames)
+  return rows;
+}
+
+// One clock: row k of every node is frame k of the dataset. With allow_gaps a frame a node has
+// no row for (not running: killed, or before its restart) is blind and uninitialised.
+std::vector<const Row*> by_frame(const std::vector<Row>& rows, const fs::path& file, int frames,
+                                 bool allow_gaps) {
+  std::vector<const Row*> out(static_cast<size_t>(frames), nullptr);
+  for (const auto& r : rows) {
+    if (r.frame >= frames)
+      throw InputError(file.string() + ": frame " + std::to_string(r.frame) + ", expected " +
+                       std::to_string(frames) + " frames");
+    out[static_cast<size_t>(r.frame)] = &r;
+  }
+  if (!allow_gaps && static_cast<int>(rows.size()) != frames)
     throw InputError(file.string() + ": " + std::to_string(rows.size()) + " frames, expected " +
                      std::to_string(frames));
-  return rows;
+  return out;
 }
 
 }  // namespace
@@ -108,10 +128,15 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
   const io::NetworkConfig& net = provider.network();
   const size_t n = net.cameras.size();
   const obs::Graph graph = run::network_graph(net);
+  // Cameras on their own clocks: each node's rows carry its own images' times, and the merge
+  // evaluates on a regular grid (below).
+  const bool own_clocks = sources::clock_mismatch(provider).has_value();
   std::vector<std::vector<Row>> rows;
-  for (const auto& c : net.cameras)
-    rows.push_back(
-        read_node_csv(nodes_dir / ("node_" + std::to_string(c.id) + ".csv"), frames, allow_gaps));
+  std::vector<fs::path> files;
+  for (const auto& c : net.cameras) {
+    files.push_back(nodes_dir / ("node_" + std::to_string(c.id) + ".csv"));
+    rows.push_back(read_node_csv(files.back(), allow_gaps || own_clocks));
+  }
 
   run::RunnerSettings rs = options.runner;
   rs.tag_size = net.target.size;
@@ -123,17 +148,50 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
   result.step_factor = run::step_factor(os, dt, result.substeps, graph.max_degree());
   if (auto w = run::step_factor_warning(result.substeps, result.step_factor))
     result.warnings.push_back(*w);
+
+  // held[i][k]: camera i's row at frame k. One clock: its row of frame k. Own clocks: frame k
+  // is the grid time t0 + k / fps (t0: the earliest camera's first image), and each camera holds
+  // its latest row at or before it; estimates.csv keeps every camera's own rows and times. The
+  // merged files count time from t0 (the nodes' files keep the dataset's times).
+  std::vector<std::vector<const Row*>> held(n);
+  double t0 = 0.0;
+  if (own_clocks) {
+    t0 = provider.frame_time(0, 0);
+    for (size_t i = 1; i < n; ++i) t0 = std::min(t0, provider.frame_time(i, 0));
+    result.source_frames.assign(static_cast<size_t>(frames), std::vector<int>(n, -1));
+    for (size_t i = 0; i < n; ++i) {
+      size_t next = 0;
+      for (int k = 0; k < frames; ++k) {
+        const double t = t0 + k * dt;
+        while (next < rows[i].size() && rows[i][next].t <= t + 1e-9) ++next;
+        held[i].push_back(next > 0 ? &rows[i][next - 1] : nullptr);
+        if (next > 0) result.source_frames[static_cast<size_t>(k)][i] = rows[i][next - 1].frame;
+      }
+      for (const auto& r : rows[i])
+        result.own_estimates.push_back(
+            {r.frame, r.t - t0, i, r.cam.obs.delta, r.initialized, r.est_w});
+    }
+    std::stable_sort(result.own_estimates.begin(), result.own_estimates.end(),
+                     [](const run::EstimateRow& a, const run::EstimateRow& b) {
+                       return a.t < b.t || (a.t == b.t && a.camera < b.camera);
+                     });
+  } else {
+    for (size_t i = 0; i < n; ++i) held[i] = by_frame(rows[i], files[i], frames, allow_gaps);
+  }
+
   std::vector<std::optional<SE3>> true_wi(n);
   for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth(i);
+  const Row none;  // blind and uninitialised
   for (int k = 0; k < frames; ++k) {
     run::FrameRecord r;
     r.frame = k;
-    r.t = k * dt;
+    r.t = k * dt;  // since t0
     r.g_wo_true = provider.target_truth(k);
     r.cameras.resize(n);
     std::vector<run::CameraFrame> cams(n);
     for (size_t i = 0; i < n; ++i) {
-      const Row& row = rows[i][static_cast<size_t>(k)];
+      const Row* p = held[i][static_cast<size_t>(k)];
+      const Row& row = p ? *p : none;
       cams[i] = row.cam;
       auto& c = r.cameras[i];
       const SE3& g_wi = net.cameras[i].g_wi;

@@ -75,12 +75,64 @@ void sleep_until_epoch(double t) {
   if (wait > 0) std::this_thread::sleep_for(std::chrono::duration<double>(wait));
 }
 
+// The common start from `file` (one number, seconds since the epoch), waiting for it to
+// appear for at most timeout_s.
+double read_start(const fs::path& file, double timeout_s) {
+  const double give_up = now_epoch() + timeout_s;
+  for (;;) {
+    std::ifstream in(file);
+    double t = 0;
+    if (in >> t) return t;
+    if (now_epoch() > give_up)
+      throw std::runtime_error(file.string() + ": no common start within " +
+                               std::to_string(timeout_s) + " s");
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+}
+
+// A node's CSV output, written as it goes into <file>.partial (flushed after every frame, so a
+// node killed mid-run leaves every frame it finished) and renamed to <file> when the node ends.
+// With `resume` (a restarted node), a killed predecessor's finished rows of frames before
+// `first` are carried over.
+class RowJournal {
+ public:
+  RowJournal(fs::path file, const std::string& header, bool resume, int first)
+      : file_(std::move(file)), partial_(partial_path(file_)) {
+    std::string kept;
+    if (resume) {
+      std::ifstream in(partial_);
+      std::string line;
+      std::getline(in, line);  // header
+      while (std::getline(in, line)) {
+        if (in.eof()) break;  // the last line had no newline: cut off by the kill
+        char* end = nullptr;
+        const long k = std::strtol(line.c_str(), &end, 10);
+        if (end != line.c_str() && *end == ',' && k < first) kept += line + "\n";
+      }
+    }
+    out_.open(partial_, std::ios::trunc);
+    if (!out_) throw InputError(partial_.string() + ": cannot write");
+    out_ << header << "\n" << kept;
+    out_.flush();
+  }
+  void row(const std::string& line) { out_ << line; }
+  void flush() { out_.flush(); }
+  void commit() {
+    out_.close();
+    if (!out_) throw InputError(partial_.string() + ": write failed");
+    fs::rename(partial_, file_);
+  }
+
+ private:
+  fs::path file_, partial_;
+  std::ofstream out_;
+};
+
 }  // namespace
 
 NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const NodeOptions& o) {
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
-  const double started = now_epoch();  // a node started after the common start joins late
   auto provider = sources::open_dataset_source(dataset, o.camera_id);
   const io::NetworkConfig& netcfg = provider->network();
   const int self = netcfg.index_of(o.camera_id);
@@ -106,11 +158,28 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   const auto incarnation = static_cast<std::uint64_t>(
       std::chrono::system_clock::now().time_since_epoch() / std::chrono::nanoseconds(1));
   net.set_incarnation(incarnation);
-  const double dt = 1.0 / netcfg.fps;
-  // Sub-steps as NetworkedObserver::substeps: the independent baseline (k_s = 0) needs fewer.
-  const int N = obs::frame_substeps(dt, net.settings(), graph.max_degree());
-  const int N_ind = obs::frame_substeps(dt, ind.settings(), graph.max_degree());
-  const double h = dt / N, h_ind = dt / N_ind;
+  const bool async = o.dds.mode == Mode::async;
+  if (!async && netcfg.camera_fps(si) != netcfg.fps)
+    throw InputError(netcfg.source + ": cameras[" + std::to_string(si) + "].fps: camera " +
+                     std::to_string(o.camera_id) +
+                     " runs at its own frame rate; lock-step needs one clock for every camera "
+                     "(use --mode async)");
+  // Lock-step: every frame lasts the dataset's 1/fps, as in the in-process run. Async: the
+  // camera's own images, from one image's time to the next (timestamps.csv, else frame / its
+  // fps), the last one lasting its nominal 1/fps.
+  const double dt = 1.0 / netcfg.fps, dt_own = 1.0 / netcfg.camera_fps(si);
+  const int own_frames = provider->camera_frame_count(si);
+  const auto frame_time = [&](int k) { return async ? provider->frame_time(si, k) : k * dt; };
+  const auto frame_length = [&](int k) {
+    if (!async) return dt;
+    const double len = k + 1 < own_frames ? frame_time(k + 1) - frame_time(k) : dt_own;
+    return len > 0 ? len : dt_own;  // (a missing image without a time)
+  };
+  // Sub-steps as NetworkedObserver::substeps, by the same stability rule for each frame's
+  // length: the independent baseline (k_s = 0) needs fewer.
+  const auto substeps = [&](double len, const obs::CameraObserver& c) {
+    return obs::frame_substeps(len, c.settings(), graph.max_degree());
+  };
 
   frontend::DetectorSettings ds = o.run.detector;
   ds.family = netcfg.target.family;
@@ -124,6 +193,18 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
 
   int frames = o.frames ? *o.frames : provider->frame_count();
   if (o.run.max_frames) frames = std::min(frames, *o.run.max_frames);
+  const int dataset_frames = frames;  // the run's, on the dataset's clock
+  // Async: the run covers `frames` frames of the dataset's clock from the earliest camera's
+  // first image (t0); this camera runs its own images within that span.
+  double t0 = 0.0;
+  if (async) {
+    t0 = provider->frame_time(0, 0);
+    for (size_t i = 1; i < n; ++i) t0 = std::min(t0, provider->frame_time(i, 0));
+    const double t_end = t0 + frames * dt;
+    int own = 0;
+    while (own < own_frames && frame_time(own) < t_end - 1e-9) ++own;
+    frames = own;
+  }
 
   DdsSettings dds = o.dds;
   dds.graph_digest = graph_digest(labels, netcfg.edges);
@@ -132,23 +213,33 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
 
   io::ensure_directory(out_dir);
   const std::string stem = "node_" + std::to_string(o.camera_id);
-  io::AtomicFile csv(out_dir / (stem + ".csv"));
-  csv << kHeader << "\n";
+  std::optional<double> start_epoch = o.start_epoch;
+  if (async && o.start_file) {  // ready: tell the launcher, then wait for the common start
+    io::write_file_atomic(out_dir / (stem + ".ready"), "ready\n");
+    start_epoch = read_start(*o.start_file, o.dds.timeout_s);
+  }
+  NodeSummary summary;
+  summary.notes = provider->notes();
+  summary.substeps = substeps(dt_own, net);
+  std::vector<obs::EstimateMessage> inbox;
+  const double start = start_epoch ? *start_epoch : now_epoch();
+  if (async && !(o.speed > 0)) throw InputError("--speed must be > 0");
+  // A node started after the common start (a restart) joins at its next image, on schedule.
+  int first = 0;
+  if (async && start_epoch) {
+    const double now_cam = t0 + (now_epoch() - start) * o.speed;
+    while (first < frames && frame_time(first) < now_cam) ++first;
+  }
+  summary.first_frame = first;
+  RowJournal csv(out_dir / (stem + ".csv"), kHeader, o.resume, first);
   // The effective graph as this camera sees it: after each frame, the neighbours whose estimate
   // is in its mutual term (heard, initialised, not forgotten as stale).
-  io::AtomicFile links(out_dir / (stem + "_links.csv"));
-  links << "frame,t,neighbours\n";
-  NodeSummary summary;
-  summary.substeps = N;
-  std::vector<obs::EstimateMessage> inbox;
-  const bool async = o.dds.mode == Mode::async;
-  const double start = o.start_epoch ? *o.start_epoch : now_epoch();
-  if (async && !(o.speed > 0)) throw InputError("--speed must be > 0");
-  // A node started after the common start (a restart) joins at the current frame.
-  int first = 0;
-  if (async && o.start_epoch)
-    first = std::max(0, static_cast<int>(std::floor((started - start) * o.speed / dt)));
-  summary.first_frame = first;
+  RowJournal links(out_dir / (stem + "_links.csv"), "frame,t,neighbours", o.resume, first);
+  // A node that joins late (a restart) starts from its neighbours, like a blind camera, so that
+  // its first estimate is theirs and none of them jumps: its own measurement is held back until
+  // it is initialised from them, or, if none has an estimate, for the staleness bound.
+  bool hold_measurement = async && first > 0 && rs.init == run::InitMode::Pnp;
+  const double hold_until = frame_time(first) + o.stale_s;
   std::mt19937_64 rng(o.seed * 1000003ULL + static_cast<std::uint64_t>(o.camera_id));
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   std::deque<std::pair<double, obs::EstimateMessage>> delayed;  // (due, message)
@@ -179,14 +270,23 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
     if (net.error_model().input() == obs::MeasurementInput::true_pose && z.delta && !z.g_io_true)
       throw InputError("the " + std::string(net.error_model().name()) +
                        " error model needs ground truth (rendered data)");
-    net.set_measurement(z);
+    obs::Measurement blind;  // what a restarted node holds until it is initialised
+    net.set_measurement(hold_measurement ? blind : z);
     ind.set_measurement(z);
-    const double t = k * dt;
+    const double t = frame_time(k), len = frame_length(k);
+    const int N = substeps(len, net), N_ind = substeps(len, ind);
+    const double h = len / N, h_ind = len / N_ind;
     for (int r = 0; r < N; ++r) {
       // One exchange round, as NetworkedObserver::step: publish, take in the neighbours', step.
       const double tr = t + r * h;
-      if (async) sleep_until_epoch(start + tr / o.speed);
-      transport.send(net.publish(tr));
+      if (hold_measurement && (net.initialized() || tr >= hold_until)) {
+        hold_measurement = false;
+        net.set_measurement(z);
+      }
+      if (async) sleep_until_epoch(start + (tr - t0) / o.speed);
+      // Lock-step neighbours wait for every round's message; an async node publishes nothing
+      // while it has no estimate.
+      if (!async || net.initialized()) transport.send(net.publish(tr));
       transport.receive(self, inbox);
       if (!async) {
         for (const auto& m : inbox) net.receive(m);
@@ -214,13 +314,17 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
       net.step(h);
     }
     for (int r = 0; r < N_ind; ++r) ind.step(h_ind);
-    csv << frame_row(k, t, cam, net, ind);
+    csv.row(frame_row(k, t, cam, net, ind));
     std::string in_term;
     for (size_t a = 0; a < net.latest().size(); ++a)
       if (net.latest()[a] && net.latest()[a]->initialized)
         in_term += (in_term.empty() ? "" : " ") +
                    std::to_string(labels[static_cast<size_t>(net.neighbours()[a])]);
-    links << k << "," << t << "," << in_term << "\n";
+    std::string link = std::to_string(k);
+    put(link, t);
+    links.row(link + "," + in_term + "\n");
+    csv.flush();
+    links.flush();
     if (o.publish_ros_pose && net.initialized())
       transport.publish_average_pose(net.estimate_world(), t);
   }
@@ -241,7 +345,14 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   j["mode"] = to_string(o.dds.mode);
   j["domain"] = o.dds.domain;
   j["frames"] = frames;
-  j["rounds_per_frame"] = N;
+  j["dataset_frames"] = dataset_frames;
+  // What the merge of the run's outputs needs (netvmo merge): the same for every node of a run.
+  j["options"] = {{"k_e", o.run.runner.k_e},
+                  {"k_s", o.run.runner.k_s},
+                  {"error", o.run.runner.error_model},
+                  {"init", run::to_string(o.run.runner.init)},
+                  {"rounds", o.run.runner.rounds}};
+  j["rounds_per_frame"] = summary.substeps;
   j["seconds"] = summary.seconds;
   j["messages"] = {{"sent", summary.stats.sent},
                    {"received", summary.stats.received},
@@ -255,6 +366,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   j["messages"]["forgotten_stale"] = summary.forgotten;
   j["first_frame"] = summary.first_frame;
   j["warnings"] = summary.warnings;
+  j["notes"] = summary.notes;
   io::write_file_atomic(out_dir / (stem + ".json"), j.dump(2) + "\n");
   return summary;
 }

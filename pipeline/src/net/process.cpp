@@ -39,6 +39,12 @@ pid_t spawn(const std::vector<std::string>& argv, const fs::path& log) {
   return pid;
 }
 
+bool has_exited(pid_t pid) {
+  siginfo_t info{};
+  return ::waitid(P_PID, static_cast<id_t>(pid), &info, WEXITED | WNOHANG | WNOWAIT) == 0 &&
+         info.si_pid == pid;
+}
+
 std::vector<ChildResult> supervise(const std::vector<pid_t>& pids_in, double timeout_s,
                                    bool kill_on_failure, const KillPlan* plan) {
   std::vector<pid_t> pids = pids_in;
@@ -52,6 +58,11 @@ std::vector<ChildResult> supervise(const std::vector<pid_t>& pids_in, double tim
   size_t left = pids.size();
   bool killing = false;
   double kill_time = 0.0;
+  double kill_epoch = 0.0;  // when the planned victim was killed
+  const auto epoch_now = [] {
+    return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
+        .count();
+  };
   for (size_t i = 0; i < pids.size(); ++i) res[i].pid = pids[i];
   // Stops every child still running (SIGTERM now, SIGKILL two seconds later, below).
   const auto stop_all = [&] {
@@ -100,6 +111,8 @@ std::vector<ChildResult> supervise(const std::vector<pid_t>& pids_in, double tim
       const size_t i = plan->index;
       if (plan_state == Plan::waiting && elapsed() >= plan->kill_at && !done[i]) {
         ::kill(pids[i], SIGKILL);
+        kill_epoch = epoch_now();
+        res[i].kill_epoch = kill_epoch;
         plan_state = Plan::killed;
       } else if (plan_state == Plan::killed && plan->restart_after >= 0 && res[i].planned_kill &&
                  elapsed() >= plan->kill_at + plan->restart_after) {
@@ -107,6 +120,8 @@ std::vector<ChildResult> supervise(const std::vector<pid_t>& pids_in, double tim
         res[i] = ChildResult{};
         res[i].pid = pids[i];
         res[i].restarted = true;
+        res[i].kill_epoch = kill_epoch;
+        res[i].restart_epoch = epoch_now();
         plan_state = Plan::restarted;
         awaiting = false;
       }

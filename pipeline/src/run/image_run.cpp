@@ -63,6 +63,10 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
   const io::NetworkConfig& net = provider.network();
   const size_t n = net.cameras.size();
   const obs::Graph graph = network_graph(net);
+  if (auto m = sources::clock_mismatch(provider))
+    throw InputError(*m +
+                     ": the in-process run needs one clock for every camera (cameras on "
+                     "their own clocks run with `netvmo launch --mode async`)");
 
   run::RunnerSettings rs = options.runner;
   rs.tag_size = net.target.size;

@@ -170,19 +170,25 @@ json write_run_outputs(const fs::path& dir, const sources::NetworkSource& provid
   {
     io::AtomicFile f(dir / "estimates.csv");
     f << "frame,t,camera,delta,px,py,pz,rx,ry,rz\n";
-    for (const auto& r : h) {
-      for (size_t i = 0; i < n; ++i) {
-        const auto& c = r.cameras[i];
-        f << r.frame << ',' << r.t << ',' << net.cameras[i].id << ',' << (c.delta ? 1 : 0);
-        if (c.initialized) {
-          const obs::Vec3 p = c.est_w.translation(), w = obs::rotvec(c.est_w);
-          f << ',' << p.x() << ',' << p.y() << ',' << p.z() << ',' << w.x() << ',' << w.y() << ','
-            << w.z();
-        } else {
-          f << ",,,,,,";
-        }
-        f << '\n';
+    const auto row = [&](int frame, double t, size_t i, bool delta, bool initialized,
+                         const obs::SE3& est_w) {
+      f << frame << ',' << t << ',' << net.cameras[i].id << ',' << (delta ? 1 : 0);
+      if (initialized) {
+        const obs::Vec3 p = est_w.translation(), w = obs::rotvec(est_w);
+        f << ',' << p.x() << ',' << p.y() << ',' << p.z() << ',' << w.x() << ',' << w.y() << ','
+          << w.z();
+      } else {
+        f << ",,,,,,";
       }
+      f << '\n';
+    };
+    if (!result.own_estimates.empty()) {  // cameras on their own clocks: their own rows
+      for (const auto& e : result.own_estimates)
+        row(e.frame, e.t, e.camera, e.delta, e.initialized, e.est_w);
+    } else {
+      for (const auto& r : h)
+        for (size_t i = 0; i < n; ++i)
+          row(r.frame, r.t, i, r.cameras[i].delta, r.cameras[i].initialized, r.cameras[i].est_w);
     }
     f.commit();
   }

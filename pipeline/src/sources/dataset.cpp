@@ -1,9 +1,11 @@
 #include "netvmo/pipeline/sources/dataset.hpp"
 
+#include <cmath>
 #include <fstream>
 #include <set>
 
 #include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/io/truth_io.hpp"
 #include "stream_util.hpp"
 
 namespace netvmo::sources {
@@ -27,13 +29,78 @@ std::string list_frames(const std::vector<int>& v) {
   return s;
 }
 
+// timestamps.csv (io::read_timestamps_csv checks the file itself): every listed camera is in
+// network.yaml, and an opened camera it lists has a row for each of its images and none past
+// its last.
+void read_timestamps(Dataset& ds) {
+  const fs::path file = ds.dir / "timestamps.csv";
+  if (!fs::exists(file)) {
+    ds.notes.push_back("no " + file.string() +
+                       ": each image's time is its frame index / its camera's fps");
+    return;
+  }
+  const auto rows = io::read_timestamps_csv(file);
+  std::set<int> listed;
+  for (const auto& r : rows) {
+    const int i = ds.index_of(r.camera);
+    const std::string where = file.string() + ":" + std::to_string(r.line);
+    if (i < 0)
+      throw InputError(where + ": camera: camera " + std::to_string(r.camera) +
+                       " is not in network.yaml");
+    listed.insert(r.camera);
+    auto& cam = ds.cameras[static_cast<size_t>(i)];
+    // A camera that was not opened (another camera's process) keeps its times unchecked.
+    const int n = cam.source ? cam.source->frame_count() : r.frame + 1;
+    if (!cam.source && cam.times.size() < static_cast<size_t>(n))
+      cam.times.resize(static_cast<size_t>(n), std::nan(""));
+    if (r.frame >= n)
+      throw InputError(where + ": frame: " + std::to_string(r.frame) +
+                       " is past the last image of camera " + std::to_string(r.camera) +
+                       ", which has " + std::to_string(n) + " (" + cam.source->path().string() +
+                       ")");
+    if (cam.times.empty()) cam.times.assign(static_cast<size_t>(n), std::nan(""));
+    cam.times[static_cast<size_t>(r.frame)] = r.t;
+  }
+  for (auto& cam : ds.cameras) {
+    if (!cam.source || !listed.count(cam.id)) continue;
+    for (int k = 0; k < cam.source->frame_count(); ++k)
+      if (cam.source->has_frame(k) && std::isnan(cam.times[static_cast<size_t>(k)]))
+        throw InputError(file.string() + ": camera " + std::to_string(cam.id) +
+                         ": no row for frame " + std::to_string(k) + " (" +
+                         cam.source->frame_name(k) + ")");
+  }
+  for (const auto& cam : ds.cameras)
+    if (!listed.count(cam.id))
+      ds.notes.push_back(file.string() + " lists no image of camera " + std::to_string(cam.id) +
+                         ": its times are frame index / its fps");
+}
+
 }  // namespace
+
+int Dataset::camera_frame_count(size_t camera_index) const {
+  const DatasetCamera& cam = cameras.at(camera_index);
+  if (!network.cameras.at(camera_index).fps || network.camera_fps(camera_index) == network.fps)
+    return frame_count;
+  return cam.source ? cam.source->frame_count() : 0;
+}
+
+std::optional<double> Dataset::listed_time(size_t camera_index, int frame) const {
+  const DatasetCamera& cam = cameras.at(camera_index);
+  if (frame < 0 || static_cast<size_t>(frame) >= cam.times.size() ||
+      std::isnan(cam.times[static_cast<size_t>(frame)]))
+    return std::nullopt;
+  return cam.times[static_cast<size_t>(frame)];
+}
+
+double Dataset::frame_time(size_t camera_index, int frame) const {
+  return listed_time(camera_index, frame).value_or(frame / network.camera_fps(camera_index));
+}
 
 cv::Mat Dataset::read(size_t camera_index, int frame) {
   DatasetCamera& cam = cameras.at(camera_index);
   if (!cam.source)
     throw InputError(dir.string() + ": camera " + std::to_string(cam.id) + " was not opened");
-  if (frame >= frame_count) return {};
+  if (frame >= camera_frame_count(camera_index)) return {};
   cv::Mat m = cam.source->read(frame);
   if (!m.empty() && (m.cols != cam.calib.width || m.rows != cam.calib.height))
     throw InputError(cam.source->frame_name(frame) + ": image is " + std::to_string(m.cols) + "x" +
@@ -106,13 +173,20 @@ Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera) {
       ds.warnings.push_back(e.path().string() + ": camera " + stem.substr(4) +
                             " is not in network.yaml; ignored");
   }
-  // Frame count rule.
-  int longest = 0;
-  for (const auto& c : ds.cameras)
-    if (c.source) longest = std::max(longest, c.source->frame_count());
-  ds.frame_count = ds.network.frames ? *ds.network.frames : longest;
-  for (const auto& c : ds.cameras) {
+  // Frame count rule (over the cameras at the dataset's fps; the others keep their own count).
+  const auto own_clock = [&](size_t i) { return ds.network.camera_fps(i) != ds.network.fps; };
+  int longest = 0, longest_any = 0;
+  for (size_t i = 0; i < ds.cameras.size(); ++i) {
+    const auto& c = ds.cameras[i];
     if (!c.source) continue;
+    longest_any = std::max(longest_any, c.source->frame_count());
+    if (!own_clock(i)) longest = std::max(longest, c.source->frame_count());
+  }
+  if (longest == 0) longest = longest_any;
+  ds.frame_count = ds.network.frames ? *ds.network.frames : longest;
+  for (size_t i = 0; i < ds.cameras.size(); ++i) {
+    const auto& c = ds.cameras[i];
+    if (!c.source || own_clock(i)) continue;
     const int n = c.source->frame_count();
     if (n < ds.frame_count)
       ds.warnings.push_back(c.source->path().string() + ": camera " + std::to_string(c.id) +
@@ -124,6 +198,7 @@ Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera) {
                             " has " + std::to_string(n) + " frames but network.yaml says frames: " +
                             std::to_string(ds.frame_count) + "; the extra frames are ignored");
   }
+  read_timestamps(ds);
   return ds;
 }
 

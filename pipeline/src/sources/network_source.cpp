@@ -1,5 +1,7 @@
 #include "netvmo/pipeline/sources/network_source.hpp"
 
+#include <cmath>
+#include <cstdio>
 #include <map>
 
 #include "netvmo/pipeline/error.hpp"
@@ -9,6 +11,12 @@ namespace netvmo::sources {
 namespace fs = std::filesystem;
 
 namespace {
+
+std::string fmt(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.9g", v);
+  return b;
+}
 
 class DatasetProvider final : public NetworkSource {
  public:
@@ -42,6 +50,11 @@ class DatasetProvider final : public NetworkSource {
     return camera_truth_[i];
   }
   std::vector<std::string> warnings() const override { return ds_.warnings; }
+  std::vector<std::string> notes() const override { return ds_.notes; }
+  int camera_frame_count(size_t i) const override { return ds_.camera_frame_count(i); }
+  std::optional<double> listed_time(size_t i, int frame) const override {
+    return ds_.listed_time(i, frame);
+  }
   std::string name() const override { return ds_.dir.string(); }
 
  private:
@@ -51,6 +64,42 @@ class DatasetProvider final : public NetworkSource {
 };
 
 }  // namespace
+
+std::optional<std::string> clock_mismatch(const NetworkSource& source) {
+  const io::NetworkConfig& net = source.network();
+  for (size_t i = 0; i < net.cameras.size(); ++i)
+    if (net.camera_fps(i) != net.fps)
+      return "camera " + std::to_string(net.cameras[i].id) + " runs at " + fmt(net.camera_fps(i)) +
+             " frames/s, the dataset at " + fmt(net.fps) + " (" + net.source + ")";
+  // Times of the same frame index, where both cameras have one: from timestamps.csv, or
+  // frame / fps for a camera it does not list at all (a listed camera without a row there has
+  // no image there).
+  const int frames = source.frame_count();
+  std::vector<bool> listed(net.cameras.size(), false);
+  for (size_t i = 0; i < net.cameras.size(); ++i)
+    for (int k = 0; k < frames && !listed[i]; ++k) listed[i] = source.listed_time(i, k).has_value();
+  const auto time = [&](size_t i, int k) -> std::optional<double> {
+    if (listed[i]) return source.listed_time(i, k);
+    return source.frame_time(i, k);
+  };
+  for (int k = 0; k < frames; ++k) {
+    std::optional<size_t> ref;  // the first camera with a time at frame k
+    for (size_t i = 0; i < net.cameras.size(); ++i) {
+      const auto b = time(i, k);
+      if (!b) continue;
+      if (!ref) {
+        ref = i;
+        continue;
+      }
+      const double a = *time(*ref, k);
+      if (std::abs(a - *b) > 1e-9)
+        return "frame " + std::to_string(k) + " is at t = " + fmt(a) + " s for camera " +
+               std::to_string(net.cameras[*ref].id) + " but " + fmt(*b) + " s for camera " +
+               std::to_string(net.cameras[i].id) + " (timestamps.csv)";
+    }
+  }
+  return std::nullopt;
+}
 
 std::unique_ptr<NetworkSource> open_dataset_source(const fs::path& dir,
                                                    std::optional<int> only_camera) {

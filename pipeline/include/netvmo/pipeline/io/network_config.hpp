@@ -5,6 +5,8 @@
 //   target: {family: tag36h11, id: 0, size: 0.2}   # size = side of the black border square, m
 //   cameras:                                  # believed camera poses g_wi in the world
 //     - {id: 1, p_wi: [x, y, z], r_wi: [rx, ry, rz]}   # r_wi: rotation vector of R_wi
+//       fps: 15                               # optional: this camera's own frame rate (> 0;
+//                                             #   default: the dataset's fps)
 //   edges: [[1, 2], [2, 3]]                   # undirected communication graph (camera ids)
 //
 // Read strictly: a misspelt or unknown key anywhere is an InputError naming network.yaml and
@@ -34,6 +36,7 @@ struct TargetSpec {
 struct CameraConfig {
   int id = 0;                            ///< positive, unique
   obs::SE3 g_wi = obs::SE3::Identity();  ///< believed pose of camera i in the world
+  std::optional<double> fps;             ///< its own frame rate, when it differs from the dataset's
 };
 
 struct NetworkConfig {
@@ -46,6 +49,8 @@ struct NetworkConfig {
 
   /// Index of a camera id in `cameras`, or -1.
   int index_of(int camera_id) const;
+  /// The frame rate of camera `index`: its own `fps`, else the dataset's.
+  double camera_fps(size_t index) const { return cameras.at(index).fps.value_or(fps); }
 };
 
 NetworkConfig load_network_config(const std::filesystem::path& file);

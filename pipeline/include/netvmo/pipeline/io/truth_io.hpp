@@ -5,6 +5,8 @@
 //               corners in OpenCV pixels (libapriltag corner order), empty when the tag is
 //               behind the camera
 //   target.csv  frame,t,px,py,pz,rx,ry,rz         (g_wo: target position, rotation vector)
+//   timestamps.csv  camera,frame,t       (recorded folders, optional: each image's time [s];
+//               frame = the image's index in its camera's folder or video)
 //   detections.csv  frame,camera,tag_id,detected,status,margin,u0,v0,u1,v1,u2,v2,u3,v3
 //               one row per camera and frame; status is to_string(TargetStatus) (detected, or
 //               the reason the target was not used); margin and corners empty when detected = 0
@@ -69,6 +71,20 @@ struct CameraTruthRow {
   obs::SE3 g_wi = obs::SE3::Identity();
 };
 std::vector<CameraTruthRow> read_truth_cameras_csv(const std::filesystem::path& file);
+
+/// timestamps.csv: the time of every image of a recorded folder, one row per image, header
+/// camera,frame,t (seconds; frame = the image's index in its camera's folder or video).
+inline constexpr const char* kTimestampsHeader = "camera,frame,t";
+struct TimestampRow {
+  int camera = 0;
+  int frame = 0;
+  double t = 0.0;
+  int line = 0;  ///< in the file, for messages
+};
+/// Reads timestamps.csv and checks what the file alone can tell: camera > 0, frame >= 0, t
+/// finite, no (camera, frame) twice, and per camera the times strictly increase with the frame.
+/// Rows are returned by camera, then frame. Errors name the file, line and column.
+std::vector<TimestampRow> read_timestamps_csv(const std::filesystem::path& file);
 
 /// One truth.csv line (without newline): times with 6 decimals, corners with 4 (a corner behind
 /// the camera is written empty).

@@ -37,12 +37,20 @@ struct NodeOptions {
   /// The common start (seconds since the epoch, wall clock); default: the node's own start. A
   /// node started after it (a restart) joins at the current frame.
   std::optional<double> start_epoch;
+  /// Instead of start_epoch: once set up and matched with its neighbours, the node writes
+  /// node_<id>.ready into its output folder and waits (at most dds.timeout_s) for this file to
+  /// hold the common start (seconds since the epoch); `launch` writes it when every node is
+  /// ready. A restarted node finds it there and joins late.
+  std::optional<std::filesystem::path> start_file;
   /// Staleness bound [s of camera time]: a neighbour whose latest accepted estimate is older
   /// than this (by its stamp) is forgotten (CameraObserver::forget) until heard again.
   double stale_s = 0.25;
   double drop = 0.0;       ///< probability that a received message is dropped (seeded)
   double delay_ms = 0.0;   ///< every received message is handed to the observer this late
   std::uint64_t seed = 0;  ///< seed of the drops (with the camera id)
+  /// A restart (`launch --restart-after`): keep the killed predecessor's finished rows of
+  /// node_<id>.csv.partial (frames before the one this node joins at).
+  bool resume = false;
 };
 
 struct NodeSummary {
@@ -53,8 +61,15 @@ struct NodeSummary {
   std::uint64_t forgotten = 0;         ///< async: neighbours dropped past the staleness bound
   int first_frame = 0;                 ///< async: the frame a (re)started node joined at
   std::vector<std::string> warnings;
+  std::vector<std::string> notes;  ///< the dataset's (e.g. where the image times come from)
   double seconds = 0.0;
 };
+
+/// Where a node writes `file` (node_<id>.csv, node_<id>_links.csv) while it runs: the finished
+/// frames, flushed after each, renamed to `file` when the node ends (`file`.partial).
+inline std::filesystem::path partial_path(const std::filesystem::path& file) {
+  return file.string() + ".partial";
+}
 
 /// Runs camera `options.camera_id` of the dataset; writes node_<id>.csv and node_<id>.json into
 /// out_dir. Throws InputError on bad input, DdsTimeout when a neighbour stays silent.

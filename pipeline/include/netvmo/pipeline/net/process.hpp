@@ -18,6 +18,9 @@ std::filesystem::path self_exe();
 /// stderr appended to `log`. Throws std::runtime_error when fork fails.
 pid_t spawn(const std::vector<std::string>& argv, const std::filesystem::path& log);
 
+/// True when the child has ended (it is not reaped: supervise() still sees it).
+bool has_exited(pid_t pid);
+
 struct ChildResult {
   pid_t pid = 0;
   bool finished = false;  ///< exited on its own (exit_code valid)
@@ -27,6 +30,9 @@ struct ChildResult {
   bool planned_kill = false;  ///< killed by a KillPlan (and not restarted)
   bool restarted = false;     ///< killed by a KillPlan and started again
   double seconds = 0.0;       ///< wall time until it ended
+  /// A KillPlan's victim: when it was killed and restarted (wall clock, seconds since the
+  /// epoch; 0 = not).
+  double kill_epoch = 0.0, restart_epoch = 0.0;
 };
 
 /// A fault to inject: child `index` is killed (SIGKILL) `kill_at` seconds after supervision

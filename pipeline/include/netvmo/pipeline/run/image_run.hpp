@@ -40,6 +40,17 @@ using FrameHook =
     std::function<void(int frame, const std::vector<cv::Mat>& images,
                        const std::vector<CameraFrame>& cams, const run::FrameRecord& record)>;
 
+/// One camera's estimate after one of its own images: a row of estimates.csv when the cameras
+/// run on their own clocks.
+struct EstimateRow {
+  int frame = 0;      ///< the camera's own frame index
+  double t = 0.0;     ///< the image's time [s]
+  size_t camera = 0;  ///< index in network.yaml
+  bool delta = false;
+  bool initialized = false;
+  obs::SE3 est_w = obs::SE3::Identity();
+};
+
 struct ImageRunResult {
   std::vector<run::FrameRecord> history;
   std::vector<std::vector<CameraFrame>> frames;  ///< [frame][camera]
@@ -49,6 +60,13 @@ struct ImageRunResult {
   double seconds = 0.0;            ///< wall time of the loop
   double seconds_front_end = 0.0;  ///< of which reading + detection + PnP
   double seconds_observer = 0.0;   ///< of which the observer and baselines
+  /// Cameras on their own clocks (async processes at different rates): estimates.csv holds
+  /// these rows (each camera's own images and times, by t, then camera), while history and
+  /// frames are a regular grid at the dataset's fps holding each camera's latest estimate at or
+  /// before each grid time. Empty: estimates.csv is written from history.
+  std::vector<EstimateRow> own_estimates;
+  /// With own_estimates: [grid frame][camera] the camera's own frame held there (-1: none yet).
+  std::vector<std::vector<int>> source_frames;
 };
 
 /// The communication graph of network.yaml (camera indices in its order). Throws InputError

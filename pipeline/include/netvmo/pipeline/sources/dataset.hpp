@@ -8,6 +8,8 @@
 //                                       kind (camera_stream.hpp): an image folder (png, jpg,
 //                                       jpeg, pgm) or a video file cv::VideoCapture reads
 //   truth.csv, target.csv               optional ground truth (truth_io.hpp)
+//   timestamps.csv                      optional: every image's time (truth_io.hpp); without
+//                                       it, time = frame index / the camera's fps (a note)
 //
 // Frame-count rule (never a silent shift of frames):
 //  - Image folder, all file stems numeric (e.g. 000042.png): the number IS the frame index
@@ -17,8 +19,12 @@
 //  - Image folder, any non-numeric stem: frame index = position in the name-sorted list.
 //  - Video file: frame index = position in the decoded stream (count from the container).
 //  - The dataset's frame count is network.yaml's `frames` if given, otherwise the largest
-//    count over the cameras. A camera with fewer frames is blind after its last one (warning);
-//    frames beyond `frames` are ignored (warning).
+//    count over the cameras at the dataset's fps. A camera at the dataset's fps with fewer
+//    frames is blind after its last one (warning); frames beyond `frames` are ignored (warning).
+//    A camera with its own `fps` (network.yaml) keeps all its frames, on its own clock.
+//  - Times: timestamps.csv gives each image's time; a camera it lists needs a row for every
+//    image it has (and none beyond its last), and a camera it does not list runs on
+//    frame / its fps. Without the file every camera does, and `notes` says so.
 //  - A frame that exists but cannot be decoded is an InputError naming the file (and frame for
 //    videos), thrown by read(); callers may treat that camera as blind for that frame.
 #pragma once
@@ -40,6 +46,9 @@ struct DatasetCamera {
   int id = 0;
   io::Calibration calib;
   std::unique_ptr<CameraStream> source;
+  /// Image times from timestamps.csv, by frame (NaN where a missing frame has no row); empty:
+  /// frame / fps.
+  std::vector<double> times;
 };
 
 struct Dataset {
@@ -48,6 +57,7 @@ struct Dataset {
   std::vector<DatasetCamera> cameras;  ///< in network.yaml order
   int frame_count = 0;                 ///< see the frame-count rule above
   std::vector<std::string> warnings;   ///< one line each, for the user
+  std::vector<std::string> notes;      ///< information for the log (e.g. where times come from)
 
   /// Camera `camera_index` (position in `cameras`) at `frame`: 8-bit gray, or empty when the
   /// camera is blind there (missing frame, after its last frame). Throws InputError naming the
@@ -55,6 +65,14 @@ struct Dataset {
   cv::Mat read(size_t camera_index, int frame);
   /// Index of a camera id in `cameras`, or -1.
   int index_of(int camera_id) const { return network.index_of(camera_id); }
+  /// The frames of camera `camera_index`: frame_count at the dataset's fps, its own stream's
+  /// count when it has its own fps (0 for a camera that was not opened).
+  int camera_frame_count(size_t camera_index) const;
+  /// The time [s] of camera `camera_index`'s image `frame`: timestamps.csv's, else
+  /// frame / the camera's fps (also for frames past its last image).
+  double frame_time(size_t camera_index, int frame) const;
+  /// timestamps.csv's time of that image, when the file gives one.
+  std::optional<double> listed_time(size_t camera_index, int frame) const;
 };
 
 /// Opens a dataset folder: network.yaml, then for every camera its calibration and its image

@@ -32,9 +32,33 @@ class NetworkSource {
   virtual std::optional<obs::SE3> camera_truth(size_t camera_index) const = 0;
   /// Warnings found when opening (missing frames, short cameras, ...), one line each.
   virtual std::vector<std::string> warnings() const { return {}; }
+  /// Information for the log (e.g. where the image times come from), one line each.
+  virtual std::vector<std::string> notes() const { return {}; }
+  /// The frames of one camera: frame_count(), or its own count when it runs at its own fps.
+  virtual int camera_frame_count(size_t camera_index) const {
+    (void)camera_index;
+    return frame_count();
+  }
+  /// The time [s] of a camera's image (timestamps.csv for dataset folders), by default
+  /// frame / the camera's fps.
+  virtual double frame_time(size_t camera_index, int frame) const {
+    return listed_time(camera_index, frame).value_or(frame / network().camera_fps(camera_index));
+  }
+  /// The time a dataset's timestamps.csv gives that image, if any (none by default).
+  virtual std::optional<double> listed_time(size_t camera_index, int frame) const {
+    (void)camera_index;
+    (void)frame;
+    return std::nullopt;
+  }
   /// A name for messages and summaries.
   virtual std::string name() const = 0;
 };
+
+/// Why the cameras do not share one clock (a camera at its own fps, or two cameras whose images
+/// of the same frame index have different times: listed in timestamps.csv for both, or for one
+/// and frame / fps for the other), or nothing when they do. `netvmo run` and
+/// lock-step processes need a common clock.
+std::optional<std::string> clock_mismatch(const NetworkSource& source);
 
 /// A dataset folder (sources/dataset.hpp documents the layout). Ground truth is read from
 /// target.csv (true target poses) and truth_cameras.csv (true camera poses,
