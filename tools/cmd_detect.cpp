@@ -52,13 +52,6 @@ int column_width(TargetStatus s) {
   return std::max(6, static_cast<int>(std::strlen(to_string(s))));
 }
 
-/// Narrowest side of the projected black square [px].
-double narrowest_side(const std::array<cv::Point2d, 4>& c) {
-  double m = 1e300;
-  for (size_t k = 0; k < 4; ++k) m = std::min(m, cv::norm(c[(k + 1) % 4] - c[k]));
-  return m;
-}
-
 /// Against the dataset's truth.csv (rendered datasets): recall of fully visible tags by the
 /// narrowest side of their projected black square, and accepted corners more than 1 px off.
 struct TruthTally {

@@ -32,13 +32,6 @@ cv::Rect tracking_window(const std::array<cv::Point2d, 4>& c, const TrackingSett
                   cv::Point(cvCeil(x1 + grow) + 1, cvCeil(y1 + grow) + 1));
 }
 
-/// Narrowest side of a quad [px].
-double narrowest(const std::array<cv::Point2d, 4>& c) {
-  double m = std::numeric_limits<double>::infinity();
-  for (size_t k = 0; k < 4; ++k) m = std::min(m, cv::norm(c[(k + 1) % 4] - c[k]));
-  return m;
-}
-
 /// Keeps the more informative of two results: a detection, else a rejection with a reason
 /// other than not_found, else the first.
 void keep_best(FrameDetections& best, FrameDetections&& next) {
@@ -48,6 +41,12 @@ void keep_best(FrameDetections& best, FrameDetections&& next) {
   if (rank(next.status) > rank(best.status)) best = std::move(next);
 }
 }  // namespace
+
+double narrowest_side(const std::array<cv::Point2d, 4>& c) {
+  double m = std::numeric_limits<double>::infinity();
+  for (size_t k = 0; k < 4; ++k) m = std::min(m, cv::norm(c[(k + 1) % 4] - c[k]));
+  return m;
+}
 
 void validate(const TrackingSettings& t) {
   auto bad = [](const std::string& what) { throw InputError("tracking settings: " + what); };
@@ -88,7 +87,7 @@ TagObservation FrontEnd::observe(const cv::Mat& gray, const io::Calibration& cal
     auto window = [&] {
       const auto& last = *track->last;
       const cv::Rect w = tracking_window(last, tracking_);
-      const double side = narrowest(last);
+      const double side = narrowest_side(last);
       SearchOptions opt;
       if (side < tracking_.full_res_below_px) opt.decimate = 1.0;
       search(kSearchWindow, w, opt);

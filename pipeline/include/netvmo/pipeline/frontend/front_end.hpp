@@ -30,6 +30,9 @@ struct TagObservation {
 Eigen::Matrix<double, 8, 1> normalized_features(const std::array<cv::Point2d, 4>& corners_px,
                                                 const io::Calibration& calib);
 
+/// Length of the shortest side of a quad [px] (the "narrowest side" of a projected tag).
+double narrowest_side(const std::array<cv::Point2d, 4>& corners);
+
 /// Tracking and acquisition: how each frame is searched (FrontEnd::observe with a TrackState).
 ///  - While a camera keeps detecting the target, the next frame is searched first in a window
 ///    around the last corners, at full resolution (decimate 1) when the last tag's narrowest
