@@ -326,6 +326,25 @@ TEST(Detector, InvalidSettingsRejected) {
   EXPECT_EQ(parse_refinement("edges"), Refinement::edge_lines);
 }
 
+// While tracking, the periodic full-frame search sees a second tag with the target id outside
+// the window: duplicate_id, and the window search that follows it does not pick one of them.
+TEST(FrontEnd, DuplicateOnThePeriodicFullFrameIsFinal) {
+  const auto calib = testing::test_calibration();
+  const testing::SynthTag near{0, kSize, facing_pose(1.5, -0.3, 0.0), {}};
+  const cv::Mat one = render_tags(calib, {near});
+  const cv::Mat two = render_tags(calib, {near, {0, kSize, facing_pose(1.5, 0.3, 0.0), {}}});
+  TrackingSettings t;
+  t.full_frame_every = 2;
+  FrontEnd fe({}, t);
+  TrackState track;
+  EXPECT_TRUE(fe.observe(one, calib, nullptr, &track).delta);
+  EXPECT_TRUE(fe.observe(one, calib, nullptr, &track).delta);
+  EXPECT_EQ(track.searches, kSearchWindow);
+  const auto o = fe.observe(two, calib, nullptr, &track);  // the periodic full frame
+  EXPECT_EQ(o.status, TargetStatus::duplicate_id) << o.reason;
+  EXPECT_EQ(track.searches, kSearchFullFrame);
+}
+
 TEST(FrontEnd, InvalidTrackingSettingsRejected) {
   TrackingSettings t;
   t.acquire_every = -1;

@@ -74,7 +74,8 @@ TagObservation FrontEnd::observe(const cv::Mat& gray, const io::Calibration& cal
     const bool tracked = track && tracking_.enabled && track->last;
     auto found = [&] { return dets.status == TargetStatus::detected; };
     auto search = [&](unsigned what, const cv::Rect& region, const SearchOptions& opt) {
-      if (found()) return;
+      // A duplicate is final: a later, narrower search (the window) must not pick one of them.
+      if (found() || dets.status == TargetStatus::duplicate_id) return;
       const bool first = searches == 0;
       searches |= what;
       FrameDetections d = detector_.detect(gray, region, &calib, opt);

@@ -45,9 +45,9 @@ double narrowest_side(const std::array<cv::Point2d, 4>& corners);
 ///    searched again at full resolution: small tags (~15-30 px) that decimate 2 misses are
 ///    found within `acquire_every` frames, at the cost of one full-resolution search per
 ///    `acquire_every` blind frames.
-/// delta still comes from a real decode in this frame. Caveat: while tracking, a second tag
-/// with the target's id outside the window is not seen, so the duplicate-id rejection is
-/// checked on full-frame searches only.
+/// delta still comes from a real decode in this frame. A duplicate_id result ends the frame's
+/// searches. Caveat: while tracking, a second tag with the target's id outside the window is
+/// not seen, so the duplicate-id rejection is checked on full-frame searches only.
 struct TrackingSettings {
   bool enabled = true;
   double window_margin = 0.75;  ///< window = corner bounding box grown by this x its size ...
