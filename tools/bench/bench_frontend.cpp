@@ -200,7 +200,7 @@ void BM_FrontEndRendered(benchmark::State& state) {
 // The front end over rendered sequences, each camera tracked frame by frame as in `netvmo run`
 // (fresh tracking state per pass): ms per camera-frame and the fraction detected, for the
 // search modes of TrackingSettings. args: sequence (0 small_tags.yaml: every 3rd frame of its 3
-// cameras, the tag shrinking from ~55 to ~13 px; 1 moving_target.yaml frames 76-92 of cameras
+// cameras, the tag shrinking from 53 to 11 px; 1 moving_target.yaml frames 76-92 of cameras
 // 3 and 5, a shadow edge crossing the tag; 2 paper5_render.yaml camera 4, which never sees the
 // tag: the cost of the acquisition pass), mode (0 before: decimate 2 everywhere, no
 // full-resolution passes, no normalised retry; 1 the defaults; 2 decimate 1 on every frame).
