@@ -1,5 +1,6 @@
 #include "choices.hpp"
 
+#include <cstdio>
 #include <vector>
 
 #include "netvmo/observer/error_model.hpp"
@@ -43,6 +44,38 @@ void add_transport_options(CLI::App& cmd, run::TransportSettings& s) {
       ->check(CLI::Range(0.0, 0.99))
       ->capture_default_str();
   cmd.add_option("--seed", s.seed, "lossy transport: seed of the losses")->capture_default_str();
+}
+
+void add_search_options(CLI::App& cmd, frontend::TrackingSettings& t) {
+  cmd.add_flag_callback(
+      "--no-track", [&t] { t.enabled = false; },
+      "Search every frame whole at the detector's decimation (default: a window around the "
+      "last detection first, the whole image when that fails and every 30 frames, and the "
+      "full-resolution acquisition pass while the target is not seen)");
+  cmd.add_option("--acquire-every", t.acquire_every,
+                 "While a camera does not see the target, search every this many frames "
+                 "again at full resolution for small tags (0: never)")
+      ->check(CLI::Range(0, 1000000))
+      ->capture_default_str();
+  cmd.add_option("--full-res-below", t.full_res_below_px,
+                 "Search the tracking window at full resolution when the last tag's narrowest "
+                 "side is below this [px] (0: never)")
+      ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str();
+  cmd.add_flag_callback(
+      "--no-shadow-retry", [&t] { t.shadow_retry = false; },
+      "No second search of the tracking window on a locally normalised copy (for tags "
+      "crossed by a hard shadow edge) when the first fails");
+}
+
+std::vector<std::string> search_arguments(const frontend::TrackingSettings& t) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", t.full_res_below_px);
+  std::vector<std::string> a = {"--acquire-every", std::to_string(t.acquire_every),
+                                "--full-res-below", b};
+  if (!t.enabled) a.push_back("--no-track");
+  if (!t.shadow_retry) a.push_back("--no-shadow-retry");
+  return a;
 }
 
 }  // namespace netvmo::tools

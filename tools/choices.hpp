@@ -4,7 +4,9 @@
 
 #include <CLI/CLI.hpp>
 #include <string>
+#include <vector>
 
+#include "netvmo/pipeline/frontend/front_end.hpp"
 #include "netvmo/pipeline/run/transports.hpp"
 
 namespace netvmo::tools {
@@ -20,5 +22,11 @@ CLI::Option* add_estimator_option(CLI::App& cmd, std::string& value);
 
 /// Adds --transport (the registered kinds, one help line each), --drop and --seed.
 void add_transport_options(CLI::App& cmd, run::TransportSettings& s);
+
+/// Adds how the front end searches each camera's frames: --no-track, --acquire-every,
+/// --full-res-below, --no-shadow-retry (defaults: frontend::TrackingSettings).
+void add_search_options(CLI::App& cmd, frontend::TrackingSettings& t);
+/// The same settings as arguments for add_search_options (a launched node's command line).
+std::vector<std::string> search_arguments(const frontend::TrackingSettings& t);
 
 }  // namespace netvmo::tools

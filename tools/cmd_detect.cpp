@@ -8,11 +8,13 @@
 // the exit code is 0. Dataset-level problems (network.yaml, a missing calibration, no frames for
 // a camera, an unknown camera id) stop before anything is written.
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <map>
 #include <set>
 
+#include "choices.hpp"
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/frontend/front_end.hpp"
@@ -32,6 +34,7 @@ namespace {
 struct DetectOptions {
   std::string dataset, out;
   DetectorSettings det;
+  TrackingSettings tracking;
   std::string refinement = to_string(DetectorSettings{}.refinement);
   bool no_border_check = false;
   bool keep_going = false;
@@ -49,6 +52,38 @@ int column_width(TargetStatus s) {
   return std::max(6, static_cast<int>(std::strlen(to_string(s))));
 }
 
+/// Against the dataset's truth.csv (rendered datasets): recall of fully visible tags by the
+/// narrowest side of their projected black square, and accepted corners more than 1 px off.
+struct TruthTally {
+  static constexpr double kEdges[] = {18, 24, 30, 40};  ///< bins <18, 18-24, 24-30, 30-40, >=40
+  std::array<int, 5> visible{}, detected{};
+  int accepted = 0, off_1px = 0;
+  double max_error = 0.0;
+  void add(const TruthRow& t, const TagObservation& o) {
+    if (o.delta && t.corners) {
+      ++accepted;
+      double e = 0.0;
+      for (size_t k = 0; k < 4; ++k) e = std::max(e, cv::norm(o.corners_px[k] - (*t.corners)[k]));
+      off_1px += e > 1.0;
+      max_error = std::max(max_error, e);
+    }
+    if (!t.in_fov || t.visible_fraction < 0.999 || !t.corners) return;
+    const double side = narrowest_side(*t.corners);
+    size_t bin = 0;
+    while (bin < std::size(kEdges) && side >= kEdges[bin]) ++bin;
+    ++visible[bin];
+    detected[bin] += o.delta;
+  }
+  void print() const {
+    std::printf("against truth.csv: fully visible tags detected, by narrowest side [px]:");
+    const char* names[] = {"<18", "18-24", "24-30", "30-40", ">=40"};
+    for (size_t b = 0; b < visible.size(); ++b)
+      std::printf(" %s %d/%d", names[b], detected[b], visible[b]);
+    std::printf("; accepted %d, with a corner > 1 px off %d (max %.2f px)\n", accepted, off_1px,
+                max_error);
+  }
+};
+
 int run_detect(DetectOptions o) {
   o.det.refinement = parse_refinement(o.refinement);
   o.det.border_check = !o.no_border_check;
@@ -56,7 +91,7 @@ int run_detect(DetectOptions o) {
   for (const auto& w : ds.warnings) std::fprintf(stderr, "netvmo detect: warning: %s\n", w.c_str());
   o.det.family = ds.network.target.family;
   o.det.target_id = ds.network.target.id;
-  FrontEnd fe(o.det);
+  FrontEnd fe(o.det, o.tracking);
 
   const fs::path out_dir(o.out);
   io::ensure_directory(out_dir);
@@ -64,6 +99,13 @@ int run_detect(DetectOptions o) {
   csv << kDetectionsHeader << "\n";
 
   std::vector<CameraStats> stats(ds.cameras.size());
+  std::vector<TrackState> tracks(ds.cameras.size());
+  std::map<std::pair<int, int>, TruthRow> truth;  // (frame, camera) -> row, when truth.csv exists
+  if (fs::exists(fs::path(o.dataset) / "truth.csv"))
+    for (auto& t : read_truth_csv(fs::path(o.dataset) / "truth.csv"))
+      truth[{t.frame, t.camera}] = t;
+  TruthTally tally;
+  double seconds = 0.0;
   std::vector<std::string> unreadable;
   Progress progress("detect", ds.frame_count, !o.quiet);
   for (int f = 0; f < ds.frame_count; ++f) {
@@ -81,7 +123,11 @@ int run_detect(DetectOptions o) {
       }
       if (!img.empty()) ++st.images;
       FrameDetections all;
-      const TagObservation obs = fe.observe(img, ds.cameras[c].calib, &all);
+      const auto t0 = std::chrono::steady_clock::now();
+      const TagObservation obs = fe.observe(img, ds.cameras[c].calib, &all, &tracks[c]);
+      seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      if (const auto it = truth.find({f, ds.cameras[c].id}); it != truth.end())
+        tally.add(it->second, obs);
       for (const auto& d : all.all)
         if (d.id != o.det.target_id) st.other_ids.insert(d.id);
       ++st.by_status[obs.status];
@@ -91,6 +137,7 @@ int run_detect(DetectOptions o) {
       row.tag_id = o.det.target_id;
       row.detected = obs.delta;
       row.status = obs.status;
+      row.reason = obs.reason;
       if (obs.delta) {
         ++st.detected;
         st.margin_sum += obs.margin;
@@ -128,6 +175,11 @@ int run_detect(DetectOptions o) {
       }
     std::printf(" %10zu %10d\n", st.other_ids.size(), st.unreadable);
   }
+  int images = 0;
+  for (const auto& st : stats) images += st.images;
+  std::printf("front end: %.2f ms per image (mean over %d images)\n",
+              images ? 1e3 * seconds / images : 0.0, images);
+  if (!truth.empty()) tally.print();
   if (!unreadable.empty() && !o.keep_going)
     throw InputError(unreadable.front() + " (" + std::to_string(unreadable.size()) +
                      " unreadable frame(s) in total, treated as blind in detections.csv; "
@@ -141,11 +193,13 @@ void add_detect(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<DetectOptions>();
   CLI::App* cmd = add_command(
       app, "detect", "Run the AprilTag front end on a dataset folder",
-      "Writes OUT/detections.csv: frame,camera,tag_id,detected,status,margin,u0,v0,...,u3,v3\n"
-      "(OpenCV pixels, corners in libapriltag order; empty when not detected; status is\n"
+      "Writes OUT/detections.csv: frame,camera,tag_id,detected,status,margin,u0,v0,...,u3,v3,\n"
+      "reason (OpenCV pixels, corners in libapriltag order; empty when not detected; status is\n"
       "detected or the reason the target was not used: not_found, duplicate_id, low_margin,\n"
-      "high_hamming, border_mismatch, no_image) and prints a per-camera summary with the count\n"
-      "of each reason. The tag family and target id come from network.yaml.");
+      "high_hamming, border_mismatch, no_image; reason says it in words) and prints a\n"
+      "per-camera summary with the count of each reason. Each camera's frames are searched as\n"
+      "in `netvmo run` (tracking window, acquisition pass; --no-track: every frame whole). The\n"
+      "tag family and target id come from network.yaml.");
   cmd->add_option("dataset", o->dataset,
                   "Dataset folder (network.yaml, calib/, cam_<id>/ or cam_<id>.<ext>)")
       ->required();
@@ -188,6 +242,7 @@ void add_detect(CLI::App& app, int& exit_code) {
                   "(lines fitted to the border edges)")
       ->check(CLI::IsMember({"none", "subpix", "edges"}))
       ->capture_default_str();
+  add_search_options(*cmd, o->tracking);
   cmd->add_flag("--keep-going", o->keep_going,
                 "Unreadable frames are warnings (camera blind there) instead of an error exit");
   cmd->add_flag("--quiet,-q", o->quiet, "No progress line");

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "choices.hpp"
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
@@ -48,7 +49,7 @@ std::vector<std::string> forwarded(const RunCliOptions& o) {
       o.error,      "--init",        o.init,     "--rounds", std::to_string(o.rounds),
       "--decimate", num(o.decimate), "--refine", o.refine};
   if (o.keep_going) a.push_back("--keep-going");
-  if (o.no_track) a.push_back("--no-track");
+  for (auto& s : search_arguments(o.tracking)) a.push_back(std::move(s));
   return a;
 }
 

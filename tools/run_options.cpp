@@ -47,9 +47,7 @@ void add_run_options(CLI::App& cmd, RunCliOptions& o, bool in_process_transport)
   cmd.add_option("--decimate", o.decimate, "libapriltag quad_decimate")
       ->capture_default_str()
       ->check(CLI::Range(1.0, 8.0));
-  cmd.add_flag("--no-track", o.no_track,
-               "Always search the whole image (default: search a window around the last "
-               "detection first, the whole image when that fails and every 30 frames)");
+  add_search_options(cmd, o.tracking);
   if (in_process_transport) add_transport_options(cmd, o.transport);
   cmd.add_option("--refine", o.refine, "Corner refinement: none, subpix or edges")
       ->check(CLI::IsMember({"none", "subpix", "edges"}))
@@ -70,7 +68,7 @@ run::ImageRunOptions to_image_run_options(const RunCliOptions& o) {
   if (o.max_frames > 0) r.max_frames = o.max_frames;
   r.detector.quad_decimate = o.decimate;
   r.detector.refinement = frontend::parse_refinement(o.refine);
-  r.tracking.enabled = !o.no_track;
+  r.tracking = o.tracking;
   r.transport = o.transport;
   return r;
 }

@@ -26,7 +26,7 @@ struct RunCliOptions {
   int max_frames = 0;
   double decimate = frontend::DetectorSettings{}.quad_decimate;
   std::string refine = frontend::to_string(frontend::DetectorSettings{}.refinement);
-  bool no_track = !frontend::TrackingSettings{}.enabled;
+  frontend::TrackingSettings tracking;
   run::TransportSettings transport;
 };
 

@@ -14,31 +14,15 @@
 #include "netvmo/pipeline/frontend/front_end.hpp"
 #include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/render/renderer.hpp"
+#include "truth_compare.hpp"
 
 namespace fs = std::filesystem;
 using namespace netvmo;
+using netvmo::testing::max_corner_error;
+using netvmo::testing::narrowest_side;
 
 namespace {
 const fs::path kSource = NETVMO_SOURCE_DIR;
-
-/// Largest distance of a detected corner from the truth [px] (infinite without truth).
-double max_corner_error(const std::array<cv::Point2d, 4>& c, const render::FrameTruth& t) {
-  double e = 0.0;
-  for (size_t k = 0; k < 4; ++k) {
-    if (!t.corners[k]) return std::numeric_limits<double>::infinity();
-    e = std::max(e, std::hypot(c[k].x - t.corners[k]->x(), c[k].y - t.corners[k]->y()));
-  }
-  return e;
-}
-
-/// Shortest side of the projected black square [px], 0 when not in view.
-double narrowest_side(const render::FrameTruth& t) {
-  if (!t.in_fov) return 0.0;
-  double side = std::numeric_limits<double>::infinity();
-  for (size_t k = 0; k < 4; ++k)
-    side = std::min(side, (*t.corners[k] - *t.corners[(k + 1) % 4]).norm());
-  return side;
-}
 
 struct Tally {
   int images = 0;

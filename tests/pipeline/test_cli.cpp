@@ -50,7 +50,8 @@ TEST(Cli, DetectWritesCsvAndSummary) {
     const size_t ci = static_cast<size_t>(row.camera - 1), f = static_cast<size_t>(row.frame);
     EXPECT_LT(testing::corner_rms(*row.corners, truth[ci][f]), 0.1);
   }
-  const std::string header = "frame,camera,tag_id,detected,status,margin,u0,v0,u1,v1,u2,v2,u3,v3\n";
+  const std::string header =
+      "frame,camera,tag_id,detected,status,margin,u0,v0,u1,v1,u2,v2,u3,v3,reason\n";
   EXPECT_EQ(slurp(dir / "out" / "detections.csv").substr(0, header.size()), header);
   // the summary has a column per reason for not using the target
   for (TargetStatus st : kAllTargetStatuses)

@@ -179,6 +179,7 @@ TEST(Detector, OtherIdsReportedNotUsed) {
                                           {7, kSize, facing_pose(1.5, 0.3, 0.0), {}}});
   const auto d = det.detect(img);
   EXPECT_EQ(d.status, TargetStatus::not_found);
+  EXPECT_NE(d.reason.find("id 5 not decoded (2 other"), std::string::npos) << d.reason;
   EXPECT_EQ(d.target(), nullptr);
   ASSERT_EQ(d.all.size(), 2u);
   std::vector<int> ids{d.all[0].id, d.all[1].id};
@@ -202,7 +203,36 @@ TEST(Detector, DuplicateTargetIdRejected) {
   const auto d = det.detect(img);
   EXPECT_EQ(d.all.size(), 2u);
   EXPECT_EQ(d.status, TargetStatus::duplicate_id);
+  EXPECT_NE(d.reason.find("2 detections of id 0"), std::string::npos) << d.reason;
   EXPECT_EQ(d.target(), nullptr);
+}
+
+// A second tag with the target id whose quiet zone is cut by the image border (partly visible,
+// as a neighbouring face's tag in a crop of a photo) is decoded but fails the border check: it
+// does not make the fully visible target a duplicate. Without the check both would count.
+TEST(Detector, PartlyVisibleSecondTagDoesNotHideTheTarget) {
+  const auto calib = testing::test_calibration();
+  const obs::SE3 target = facing_pose(1.2, -0.2, 0.0, {0.0, 0.0, 0.05});
+  const cv::Mat img = render_tags(
+      calib,
+      {{0, kSize, target, {}}, {0, kSize, facing_pose(1.2, 0.5175, 0.0, {0.0, 0.0, 0.05}), {}}});
+  const auto d = TagDetector().detect(img, &calib);
+  ASSERT_EQ(d.all.size(), 2u);
+  EXPECT_EQ(d.all[0].id, 0);
+  EXPECT_EQ(d.all[1].id, 0);
+  ASSERT_EQ(d.status, TargetStatus::detected) << d.reason;
+  const auto truth = project_corners(calib, target, kSize);
+  for (size_t k = 0; k < 4; ++k) EXPECT_LT(cv::norm(d.target()->corners[k] - truth[k]), 0.3);
+  DetectorSettings unchecked;
+  unchecked.border_check = false;
+  EXPECT_EQ(TagDetector(unchecked).detect(img, &calib).status, TargetStatus::duplicate_id);
+  // The partly visible one alone: rejected, with the side on the image border as the reason.
+  DetectorSettings s;
+  const cv::Mat alone =
+      render_tags(calib, {{0, kSize, facing_pose(1.2, 0.5175, 0.0, {0.0, 0.0, 0.05}), {}}});
+  const auto a = TagDetector(s).detect(alone, &calib);
+  EXPECT_EQ(a.status, TargetStatus::border_mismatch);
+  EXPECT_NE(a.reason.find("outside the image"), std::string::npos) << a.reason;
 }
 
 TEST(Detector, TagOutsideImageOrBehindNotDetected) {
@@ -239,6 +269,7 @@ TEST(Detector, HammingAndMarginThresholds) {
   ASSERT_EQ(d0.all.size(), 1u);
   EXPECT_EQ(d0.all[0].hamming, 1);
   EXPECT_EQ(d0.status, TargetStatus::high_hamming);
+  EXPECT_NE(d0.reason.find("1 corrected bits, more than 0"), std::string::npos) << d0.reason;
   DetectorSettings lenient;
   lenient.max_hamming = 1;
   EXPECT_EQ(TagDetector(lenient).detect(img).status, TargetStatus::detected);
@@ -249,6 +280,7 @@ TEST(Detector, HammingAndMarginThresholds) {
       TagDetector(margin).detect(render_tags(calib, {{0, kSize, facing_pose(1.2), {}}}));
   ASSERT_EQ(dm.all.size(), 1u);
   EXPECT_EQ(dm.status, TargetStatus::low_margin);
+  EXPECT_NE(dm.reason.find("below"), std::string::npos) << dm.reason;
 }
 
 // The default min_white_black_diff (20) keeps low-contrast tags: black 110 / white 150 on a
@@ -294,6 +326,38 @@ TEST(Detector, InvalidSettingsRejected) {
   EXPECT_EQ(parse_refinement("edges"), Refinement::edge_lines);
 }
 
+// While tracking, the periodic full-frame search sees a second tag with the target id outside
+// the window: duplicate_id, and the window search that follows it does not pick one of them.
+TEST(FrontEnd, DuplicateOnThePeriodicFullFrameIsFinal) {
+  const auto calib = testing::test_calibration();
+  const testing::SynthTag near{0, kSize, facing_pose(1.5, -0.3, 0.0), {}};
+  const cv::Mat one = render_tags(calib, {near});
+  const cv::Mat two = render_tags(calib, {near, {0, kSize, facing_pose(1.5, 0.3, 0.0), {}}});
+  TrackingSettings t;
+  t.full_frame_every = 2;
+  FrontEnd fe({}, t);
+  TrackState track;
+  EXPECT_TRUE(fe.observe(one, calib, nullptr, &track).delta);
+  EXPECT_TRUE(fe.observe(one, calib, nullptr, &track).delta);
+  EXPECT_EQ(track.searches, kSearchWindow);
+  const auto o = fe.observe(two, calib, nullptr, &track);  // the periodic full frame
+  EXPECT_EQ(o.status, TargetStatus::duplicate_id) << o.reason;
+  EXPECT_EQ(track.searches, kSearchFullFrame);
+}
+
+TEST(FrontEnd, InvalidTrackingSettingsRejected) {
+  TrackingSettings t;
+  t.acquire_every = -1;
+  EXPECT_THROW(FrontEnd({}, t), InputError);
+  t = {};
+  t.full_frame_every = 0;
+  EXPECT_THROW(FrontEnd({}, t), InputError);
+  t = {};
+  t.full_res_below_px = -1.0;
+  EXPECT_THROW(FrontEnd({}, t), InputError);
+  EXPECT_NO_THROW(FrontEnd({}, TrackingSettings{}));
+}
+
 // The front end: normalized coordinates are the undistorted corners, in object-point order.
 TEST(FrontEnd, NormalizedFeaturesMatchProjection) {
   for (bool distortion : {false, true}) {
@@ -311,6 +375,79 @@ TEST(FrontEnd, NormalizedFeaturesMatchProjection) {
   FrontEnd fe;
   const auto blind = fe.observe(cv::Mat(), testing::test_calibration());
   EXPECT_FALSE(blind.delta);
+}
+
+}  // namespace
+}  // namespace netvmo
+
+namespace netvmo {
+namespace {
+using namespace frontend;
+
+// ~20 px tags that libapriltag misses at the default decimate 2 but finds at full resolution:
+// at the default settings the front end finds each within the acquisition period
+// (TrackingSettings::acquire_every frames) and keeps it (the tracking window is searched at full
+// resolution for small tags), corners within 1 px; with the full-resolution passes off it never
+// finds them. The camera first sees nothing for 3 frames.
+TEST(FrontEnd, SmallTagFoundWithinTheAcquisitionPeriod) {
+  const auto calib = testing::test_calibration();
+  const double size = 0.065;  // 19-20 px at 2 m
+  const TrackingSettings defaults;
+  ASSERT_GT(defaults.acquire_every, 3);
+  const int frames = 3 + 2 * defaults.acquire_every;
+  const cv::Mat blank(calib.height, calib.width, CV_8UC1, cv::Scalar(128));
+  int tested = 0;
+  for (int p = 0; p < 6; ++p) {
+    const obs::SE3 pose =
+        testing::facing_pose(2.0, 0.1 * p - 0.2, -0.05 + 0.03 * p, {0.1 * p, -0.15, 0.3 + p});
+    cv::Mat img = testing::render_tags(calib, {{0, size, pose, {}}});
+    cv::Mat noise(img.size(), CV_16SC1), img16;
+    cv::RNG rng(static_cast<uint64_t>(3 + p));
+    rng.fill(noise, cv::RNG::NORMAL, 0, 1.5);
+    img.convertTo(img16, CV_16SC1);
+    cv::Mat(img16 + noise).convertTo(img, CV_8UC1);
+    const auto truth = testing::project_corners(calib, pose, size);
+    double side = 1e9;
+    for (size_t k = 0; k < 4; ++k) side = std::min(side, cv::norm(truth[k] - truth[(k + 1) % 4]));
+    EXPECT_GT(side, 17.0) << "pose " << p;
+    EXPECT_LT(side, 23.0) << "pose " << p;
+    if (TagDetector().detect(img).status == TargetStatus::detected) continue;  // not a miss
+    ++tested;
+
+    FrontEnd fe;
+    TrackState track;
+    int first = -1, acquisitions = 0;
+    for (int k = 0; k < frames; ++k) {
+      const auto o = fe.observe(k < 3 ? blank : img, calib, nullptr, &track);
+      acquisitions += (track.searches & kSearchAcquisition) != 0;
+      if (k < 3) {
+        EXPECT_FALSE(o.delta);
+        continue;
+      }
+      if (o.delta && first < 0) first = k;
+      if (first < 0) continue;
+      EXPECT_TRUE(o.delta) << "pose " << p << " frame " << k << ": lost after acquisition";
+      if (!o.delta) continue;
+      for (size_t c = 0; c < 4; ++c)
+        EXPECT_LT(cv::norm(o.corners_px[c] - truth[c]), 1.0)
+            << "pose " << p << " frame " << k << " corner " << c;
+    }
+    ASSERT_GE(first, 3) << "pose " << p << ": never found";
+    EXPECT_LT(first, 3 + defaults.acquire_every) << "pose " << p;
+    // A full-resolution acquisition at frame 0 (blind) and when the next is due; none while
+    // tracking.
+    EXPECT_EQ(acquisitions, 2) << "pose " << p;
+
+    TrackingSettings off;
+    off.acquire_every = 0;
+    off.full_res_below_px = 0.0;
+    FrontEnd plain(DetectorSettings{}, off);
+    TrackState t2;
+    int found = 0;
+    for (int k = 0; k < frames; ++k) found += plain.observe(img, calib, nullptr, &t2).delta;
+    EXPECT_EQ(found, 0) << "pose " << p;
+  }
+  EXPECT_GE(tested, 2);  // measured: 3 of the 6 poses are missed at decimate 2
 }
 
 }  // namespace

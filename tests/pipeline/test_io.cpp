@@ -201,7 +201,8 @@ TEST(DetectionsIo, FormatAndReadBack) {
   b.camera = 5;
   b.tag_id = 0;
   b.status = TargetStatus::border_mismatch;
-  EXPECT_EQ(format_detection_row(b), "3,5,0,0,border_mismatch,,,,,,,,,");
+  b.reason = "side 1, corners 1-2";
+  EXPECT_EQ(format_detection_row(b), "3,5,0,0,border_mismatch,,,,,,,,,,side 1; corners 1-2");
   write(dir / "d.csv", std::string(kDetectionsHeader) + "\n" + format_detection_row(a) + "\n" +
                            format_detection_row(b) + "\n");
   const auto rows = read_detections_csv(dir / "d.csv");
@@ -213,6 +214,8 @@ TEST(DetectionsIo, FormatAndReadBack) {
   EXPECT_FALSE(rows[1].detected);
   EXPECT_EQ(rows[1].status, TargetStatus::border_mismatch);
   EXPECT_FALSE(rows[1].corners.has_value());
+  EXPECT_EQ(rows[1].reason, "side 1; corners 1-2");
+  EXPECT_EQ(rows[0].reason, "");
 }
 
 // Every status token reads back as itself; an unknown token or a status that contradicts the
@@ -236,10 +239,10 @@ TEST(DetectionsIo, StatusColumn) {
   for (size_t i = 0; i < rows.size(); ++i) EXPECT_EQ(rows[i].status, kAllTargetStatuses[i]);
 
   const std::string header = std::string(kDetectionsHeader) + "\n";
-  write(dir / "bad.csv", header + "0,1,0,0,occluded,,,,,,,,,\n");
+  write(dir / "bad.csv", header + "0,1,0,0,occluded,,,,,,,,,,\n");
   expect_input_error([&] { read_detections_csv(dir / "bad.csv"); },
                      {"bad.csv:2", "status", "occluded", "border_mismatch"});
-  write(dir / "bad2.csv", header + "0,1,0,0,detected,,,,,,,,,\n");
+  write(dir / "bad2.csv", header + "0,1,0,0,detected,,,,,,,,,,\n");
   expect_input_error([&] { read_detections_csv(dir / "bad2.csv"); }, {"bad2.csv:2", "status"});
 }
 

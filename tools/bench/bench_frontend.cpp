@@ -3,11 +3,16 @@
 // 1 and 2. The frame: a 0.2 m tag36h11 at ~2 m, slightly tilted, on a mid-gray background with
 // some clutter and Gaussian noise (sigma 2), drawn by warping the tag bitmap with the
 // homography of its projected corners (exact geometry is tested elsewhere; this is for timing).
+// BM_FrontEndSequence: rendered sequences tracked frame by frame, before / after the
+// full-resolution and shadow searches (README, recall against tag size).
 #include <apriltag/apriltag.h>
 #include <apriltag/tag36h11.h>
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cstdlib>
+#include <map>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -192,8 +197,93 @@ void BM_FrontEndRendered(benchmark::State& state) {
                  (tracking ? ", tracking window" : ", full frame"));
 }
 
+// The front end over rendered sequences, each camera tracked frame by frame as in `netvmo run`
+// (fresh tracking state per pass): ms per camera-frame and the fraction detected, for the
+// search modes of TrackingSettings. args: sequence (0 small_tags.yaml: every 3rd frame of its 3
+// cameras, the tag shrinking from 53 to 11 px; 1 moving_target.yaml frames 76-92 of cameras
+// 3 and 5, a shadow edge crossing the tag; 2 paper5_render.yaml camera 4, which never sees the
+// tag: the cost of the acquisition pass), mode (0 before: decimate 2 everywhere, no
+// full-resolution passes, no normalised retry; 1 the defaults; 2 decimate 1 on every frame).
+struct Sequence {
+  std::vector<Calibration> calib;            // per camera
+  std::vector<std::vector<cv::Mat>> images;  // per camera, frames in order
+  int target_id = 0;
+};
+
+const Sequence& sequence(int which) {
+  static std::map<int, Sequence> cache;
+  auto it = cache.find(which);
+  if (it != cache.end()) return it->second;
+  const char* files[] = {"small_tags.yaml", "moving_target.yaml", "paper5_render.yaml"};
+  auto scene = netvmo::io::load_render_scenario(std::string(NETVMO_SOURCE_DIR) + "/datasets/" +
+                                                files[which]);
+  netvmo::render::Renderer r(scene);
+  Sequence seq;
+  seq.target_id = scene.target.tag.id;
+  std::vector<int> cams, frames;
+  if (which == 0) {
+    cams = {0, 1, 2};
+    for (int k = 0; k < r.frame_count(); k += 3) frames.push_back(k);
+  } else if (which == 1) {
+    cams = {2, 4};
+    for (int k = 76; k <= 92; ++k) frames.push_back(k);
+  } else {
+    cams = {3};
+    for (int k = 0; k < 30; ++k) frames.push_back(k);
+  }
+  for (int c : cams) {
+    seq.calib.push_back(netvmo::io::scene_calibration(scene.cameras[static_cast<size_t>(c)]));
+    seq.images.emplace_back();
+    for (int k : frames) seq.images.back().push_back(r.render(c, k));
+  }
+  return cache.emplace(which, std::move(seq)).first->second;
+}
+
+void BM_FrontEndSequence(benchmark::State& state) {
+  const int which = static_cast<int>(state.range(0)), mode = static_cast<int>(state.range(1));
+  const Sequence& seq = sequence(which);
+  DetectorSettings ds;
+  ds.target_id = seq.target_id;
+  TrackingSettings ts;
+  if (mode == 0) {
+    ts.acquire_every = 0;
+    ts.full_res_below_px = 0.0;
+    ts.shadow_retry = false;
+  } else if (mode == 2) {
+    ds.quad_decimate = 1.0;
+    ts.enabled = false;
+  }
+  FrontEnd fe(ds, ts);
+  int frames = 0, detected = 0;
+  double seconds = 0.0;  // wall time in observe(), over every pass
+  long passes = 0;
+  for (auto _ : state) {
+    frames = detected = 0;
+    const auto t0 = std::chrono::steady_clock::now();
+    for (size_t c = 0; c < seq.images.size(); ++c) {
+      TrackState track;
+      for (const cv::Mat& img : seq.images[c]) {
+        detected += fe.observe(img, seq.calib[c], nullptr, &track).delta;
+        ++frames;
+      }
+    }
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ++passes;
+  }
+  state.counters["ms_per_frame"] = 1e3 * seconds / static_cast<double>(passes * frames);
+  state.counters["detected"] = static_cast<double>(detected) / std::max(1, frames);
+  const char* names[] = {"small_tags", "moving_target shadow frames", "paper5 camera 4 (no tag)"};
+  const char* modes[] = {"before (decimate 2 only)", "defaults", "decimate 1 every frame"};
+  state.SetLabel(std::string(names[which]) + ", " + modes[mode]);
+}
+
 }  // namespace
 
+BENCHMARK(BM_FrontEndSequence)
+    ->ArgsProduct({{0, 1, 2}, {0, 1, 2}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(1.0);
 BENCHMARK(BM_FrontEndRendered)
     ->Args({0, 0})
     ->Args({0, 1})

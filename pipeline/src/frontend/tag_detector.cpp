@@ -20,6 +20,12 @@ namespace {
 /// libapriltag reports pixel centres at +0.5 (measured, see tests/pipeline/test_detector.cpp).
 constexpr double kApriltagPixelOffset = 0.5;
 
+/// A target found on a normalised copy (SearchOptions::normalized) is rejected when its corners
+/// refined on the image and on the copy differ by more than this [px] (a shadow boundary along
+/// a border edge; measured on moving_target: 0.01-0.21 px where the corners are right, 0.53 px
+/// where the image fit put a corner 1.4 px off).
+constexpr double kMaxNormalizedDisagreement = 0.35;
+
 void validate(const DetectorSettings& s) {
   auto bad = [](const std::string& what) { throw InputError("detector settings: " + what); };
   if (!render::find_tag_family(s.family))
@@ -442,7 +448,7 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
   for (int k = 0; k < 4; ++k) {
     const size_t ks = static_cast<size_t>(k);
     // Contrast samples.
-    int failed = 0;
+    int failed = 0, outside = 0;
     for (int j = 0; j < m; ++j) {
       const cv::Point2d q = img[at++], b = img[at++];
       const cv::Point2d b_obj = S[k] + ((j + 0.5) / kPerCell) * D[k] - 0.5 * O[k];
@@ -451,7 +457,9 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
         if (!std::isnan(white_level[i]) && cv::norm(white_cells[i] - b_obj) <= 2.5)
           near.push_back(white_level[i]);
       const double white = near.empty() ? global_white : median(near);
-      bool pass = inside(gray, q) && inside(gray, b) && !std::isnan(white);
+      const bool in_image = inside(gray, q) && inside(gray, b);
+      outside += !in_image;
+      bool pass = in_image && !std::isnan(white);
       if (pass) {
         const double vq = sample_bilinear(gray, q.x, q.y), vb = sample_bilinear(gray, b.x, b.y);
         pass = white - vb > 0.0 && vq - vb >= s.border_min_contrast * (white - vb);
@@ -473,6 +481,7 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
     }
     out.samples[ks] = m;
     out.failed[ks] = failed;
+    out.outside[ks] = outside;
     // Inner edge of the border next to white data cells.
     offsets.clear();
     ts.clear();
@@ -525,11 +534,16 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
   for (int k = 0; k < 4; ++k) {
     const size_t ks = static_cast<size_t>(k);
     const int failed = out.failed[ks];
-    const double contrast_excess = failed / std::max(1.0, s.border_max_failed_fraction * m);
+    const double contrast_excess =
+        std::max(failed / std::max(1.0, s.border_max_failed_fraction * m),
+                 out.outside[ks] > 0 ? 1.0 + static_cast<double>(out.outside[ks]) / m : 0.0);
     const double thickness_excess = std::isnan(out.thickness_error[ks])
                                         ? 0.0
                                         : std::abs(out.thickness_error[ks]) / out.thickness_limit;
-    const bool contrast_fails = failed > s.border_max_failed_fraction * m;
+    // A quiet zone cut by the image border cannot be verified: a tag is only accepted with its
+    // quiet zone in the image (else a partly visible neighbour, e.g. on another face of a cube,
+    // could pass and hide the target as a duplicate).
+    const bool contrast_fails = failed > s.border_max_failed_fraction * m || out.outside[ks] > 0;
     const bool thickness_fails = thickness_excess > 1.0;
     if (!contrast_fails && !thickness_fails) continue;
     out.ok = false;
@@ -537,7 +551,11 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
         std::max(contrast_fails ? contrast_excess : 0.0, thickness_fails ? thickness_excess : 0.0);
     if (excess <= worst) continue;
     worst = excess;
-    if (contrast_fails && (!thickness_fails || contrast_excess >= thickness_excess))
+    if (out.outside[ks] > 0 && (!thickness_fails || contrast_excess >= thickness_excess))
+      std::snprintf(buf, sizeof buf,
+                    "side %d (corners %d-%d): quiet zone outside the image at %d of %d samples", k,
+                    k, (k + 1) % 4, out.outside[ks], m);
+    else if (contrast_fails && (!thickness_fails || contrast_excess >= thickness_excess))
       std::snprintf(buf, sizeof buf,
                     "side %d (corners %d-%d): quiet zone not brighter than the border at %d of "
                     "%d samples",
@@ -571,8 +589,9 @@ struct TagDetector::Impl {
   DetectorSettings s;
   render::TagFamilyPtr family{nullptr, nullptr};
   apriltag_detector_t* td = nullptr;
-  cv::Mat gray;     // conversion buffer for non-gray input
-  cv::Mat pattern;  // the target's bitmap, for the border check
+  cv::Mat gray;        // conversion buffer for non-gray input
+  cv::Mat normalized;  // the image with the searched region normalised (SearchOptions)
+  cv::Mat pattern;     // the target's bitmap, for the border check
 
   explicit Impl(DetectorSettings settings) : s(std::move(settings)) {
     validate(s);
@@ -611,8 +630,24 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const io::Calibration*
   return detect(image, cv::Rect(0, 0, image.cols, image.rows), calib);
 }
 
+cv::Mat normalize_illumination(const cv::Mat& gray, int window) {
+  CV_Assert(gray.type() == CV_8UC1 && window >= 1);
+  const cv::Mat k = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(window, window));
+  cv::Mat white;
+  cv::morphologyEx(gray, white, cv::MORPH_CLOSE, k, cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
+  const int smooth = std::max(1, window / 4);
+  cv::blur(white, white, cv::Size(smooth, smooth), cv::Point(-1, -1), cv::BORDER_REPLICATE);
+  cv::Mat white_f, gray_f, out;
+  white.convertTo(white_f, CV_32F);
+  cv::max(white_f, 8.0, white_f);  // no division by (near) zero in black areas
+  gray.convertTo(gray_f, CV_32F);
+  cv::divide(gray_f, white_f, gray_f, 240.0);
+  gray_f.convertTo(out, CV_8U);  // saturates
+  return out;
+}
+
 FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region,
-                                    const io::Calibration* calib) {
+                                    const io::Calibration* calib, const SearchOptions& opt) {
   const cv::Mat* g = &image;
   if (image.type() == CV_8UC3) {
     cv::cvtColor(image, impl_->gray, cv::COLOR_BGR2GRAY);
@@ -620,12 +655,21 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
   } else if (image.type() != CV_8UC1) {
     throw std::invalid_argument("TagDetector::detect: expected an 8-bit gray or BGR image");
   }
+  const DetectorSettings& s = impl_->s;
   FrameDetections out;
+  char buf[200];
+  std::snprintf(buf, sizeof buf, "id %d not decoded", s.target_id);
+  out.reason = buf;
   if (g->empty()) return out;
+  if (!(opt.decimate == 0.0 || opt.decimate >= 1.0))
+    throw std::invalid_argument("TagDetector::detect: decimate must be 0 or >= 1");
+  if (opt.normalized && opt.normalize_window < 1)
+    throw std::invalid_argument("TagDetector::detect: normalize_window must be >= 1");
+  const double decimate = opt.decimate > 0.0 ? opt.decimate : s.quad_decimate;
   // Align the region to the decimation grid so a windowed search samples the same pixels as a
   // full-frame one (identical quads, identical corners).
   // libapriltag thresholds in 4x4 tiles of the decimated image: align to 4 x decimate.
-  const int step = 4 * std::max(1, static_cast<int>(std::ceil(impl_->s.quad_decimate)));
+  const int step = 4 * std::max(1, static_cast<int>(std::ceil(decimate)));
   cv::Rect aligned = region;
   aligned.x -= ((aligned.x % step) + step) % step;
   aligned.y -= ((aligned.y % step) + step) % step;
@@ -634,12 +678,23 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
   const cv::Rect roi = aligned & cv::Rect(0, 0, g->cols, g->rows);
   // Nothing decodable in a tiny region; libapriltag needs a few tiles.
   if (roi.width < 16 || roi.height < 16) return out;
-  // libapriltag searches the region only (a view into the image, no copy); corners are mapped
-  // back to the whole image and refined there.
-  const cv::Mat sub = (*g)(roi);
+  // libapriltag searches the region only (a view into the image, no copy, or its normalised
+  // normalised copy); corners are mapped back to the whole image and refined there.
+  const cv::Mat sub =
+      opt.normalized ? normalize_illumination((*g)(roi), opt.normalize_window) : (*g)(roi);
+  const cv::Mat* original = g;
+  if (opt.normalized) {
+    // Refinement and border check on the normalised region too: a shadow edge along a border
+    // edge biases the edge fit on the image itself.
+    g->copyTo(impl_->normalized);
+    sub.copyTo(impl_->normalized(roi));
+    g = &impl_->normalized;
+  }
   image_u8_t im{sub.cols, sub.rows, static_cast<int32_t>(sub.step[0]),
                 const_cast<uint8_t*>(sub.ptr<uint8_t>())};
+  impl_->td->quad_decimate = static_cast<float>(decimate);
   zarray_t* dets = apriltag_detector_detect(impl_->td, &im);
+  impl_->td->quad_decimate = static_cast<float>(s.quad_decimate);
   if (!dets) throw std::runtime_error("libapriltag: detection failed");
   for (int i = 0; i < zarray_size(dets); ++i) {
     apriltag_detection_t* det = nullptr;
@@ -657,49 +712,79 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
   }
   apriltag_detections_destroy(dets);
 
-  // Target decision: candidates with the target id that pass hamming and margin; exactly one.
-  const DetectorSettings& s = impl_->s;
-  int accepted = -1, n_accepted = 0;
-  bool any_id = false, any_hamming_ok = false;
+  // Target decision. Every detection of the target id that passes hamming and margin is refined
+  // and border-checked; the duplicate-id rule counts only those that pass, so a partly visible
+  // second tag of the same id (a neighbouring face of a cube, a tag cut by the image border)
+  // does not hide a good one. Without a passing one, the reason is the furthest any candidate
+  // got: border check, then margin, then hamming.
+  int n_id = 0, n_hamming_ok = 0, n_margin_ok = 0, n_passed = 0, passed = -1;
+  double best_margin = -1.0;
+  int best_hamming = 1 << 30;
+  std::string border_reason;
   for (size_t i = 0; i < out.all.size(); ++i) {
-    const TagDetection& d = out.all[i];
+    TagDetection& d = out.all[i];
     if (d.id != s.target_id) continue;
-    any_id = true;
+    ++n_id;
+    best_hamming = std::min(best_hamming, d.hamming);
     if (d.hamming > s.max_hamming) continue;
-    any_hamming_ok = true;
+    ++n_hamming_ok;
+    best_margin = std::max(best_margin, d.margin);
     if (d.margin < s.min_decision_margin) continue;
-    accepted = static_cast<int>(i);
-    ++n_accepted;
-  }
-  char buf[160];
-  if (n_accepted > 1) {
-    out.status = TargetStatus::duplicate_id;
-    std::snprintf(buf, sizeof buf, "%d acceptable detections of id %d", n_accepted, s.target_id);
-    out.reason = buf;
-  } else if (n_accepted == 1) {
-    TagDetection& t = out.all[static_cast<size_t>(accepted)];
-    refine_corners(*g, t.corners, s.refinement, border_cells(), calib);
-    const BorderCheck bc =
-        s.border_check ? check_border(*g, t.corners, impl_->pattern, border_cells(), s, calib)
-                       : BorderCheck{};
-    if (bc.ok) {
-      out.status = TargetStatus::detected;
-      out.target_index = accepted;
-    } else {
-      out.status = TargetStatus::border_mismatch;
-      out.reason = bc.reason;
+    ++n_margin_ok;
+    std::array<cv::Point2d, 4> corners = d.corners;
+    refine_corners(*g, corners, s.refinement, border_cells(), calib);
+    BorderCheck bc = s.border_check
+                         ? check_border(*g, corners, impl_->pattern, border_cells(), s, calib)
+                         : BorderCheck{};
+    if (bc.ok && opt.normalized) {
+      // Corners must not depend on the illumination correction: where a shadow boundary runs
+      // along a border edge, the fits on the image and on its normalised copy disagree.
+      std::array<cv::Point2d, 4> plain = d.corners;
+      refine_corners(*original, plain, s.refinement, border_cells(), calib);
+      double moved = 0.0;
+      for (size_t k = 0; k < 4; ++k) moved = std::max(moved, cv::norm(plain[k] - corners[k]));
+      if (moved > kMaxNormalizedDisagreement) {
+        bc.ok = false;
+        std::snprintf(buf, sizeof buf,
+                      "shadow edge along the border: corners fitted on the image and on its "
+                      "normalised copy differ by %.2f px",
+                      moved);
+        bc.reason = buf;
+      }
     }
-  } else if (!any_id) {
-    out.status = TargetStatus::not_found;
-  } else if (any_hamming_ok) {
-    out.status = TargetStatus::low_margin;
-    std::snprintf(buf, sizeof buf, "decision margin below %g", s.min_decision_margin);
-    out.reason = buf;
-  } else {
-    out.status = TargetStatus::high_hamming;
-    std::snprintf(buf, sizeof buf, "more than %d corrected bits", s.max_hamming);
-    out.reason = buf;
+    if (!bc.ok) {
+      if (border_reason.empty()) border_reason = bc.reason;
+      continue;
+    }
+    d.corners = corners;  // only a passing candidate's corners are replaced by refined ones
+    ++n_passed;
+    passed = static_cast<int>(i);
   }
+  if (n_passed > 1) {
+    out.status = TargetStatus::duplicate_id;
+    std::snprintf(
+        buf, sizeof buf,
+        "%d detections of id %d pass every check (more than one tag with the target id in view)",
+        n_passed, s.target_id);
+  } else if (n_passed == 1) {
+    out.status = TargetStatus::detected;
+    out.target_index = passed;
+    buf[0] = '\0';
+  } else if (n_margin_ok > 0) {
+    out.status = TargetStatus::border_mismatch;
+    std::snprintf(buf, sizeof buf, "%.*s", 190, border_reason.c_str());
+  } else if (n_hamming_ok > 0) {
+    out.status = TargetStatus::low_margin;
+    std::snprintf(buf, sizeof buf, "decision margin %.1f below %g", best_margin,
+                  s.min_decision_margin);
+  } else if (n_id > 0) {
+    out.status = TargetStatus::high_hamming;
+    std::snprintf(buf, sizeof buf, "%d corrected bits, more than %d", best_hamming, s.max_hamming);
+  } else {
+    std::snprintf(buf, sizeof buf, "id %d not decoded (%zu other tag(s) decoded)", s.target_id,
+                  out.all.size());
+  }
+  out.reason = buf;
   return out;
 }
 

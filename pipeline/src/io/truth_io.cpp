@@ -185,6 +185,7 @@ std::vector<DetectionRow> read_detections_csv(const fs::path& file) {
              }
              r.margin = f[5].empty() ? 0.0 : num(f, names, 5, where);
              r.corners = corners(f, names, 6, where);
+             r.reason = f[14];
              if (r.detected != r.corners.has_value())
                throw InputError(where + ": corners must be given exactly when detected = 1");
              if (r.detected != (r.status == frontend::TargetStatus::detected))
@@ -250,6 +251,8 @@ std::string format_detection_row(const DetectionRow& r) {
       s += ",,";
     }
   }
+  s += ',';
+  for (char ch : r.reason) s += ch == ',' ? ';' : (ch == '\n' || ch == '\r') ? ' ' : ch;
   return s;
 }
 

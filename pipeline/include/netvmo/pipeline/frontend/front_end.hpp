@@ -30,33 +30,64 @@ struct TagObservation {
 Eigen::Matrix<double, 8, 1> normalized_features(const std::array<cv::Point2d, 4>& corners_px,
                                                 const io::Calibration& calib);
 
-/// Tracking: while a camera keeps detecting the target, the next frame is searched first in a
-/// window around the last corners; only when that fails (or every `full_frame_every` frames)
-/// is the whole image searched. delta still comes from a real decode in this frame. Caveat:
-/// while tracking, a second tag with the target's id outside the window is not seen, so the
-/// duplicate-id rejection is checked on full-frame searches only.
+/// Length of the shortest side of a quad [px] (the "narrowest side" of a projected tag).
+double narrowest_side(const std::array<cv::Point2d, 4>& corners);
+
+/// Tracking and acquisition: how each frame is searched (FrontEnd::observe with a TrackState).
+///  - While a camera keeps detecting the target, the next frame is searched first in a window
+///    around the last corners, at full resolution (decimate 1) when the last tag's narrowest
+///    side was below `full_res_below_px`; if that fails and `shadow_retry`, the window again on
+///    a locally normalised copy (normalize_illumination(), for a hard shadow edge across the
+///    tag). Only when those fail (or every `full_frame_every` frames, then after the full frame)
+///    is the whole image searched at the settings' decimation.
+///  - Acquisition: while the camera has no target (no detection in the previous frame), every
+///    `acquire_every`-th such frame (the first one included) that the decimated search misses is
+///    searched again at full resolution: small tags (~15-30 px) that decimate 2 misses are
+///    found within `acquire_every` frames, at the cost of one full-resolution search per
+///    `acquire_every` blind frames.
+/// delta still comes from a real decode in this frame. A duplicate_id result ends the frame's
+/// searches. Caveat: while tracking, a second tag with the target's id outside the window is
+/// not seen, so the duplicate-id rejection is checked on full-frame searches only.
 struct TrackingSettings {
   bool enabled = true;
   double window_margin = 0.75;  ///< window = corner bounding box grown by this x its size ...
   int window_pad = 24;          ///< ... plus this many pixels on every side
   int full_frame_every = 30;    ///< a full-frame search at least this often (frames)
+  /// Window searched at decimate 1 when the last tag's narrowest side is below this [px]
+  /// (0: never). 40 px covers the sizes decimate 2 misses (README, recall against tag size).
+  double full_res_below_px = 40.0;
+  /// Full-resolution acquisition pass every this many blind frames (0: never). 10 adds one
+  /// full-resolution search per 10 frames of a camera that sees nothing (README, ms/frame).
+  int acquire_every = 10;
+  /// A second window search on a locally normalised copy when the window search fails.
+  bool shadow_retry = true;
 };
+/// Checks a TrackingSettings; throws InputError naming the field.
+void validate(const TrackingSettings& t);
 
 /// One camera's tracking state (keep one per camera, pass it on every frame).
 struct TrackState {
   std::optional<std::array<cv::Point2d, 4>> last;  ///< corners of the last detection
   int frames_since_full = 0;
+  int blind_frames = 0;  ///< consecutive frames without the target (acquisition period)
+  /// How the last frame was searched, for tests and benchmarks: bit 0 window, bit 1 normalised
+  /// window, bit 2 full frame, bit 3 full-resolution acquisition.
+  unsigned searches = 0;
+  /// The search that found the target in the last frame (one bit as above), 0 when none.
+  unsigned found_by = 0;
 };
+inline constexpr unsigned kSearchWindow = 1, kSearchNormalizedWindow = 2, kSearchFullFrame = 4,
+                          kSearchAcquisition = 8;
 
 /// Detector (reused across frames and cameras) + refinement + cv::undistortPoints.
 class FrontEnd {
  public:
-  explicit FrontEnd(DetectorSettings settings = {}, TrackingSettings tracking = {})
-      : detector_(std::move(settings)), tracking_(tracking) {}
+  explicit FrontEnd(DetectorSettings settings = {}, TrackingSettings tracking = {});
 
   /// Runs on one camera's frame. An empty image (camera blind at that frame) gives
   /// detected = false. If `all` is given it receives every decoded tag of the frame (of the
-  /// searched window when tracking). With `track`, the search is windowed as described above.
+  /// searched window when tracking). With `track`, the search is windowed and the acquisition
+  /// pass runs as described at TrackingSettings; without it, one full-frame search.
   TagObservation observe(const cv::Mat& gray, const io::Calibration& calib,
                          FrameDetections* all = nullptr, TrackState* track = nullptr);
   const TrackingSettings& tracking() const { return tracking_; }

@@ -80,11 +80,15 @@ struct TagDetection {
 };
 
 /// The front end's decision about the target in one frame. Every status but `detected` is a
-/// reason for not using the frame.
+/// reason for not using the frame. Decision: the detections of the target id with hamming <=
+/// max_hamming and margin >= min_decision_margin are refined and border-checked; exactly one
+/// passing is `detected`, whatever the others (a partly visible second tag of the same id, e.g.
+/// on a neighbouring face of a cube, fails its check and does not hide the good one); two or
+/// more passing is `duplicate_id`; none passing gives the reason of the best candidate.
 enum class TargetStatus {
   detected,         ///< exactly one acceptable detection of the target id, corners checked
   not_found,        ///< the target id was not decoded
-  duplicate_id,     ///< two or more acceptable detections of the target id: all rejected
+  duplicate_id,     ///< two or more detections of the target id pass every check: all rejected
   low_margin,       ///< decoded, but the decision margin is below min_decision_margin
   high_hamming,     ///< decoded, but with more corrected bits than max_hamming
   border_mismatch,  ///< the corners do not frame a black border inside a white quiet zone
@@ -113,6 +117,26 @@ struct FrameDetections {
   }
 };
 
+/// How one search is done (the front end's tracking window and acquisition pass use these).
+struct SearchOptions {
+  /// libapriltag quad_decimate for this search; 0: the settings' quad_decimate. 1 finds tags
+  /// down to ~15 px that decimate 2 misses, at about twice the cost per searched pixel.
+  double decimate = 0.0;
+  /// Search a locally normalised copy of the region (normalize_illumination(), white level
+  /// over `normalize_window` px) instead of the image itself, and refine and border-check the
+  /// corners on it too. For tags crossed by a hard shadow edge.
+  bool normalized = false;
+  int normalize_window = 0;  ///< > 0 when `normalized`
+};
+
+/// The image divided by an estimate of its local white level: a morphological closing (max then
+/// min filter) over a `window` x `window` square, which fills dark print narrower than the
+/// window and keeps large-scale steps such as a shadow boundary, smoothed by a box filter of
+/// a quarter of the window. A tag under a hard shadow edge becomes one tag of uniform contrast:
+/// ink / paper on both sides of the edge. `window` should exceed the widest dark run of the tag
+/// (5 bit cells is used). 8-bit in, 8-bit out (white ~ 240).
+cv::Mat normalize_illumination(const cv::Mat& gray, int window);
+
 /// libapriltag detector, created once and reused across frames (not thread-safe: one
 /// detect() at a time; it uses `nthreads` workers internally).
 class TagDetector {
@@ -131,7 +155,7 @@ class TagDetector {
   /// The same, searching only `region` of the image (tags must lie wholly inside it); corners
   /// are reported and refined in whole-image pixels.
   FrameDetections detect(const cv::Mat& image, const cv::Rect& region,
-                         const io::Calibration* calib = nullptr);
+                         const io::Calibration* calib = nullptr, const SearchOptions& opt = {});
 
   const DetectorSettings& settings() const;
   /// Cells across the black border square (8 for tag36h11): corners are at this square.
@@ -149,6 +173,9 @@ struct BorderCheck {
   std::string reason;    ///< the worst failing side and why (empty when ok)
   /// Per side (side k runs from corner k to corner k+1): contrast samples, and how many failed.
   std::array<int, 4> samples{}, failed{};
+  /// Per side: contrast samples outside the image (any one fails the side: a quiet zone cut by
+  /// the image border cannot be verified).
+  std::array<int, 4> outside{};
   /// Per side: the larger offset of the inner edge of the black border from one cell inside
   /// the side, at the ends of the measured stretch [px], negative when the border looks
   /// thinner than one cell; NaN where fewer than 4 points were measured (no white data cell
@@ -177,9 +204,10 @@ cv::Mat tag_pattern(const std::string& family, int id);
 ///    cell row). It passes when quiet - border >= border_min_contrast x (white - border), with
 ///    `white` the median of the tag's white data cells within 2.5 cells of the border sample:
 ///    a local level, so a shadow that darkens both sides of the edge scales both sides of the
-///    inequality. A sample outside the image fails. The side fails when more than
-///    border_max_failed_fraction of its 4n samples fail (an occluder darker than the quiet zone
-///    beyond the side, or corners more than half a cell off).
+///    inequality. The side fails when more than border_max_failed_fraction of its 4n samples
+///    fail (an occluder darker than the quiet zone beyond the side, or corners more than half a
+///    cell off), or when any sample lies outside the image (a quiet zone cut by the image
+///    border cannot be verified; a partly visible tag must not pass, see TargetStatus).
 ///  - border thickness, where the data cell next to the border is white: the inner edge of the
 ///    border (the dark-to-bright step one cell inside the side) is located to sub-pixel at 5
 ///    points per such cell, by the centroid of the intensity differences along the normal as in

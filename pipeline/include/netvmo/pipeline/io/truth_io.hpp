@@ -7,9 +7,10 @@
 //   target.csv  frame,t,px,py,pz,rx,ry,rz         (g_wo: target position, rotation vector)
 //   timestamps.csv  camera,frame,t       (recorded folders, optional: each image's time [s];
 //               frame = the image's index in its camera's folder or video)
-//   detections.csv  frame,camera,tag_id,detected,status,margin,u0,v0,u1,v1,u2,v2,u3,v3
+//   detections.csv  frame,camera,tag_id,detected,status,margin,u0,v0,u1,v1,u2,v2,u3,v3,reason
 //               one row per camera and frame; status is to_string(TargetStatus) (detected, or
-//               the reason the target was not used); margin and corners empty when detected = 0
+//               the reason the target was not used), reason the same in words (empty when
+//               detected); margin and corners empty when detected = 0
 //
 // The header must match exactly; every error is an InputError "<file>:<line>: <column>: ...".
 #pragma once
@@ -51,13 +52,16 @@ struct DetectionRow {
       frontend::TargetStatus::not_found;  ///< detected exactly when `detected`
   double margin = 0.0;
   std::optional<std::array<cv::Point2d, 4>> corners;
+  /// Why the target was not used (TagObservation::reason; empty when detected). Written with
+  /// every comma replaced by ';' and line breaks by spaces, so it stays one CSV field.
+  std::string reason;
 };
 
 inline constexpr const char* kTruthHeader =
     "frame,t,camera,in_fov,visible_fraction,u0,v0,u1,v1,u2,v2,u3,v3";
 inline constexpr const char* kTargetHeader = "frame,t,px,py,pz,rx,ry,rz";
 inline constexpr const char* kDetectionsHeader =
-    "frame,camera,tag_id,detected,status,margin,u0,v0,u1,v1,u2,v2,u3,v3";
+    "frame,camera,tag_id,detected,status,margin,u0,v0,u1,v1,u2,v2,u3,v3,reason";
 
 std::vector<TruthRow> read_truth_csv(const std::filesystem::path& file);
 std::vector<TargetTruthRow> read_target_csv(const std::filesystem::path& file);
