@@ -189,15 +189,30 @@ void trace_packet(const FrameJob& f, const TileRect& t, int base, TileWorker& w,
   }
 }
 
-// Whether a moved body or its shadow can reach the packets [p0, p1): one of their primary rays
-// may hit it, or a shadow ray from a point they hit last time may.
-bool packets_touched(const FrameJob& f, const PacketBounds* p0, const PacketBounds* p1) {
-  for (const PacketBounds* p = p0; p != p1; ++p)
+// Whether a primary ray of the packet of samples [base, base + kPacket) may hit the body.
+bool rays_may_hit(const FrameJob& f, const TileRect& t, int base, const MovedBody& b) {
+  for (int idx = base; idx < base + kPacket; ++idx) {
+    int cin, rin, s;
+    float xn, yn;
+    if (tile_sample(f, t, idx, cin, rin, s) && camera_ray(f, t.x0 + cin, t.y0 + rin, s, xn, yn) &&
+        ray_may_hit(b, xn, yn))
+      return true;
+  }
+  return false;
+}
+
+// Whether a moved body or its shadow can reach samples [c0, c1) of the tile: one of their
+// primary rays may hit it (bounds of the packets' rays first, then ray by ray), or a shadow ray
+// from a point they hit last time may.
+bool chunk_touched(const FrameJob& f, const TileRect& t, int c0, int c1, const PacketBounds* pb) {
+  for (int base = c0; base < c1; base += kPacket) {
+    const PacketBounds& p = pb[base / kPacket];
     for (const MovedBody& b : f.moved) {
-      if (primary_may_hit(b, *p)) return true;
+      if (primary_may_hit(b, p) && rays_may_hit(f, t, base, b)) return true;
       for (const LightF& L : f.shading.lights)
-        if (shadow_may_hit(b, L, *p)) return true;
+        if (shadow_may_hit(b, L, p)) return true;
     }
+  }
   return false;
 }
 
@@ -235,7 +250,7 @@ void render_tile(const FrameJob& f, int tile, TileWorker& w) {
       const int c1 = std::min(c0 + f.chunk, t.nsamples);
       const int np = (c1 - c0 + kPacket - 1) / kPacket;
       if (f.source == Radiance::Partial) {
-        if (!packets_touched(f, pb + c0 / kPacket, pb + c0 / kPacket + np)) continue;
+        if (!chunk_touched(f, t, c0, c1, pb)) continue;
         clear_chunk(f, t, c0, c1, w);
       }
       for (int base = c0; base < c1; base += kPacket)

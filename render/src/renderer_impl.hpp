@@ -167,11 +167,16 @@ void shade_packet(const Shading& sh, const Eigen::Vector3f& O, Packet& pk,
 // Radiance reuse under motion (reuse_bounds.cpp).
 /// A body that moved since a camera's cached image: a world box holding it at both poses
 /// (padded), and that box's bounds in the camera's undistorted normalized coordinates.
+/// Also, for testing single primary rays, its own box (padded) and, at each of the two poses,
+/// the camera centre and camera -> body rotation in the body frame.
 struct MovedBody {
   Eigen::AlignedBox3d box;
   bool everywhere = false;  // the box reaches the camera plane: any primary ray may hit it
   bool behind = false;      // the box lies behind the camera: no primary ray hits it
   float xmin = 0, xmax = 0, ymin = 0, ymax = 0;
+  Eigen::AlignedBox3d local;
+  Eigen::Vector3d origin[2];
+  Eigen::Matrix3d rotation[2];
 };
 /// The instances whose pose differs between `cached` and now (their g_wb), seen from g_wc.
 std::vector<MovedBody> moved_bodies(const Renderer::Impl& impl,
@@ -182,6 +187,9 @@ inline bool primary_may_hit(const MovedBody& b, const PacketBounds& p) {
   return b.everywhere ||
          (p.xmax >= b.xmin && p.xmin <= b.xmax && p.ymax >= b.ymin && p.ymin <= b.ymax);
 }
+/// Whether the primary ray through normalized coordinates (xn, yn) may hit the body's own box
+/// at either pose.
+bool ray_may_hit(const MovedBody& b, float xn, float yn);
 /// Whether a shadow ray from a point the packet hit towards L may hit the body (false without
 /// shadows).
 bool shadow_may_hit(const MovedBody& b, const LightF& L, const PacketBounds& p);

@@ -75,6 +75,13 @@ bool segment_meets(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double tm
 
 }  // namespace
 
+bool ray_may_hit(const MovedBody& b, float xn, float yn) {
+  const Eigen::Vector3d d(xn, yn, 1.0);
+  for (int k = 0; k < 2; ++k)
+    if (segment_meets(b.origin[k], b.rotation[k] * d, kInf, b.local)) return true;
+  return false;
+}
+
 std::vector<MovedBody> moved_bodies(const Renderer::Impl& I,
                                     const std::vector<Eigen::Matrix4d>& cached, const Pose& g_wc) {
   std::vector<MovedBody> out;
@@ -88,6 +95,14 @@ std::vector<MovedBody> moved_bodies(const Renderer::Impl& I,
     b.box.min().array() -= pad;
     b.box.max().array() += pad;
     project(g_wc, b);
+    b.local = in.box;
+    b.local.min().array() -= pad;
+    b.local.max().array() += pad;
+    const Eigen::Matrix4d g_bw[2] = {cached[i].inverse(), now.inverse()};
+    for (int k = 0; k < 2; ++k) {
+      b.origin[k] = (g_bw[k] * g_wc.translation().homogeneous()).head<3>();
+      b.rotation[k] = g_bw[k].topLeftCorner<3, 3>() * g_wc.linear();
+    }
     out.push_back(b);
   }
   return out;
