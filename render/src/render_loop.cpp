@@ -1,15 +1,22 @@
 // The render loop, in layers: a frame is split into square tiles that the threads take in turn;
 // a tile is traced in packets of kPacket samples covering small square pixel blocks (coherent
 // primary and shadow rays), each packet shaded by the kernel (shading.cpp), and the tile's
-// radiance goes through the sensor (sensor.cpp). A camera whose scene has not moved since its
-// last image reuses that image's radiance and draws new noise only.
+// radiance goes through the sensor (sensor.cpp). A camera reuses its last image's radiance
+// wherever no moved body or its shadow can have changed it (reuse_bounds.cpp) and re-traces the
+// rest; in either case the frame draws new noise.
 #include <atomic>
 #include <cmath>
+#include <numeric>
+#include <stdexcept>
 
 #include "renderer_impl.hpp"
 
 namespace netvmo::render {
 namespace {
+
+// Where a frame's radiance comes from: traced in full, reused in full, or reused except where a
+// moved body or its shadow can reach.
+enum class Radiance { Trace, Reuse, Partial };
 
 // What every tile of one image shares.
 struct FrameJob {
@@ -27,10 +34,12 @@ struct FrameJob {
         spp(int(I.offsets.size())),
         block(std::max(1, int(std::lround(std::sqrt(double(kPacket) / spp))))),
         scale(255.0 * im.exposure / spp),
+        chunk(std::lcm(block * block * spp, kPacket)),
         shading(make_shading(I, scene)),
         cache(*I.radiance[size_t(ci)]),
         out(out) {
     const CameraSpec& cam = scene.cameras[size_t(ci)];
+    g_wc = cam.g_wi_true;
     R = cam.g_wi_true.linear().cast<float>();
     O = cam.g_wi_true.translation().cast<float>();
     const Intrinsics& Kc = cam.intrinsics;
@@ -44,10 +53,17 @@ struct FrameJob {
   int width, height, tile, tiles_x, ntiles, spp;
   int block;     // packets cover block x block pixels with all their samples (~kPacket rays)
   double scale;  // summed radiance of a pixel -> DN
+  // Samples traced or reused together: whole packets covering whole pixel blocks, so a traced
+  // pixel's sum has the same packets in the same order as in a full trace.
+  int chunk;
+  std::vector<int> first_packet;  // per tile: index of its first packet in cache.packets
   Shading shading;
   RadianceCache& cache;
-  bool reuse = false;  // trace nothing: take the radiance from `cache`
+  Radiance source = Radiance::Trace;
+  std::vector<MovedBody> moved;        // Partial: the bodies that moved since the cached image
+  mutable std::atomic<int> traced{0};  // packets traced
   cv::Mat& out;
+  Pose g_wc;
   Eigen::Matrix3f R;  // camera -> world
   Eigen::Vector3f O;  // camera centre
   float fx = 0, fy = 0, cx = 0, cy = 0;
@@ -86,6 +102,7 @@ struct TileWorker {
   RTCIntersectContext ctx, sctx;
   Packet pk;
   std::vector<float> acc;  // the tile's radiance per pixel, summed over samples
+  int traced = 0;          // packets traced
 };
 
 // Lane j of the packet, inactive until primary_lane aims it.
@@ -106,6 +123,18 @@ void clear_lane(RayHitK& rh, const Eigen::Vector3f& O, int j) {
   rh.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
 }
 
+// Sample `idx` of the tile (consecutive samples of neighbouring pixels of one block): its pixel
+// (cin, rin) in the tile and sample s; false when the tile has run out of samples or the block
+// overhangs a partial tile.
+bool tile_sample(const FrameJob& f, const TileRect& t, int idx, int& cin, int& rin, int& s) {
+  if (idx >= t.nsamples) return false;
+  const int blk = idx / t.per_block, w = idx % t.per_block, pib = w / f.spp;
+  s = w % f.spp;
+  cin = (blk % t.bxn) * f.block + pib % f.block;
+  rin = (blk / t.bxn) * f.block + pib / f.block;
+  return cin < t.w && rin < t.h;
+}
+
 // Undistorted normalized coordinates of sample s of pixel (col, row); false outside the region
 // where the distortion model is invertible (the sample stays black).
 bool camera_ray(const FrameJob& f, int col, int row, int s, float& xn, float& yn) {
@@ -120,21 +149,22 @@ bool camera_ray(const FrameJob& f, int col, int row, int s, float& xn, float& yn
   return std::isfinite(xn);
 }
 
-// Pixel level: lane j takes sample `idx` of the tile (consecutive samples of neighbouring pixels
-// of one block), unless the tile has run out of samples or the block overhangs a partial tile.
-void primary_lane(const FrameJob& f, const TileRect& t, int idx, int j, Packet& pk) {
+// Pixel level: lane j takes sample `idx` of the tile, if it has one; `pb` bounds the rays.
+void primary_lane(const FrameJob& f, const TileRect& t, int idx, int j, Packet& pk,
+                  PacketBounds& pb) {
   pk.valid[j] = 0;
   pk.pix[j] = -1;
   pk.rad[j] = 0;
   clear_lane(pk.rh, f.O, j);
-  if (idx >= t.nsamples) return;
-  const int blk = idx / t.per_block, w = idx % t.per_block, pib = w / f.spp, s = w % f.spp;
-  const int cin = (blk % t.bxn) * f.block + pib % f.block;
-  const int rin = (blk / t.bxn) * f.block + pib / f.block;
-  if (cin >= t.w || rin >= t.h) return;
+  int cin, rin, s;
+  if (!tile_sample(f, t, idx, cin, rin, s)) return;
   pk.pix[j] = rin * t.w + cin;
   float xn, yn;
   if (!camera_ray(f, t.x0 + cin, t.y0 + rin, s, xn, yn)) return;
+  pb.xmin = std::min(pb.xmin, xn);
+  pb.xmax = std::max(pb.xmax, xn);
+  pb.ymin = std::min(pb.ymin, yn);
+  pb.ymax = std::max(pb.ymax, yn);
   const Eigen::Vector3f d = f.R * Eigen::Vector3f(xn, yn, 1.0f);
   pk.rh.ray.dir_x[j] = d.x();
   pk.rh.ray.dir_y[j] = d.y();
@@ -142,14 +172,56 @@ void primary_lane(const FrameJob& f, const TileRect& t, int idx, int j, Packet& 
   pk.valid[j] = -1;
 }
 
-// Packet level: aim, trace and shade kPacket samples from `base` on; add them to their pixels.
-void trace_packet(const FrameJob& f, const TileRect& t, int base, TileWorker& w) {
+// Packet level: aim, trace and shade kPacket samples from `base` on; add them to their pixels
+// and keep the bounds of their rays and of the surface points they hit.
+void trace_packet(const FrameJob& f, const TileRect& t, int base, TileWorker& w, PacketBounds& pb) {
   Packet& pk = w.pk;
-  for (int j = 0; j < kPacket; ++j) primary_lane(f, t, base + j, j, pk);
+  pb = PacketBounds();
+  for (int j = 0; j < kPacket; ++j) primary_lane(f, t, base + j, j, pk, pb);
   intersectK(pk.valid, f.impl.top, &w.ctx, &pk.rh);
   shade_packet(f.shading, f.O, pk, &w.sctx);
-  for (int j = 0; j < kPacket; ++j)
+  for (int j = 0; j < kPacket; ++j) {
     if (pk.pix[j] >= 0) w.acc[size_t(pk.pix[j])] += pk.rad[j];
+    if (pk.valid[j]) {  // a hit (shading clears the lanes that missed)
+      pb.lo = pb.lo.cwiseMin(pk.p[j]);
+      pb.hi = pb.hi.cwiseMax(pk.p[j]);
+    }
+  }
+}
+
+// Whether a primary ray of the packet of samples [base, base + kPacket) may hit the body.
+bool rays_may_hit(const FrameJob& f, const TileRect& t, int base, const MovedBody& b) {
+  for (int idx = base; idx < base + kPacket; ++idx) {
+    int cin, rin, s;
+    float xn, yn;
+    if (tile_sample(f, t, idx, cin, rin, s) && camera_ray(f, t.x0 + cin, t.y0 + rin, s, xn, yn) &&
+        ray_may_hit(b, xn, yn))
+      return true;
+  }
+  return false;
+}
+
+// Whether a moved body or its shadow can reach samples [c0, c1) of the tile: one of their
+// primary rays may hit it (bounds of the packets' rays first, then ray by ray), or a shadow ray
+// from a point they hit last time may.
+bool chunk_touched(const FrameJob& f, const TileRect& t, int c0, int c1, const PacketBounds* pb) {
+  for (int base = c0; base < c1; base += kPacket) {
+    const PacketBounds& p = pb[base / kPacket];
+    for (const MovedBody& b : f.moved) {
+      if (primary_may_hit(b, p) && rays_may_hit(f, t, base, b)) return true;
+      for (const LightF& L : f.shading.lights)
+        if (shadow_may_hit(b, L, p)) return true;
+    }
+  }
+  return false;
+}
+
+// Clears the radiance of the pixels of samples [c0, c1) before they are traced again.
+void clear_chunk(const FrameJob& f, const TileRect& t, int c0, int c1, TileWorker& w) {
+  for (int idx = c0; idx < c1; ++idx) {
+    int cin, rin, s;
+    if (tile_sample(f, t, idx, cin, rin, s)) w.acc[size_t(rin * t.w + cin)] = 0.0f;
+  }
 }
 
 // Copies a tile's radiance between the worker's buffer and the camera's radiance cache.
@@ -165,14 +237,29 @@ void copy_radiance(const FrameJob& f, const TileRect& t, TileWorker& w, bool to_
     }
 }
 
-// Tile level: radiance (traced, or reused from the cache), then the sensor.
+// Tile level: radiance (traced, reused from the cache, or reused where nothing can have changed
+// and traced elsewhere, chunk by chunk), then the sensor.
 void render_tile(const FrameJob& f, int tile, TileWorker& w) {
   const TileRect t = tile_rect(f, tile);
   std::fill(w.acc.begin(), w.acc.end(), 0.0f);
-  if (f.reuse) copy_radiance(f, t, w, false);
-  for (int base = f.reuse ? t.nsamples : 0; base < t.nsamples; base += kPacket)
-    trace_packet(f, t, base, w);
-  if (!f.reuse) copy_radiance(f, t, w, true);
+  if (f.source != Radiance::Trace) copy_radiance(f, t, w, false);
+  if (f.source != Radiance::Reuse) {
+    PacketBounds* pb = f.cache.packets.data() + f.first_packet[size_t(tile)];
+    bool traced = false;
+    for (int c0 = 0; c0 < t.nsamples; c0 += f.chunk) {
+      const int c1 = std::min(c0 + f.chunk, t.nsamples);
+      const int np = (c1 - c0 + kPacket - 1) / kPacket;
+      if (f.source == Radiance::Partial) {
+        if (!chunk_touched(f, t, c0, c1, pb)) continue;
+        clear_chunk(f, t, c0, c1, w);
+      }
+      for (int base = c0; base < c1; base += kPacket)
+        trace_packet(f, t, base, w, pb[base / kPacket]);
+      w.traced += np;
+      traced = true;
+    }
+    if (traced) copy_radiance(f, t, w, true);
+  }
   expose_tile(f.im, f.scale, tile_seed(f.im.seed, f.camera_id, f.frame, tile), w.acc, t.x0, t.y0,
               t.w, t.h, f.out);
 }
@@ -181,35 +268,53 @@ void render_tile(const FrameJob& f, int tile, TileWorker& w) {
 void render_tiles(const FrameJob& f, std::atomic<int>& next) {
   TileWorker w(f.tile);
   for (int tile = next++; tile < f.ntiles; tile = next++) render_tile(f, tile, w);
+  f.traced += w.traced;
 }
 
 }  // namespace
 
-// Frame level: the camera's radiance cache decides between tracing and reuse, the threads share
-// out the tiles.
+// Frame level: the camera's radiance cache and what moved since it was filled decide between
+// tracing, reuse and partial reuse; the threads share out the tiles.
 cv::Mat Renderer::render(int ci, int frame) {
   auto lk = acquire(ci, frame);
   const Impl& I = *impl_;
   const Intrinsics& Kc = scene_.cameras[size_t(ci)].intrinsics;
   cv::Mat out(Kc.height, Kc.width, CV_8UC1);
   FrameJob f(I, scene_, ci, frame, out);
+  int packets = 0;
+  for (int tile = 0; tile < f.ntiles; ++tile) {
+    f.first_packet.push_back(packets);
+    packets += (tile_rect(f, tile).nsamples + kPacket - 1) / kPacket;
+  }
   std::unique_lock<std::mutex> cache_lock(f.cache.mutex);
   std::vector<Eigen::Matrix4d> key;
   for (const auto& in : I.instances) key.push_back(in.g_wb.matrix());
-  f.reuse = f.im.reuse_static && f.cache.valid && f.cache.key == key;
-  if (!f.reuse) {
-    f.cache.valid = false;
+  if (!f.im.reuse_radiance || !f.cache.valid) {
+    f.source = Radiance::Trace;
     f.cache.acc.assign(size_t(f.width) * size_t(f.height), 0.0f);
+    f.cache.packets.assign(size_t(packets), PacketBounds());
+  } else if (f.cache.key == key) {
+    f.source = Radiance::Reuse;
+  } else {
+    f.source = Radiance::Partial;
+    f.moved = moved_bodies(I, f.cache.key, f.g_wc);
   }
+  f.cache.valid = false;  // until every tile is done
   const int hw = int(std::max(1u, std::thread::hardware_concurrency()));
   const int nthreads = std::max(1, std::min(f.ntiles, f.im.threads > 0 ? f.im.threads : hw));
   std::atomic<int> next{0};
   run_threads(nthreads, [&]() { render_tiles(f, next); });
-  if (!f.reuse) {
-    f.cache.key = std::move(key);
-    f.cache.valid = true;
-  }
+  f.cache.key = std::move(key);
+  f.cache.traced_fraction = double(f.traced) / double(std::max(1, packets));
+  f.cache.valid = true;
   return out;
+}
+
+double Renderer::traced_fraction(int ci) {
+  if (ci < 0 || ci >= camera_count()) throw std::invalid_argument("camera index out of range");
+  RadianceCache& c = *impl_->radiance[size_t(ci)];
+  std::lock_guard<std::mutex> lock(c.mutex);
+  return c.traced_fraction;
 }
 
 }  // namespace netvmo::render

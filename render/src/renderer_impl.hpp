@@ -7,6 +7,7 @@
 //   shading.cpp         the shading kernel: radiance of a traced packet (textures, lights, shadows)
 //   sensor.cpp          radiance -> 8-bit pixels with seeded read and shot noise
 //   render_loop.cpp     Renderer::render: frame -> tiles -> packets
+//   reuse_bounds.cpp    which packets a moved body or its shadow can touch (radiance reuse)
 //   ground_truth.cpp    Renderer::truth: corners, field of view, visible fraction
 //   intersect_bare.cpp  Renderer::intersect_bare, the benchmark baseline
 #pragma once
@@ -54,16 +55,31 @@ struct Instance {
   unsigned top_id = RTC_INVALID_GEOMETRY_ID;
   std::vector<GeomInfo> geoms;
   const Trajectory* motion = nullptr;  // null: static (identity)
+  Eigen::AlignedBox3d box;             // bounds of the geometry in the instance frame
   Pose g_wb = Pose::Identity();        // current pose
   Pose g_bw = Pose::Identity();
 };
 
-// The noise-free radiance of a camera's last image and the poses of every instance it was
-// rendered with: when nothing has moved, the next frame reuses it and only draws new noise.
+/// What a traced packet covered: the bounds of its rays in the camera's undistorted normalized
+/// coordinates and of the surface points they hit (lo > hi: none).
+struct PacketBounds {
+  float xmin = kInf, xmax = -kInf, ymin = kInf, ymax = -kInf;
+  Eigen::Vector3f lo = Eigen::Vector3f::Constant(kInf);
+  Eigen::Vector3f hi = Eigen::Vector3f::Constant(-kInf);
+  bool no_hit() const { return !(lo.x() <= hi.x()); }
+  bool no_ray() const { return !(xmin <= xmax); }
+};
+
+// The noise-free radiance of a camera's last image, the poses of every instance it was rendered
+// with and where each packet's primary rays hit: the next frame reuses the radiance of every
+// packet that no moved body or its shadow can touch (all of them when nothing has moved) and
+// draws new noise.
 struct RadianceCache {
   std::mutex mutex;
-  std::vector<Eigen::Matrix4d> key;  // g_wb of every instance
-  std::vector<float> acc;            // per pixel, summed over samples (before the sensor)
+  std::vector<Eigen::Matrix4d> key;   // g_wb of every instance
+  std::vector<float> acc;             // per pixel, summed over samples (before the sensor)
+  std::vector<PacketBounds> packets;  // per packet, in tile order
+  double traced_fraction = 1;         // of the packets, in the last image
   bool valid = false;
 };
 
@@ -147,6 +163,36 @@ struct Packet {
 /// albedo times ambient plus each light, one shadow-ray packet per light (context `sctx`).
 void shade_packet(const Shading& sh, const Eigen::Vector3f& O, Packet& pk,
                   RTCIntersectContext* sctx);
+
+// Radiance reuse under motion (reuse_bounds.cpp).
+/// A body that moved since a camera's cached image: a world box holding it at both poses
+/// (padded), and that box's bounds in the camera's undistorted normalized coordinates.
+/// Also, for testing single primary rays, its own box (padded) and, at each of the two poses,
+/// the camera centre and camera -> body rotation in the body frame.
+struct MovedBody {
+  Eigen::AlignedBox3d box;
+  bool everywhere = false;  // the box reaches the camera plane: any primary ray may hit it
+  bool behind = false;      // the box lies behind the camera: no primary ray hits it
+  float xmin = 0, xmax = 0, ymin = 0, ymax = 0;
+  Eigen::AlignedBox3d local;
+  Eigen::Vector3d origin[2];
+  Eigen::Matrix3d rotation[2];
+};
+/// The instances whose pose differs between `cached` and now (their g_wb), seen from g_wc.
+std::vector<MovedBody> moved_bodies(const Renderer::Impl& impl,
+                                    const std::vector<Eigen::Matrix4d>& cached, const Pose& g_wc);
+/// Whether one of the packet's primary rays may hit the body.
+inline bool primary_may_hit(const MovedBody& b, const PacketBounds& p) {
+  if (p.no_ray() || b.behind) return false;
+  return b.everywhere ||
+         (p.xmax >= b.xmin && p.xmin <= b.xmax && p.ymax >= b.ymin && p.ymin <= b.ymax);
+}
+/// Whether the primary ray through normalized coordinates (xn, yn) may hit the body's own box
+/// at either pose.
+bool ray_may_hit(const MovedBody& b, float xn, float yn);
+/// Whether a shadow ray from a point the packet hit towards L may hit the body (false without
+/// shadows).
+bool shadow_may_hit(const MovedBody& b, const LightF& L, const PacketBounds& p);
 
 // The sensor (sensor.cpp).
 /// Seed of a tile's noise generator, from (seed, camera id, frame, tile).

@@ -111,8 +111,10 @@ void Renderer::Impl::add_mesh(Instance& in, const Mesh& mesh, GeomInfo info) {
     check("geometry buffer");
     throw std::runtime_error("Embree could not allocate a geometry buffer");
   }
-  for (size_t i = 0; i < mesh.vertices.size(); ++i)
+  for (size_t i = 0; i < mesh.vertices.size(); ++i) {
     for (int k = 0; k < 3; ++k) v[3 * i + size_t(k)] = mesh.vertices[i][k];
+    in.box.extend(mesh.vertices[i].cast<double>());
+  }
   for (size_t i = 0; i < mesh.triangles.size(); ++i) {
     for (int k = 0; k < 3; ++k) {
       if (mesh.triangles[i][size_t(k)] >= mesh.vertices.size()) {

@@ -39,6 +39,15 @@ class Gauss {
   bool has_ = false;
 };
 
+// std::clamp(std::lround(dn), 0, 255) (halves away from zero; NaN gives 0), without the libm
+// call: within (0, 255) truncation is the floor and dn - floor(dn) is exact.
+std::uint8_t to_dn(double dn) {
+  if (!(dn > 0)) return 0;
+  if (dn >= 255) return 255;
+  const int r = int(dn);
+  return std::uint8_t(dn - r >= 0.5 ? r + 1 : r);
+}
+
 }  // namespace
 
 std::uint64_t tile_seed(std::uint64_t seed, int camera_id, int frame, int tile) {
@@ -61,7 +70,7 @@ void expose_tile(const Imaging& im, double scale, std::uint64_t seed, const std:
         const double var = im.read_noise * im.read_noise + im.shot_noise * std::max(dn, 0.0);
         dn += std::sqrt(var) * gauss();
       }
-      row[x0 + x] = std::uint8_t(std::clamp(std::lround(dn), 0L, 255L));
+      row[x0 + x] = to_dn(dn);
     }
   }
 }

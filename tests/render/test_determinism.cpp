@@ -93,7 +93,7 @@ TEST(Determinism, StaticSceneReuseIsByteIdentical) {
     auto scene = noisy_scene(7, 2);
     if (!moving) scene.target.motion = Trajectory::fixed(scene.target.motion.g0);
     auto fresh_scene = scene;
-    fresh_scene.imaging.reuse_static = false;
+    fresh_scene.imaging.reuse_radiance = false;
     Renderer cached(scene), fresh(fresh_scene);
     for (int f = 0; f < 3; ++f) {
       const cv::Mat a = cached.render(0, f), b = fresh.render(0, f);

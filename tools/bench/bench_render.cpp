@@ -1,7 +1,8 @@
 // Renderer speed on datasets/paper5_render.yaml (640x480): ms per frame and primary rays per
 // second at 1 and 4 samples per pixel, tile-parallel over all cores with Embree ray packets and
 // shading (texture, ambient + directional light with shadow rays, noise); compared with a bare
-// one-ray-at-a-time rtcIntersect1 loop over the same primary rays with no shading.
+// one-ray-at-a-time rtcIntersect1 loop over the same primary rays with no shading; the same on
+// the moving scene datasets/moving_target.yaml, with and without radiance reuse.
 #include <benchmark/benchmark.h>
 
 #include <memory>
@@ -17,7 +18,7 @@ using netvmo::render::Renderer;
 std::unique_ptr<Renderer> make_renderer(int spp, bool shadows = true, bool textures = true) {
   auto scene = netvmo::io::load_render_scenario(NETVMO_SOURCE_DIR "/datasets/paper5_render.yaml");
   scene.imaging.spp = spp;
-  scene.imaging.reuse_static = false;  // measure tracing, not the static-scene reuse
+  scene.imaging.reuse_radiance = false;  // measure tracing, not the radiance reuse
   for (auto& l : scene.lights) l.shadows = shadows;
   if (!textures) {
     for (auto& b : scene.occluders)
@@ -82,6 +83,67 @@ void BM_BareIntersect1(benchmark::State& state) {
 BENCHMARK(BM_BareIntersect1)
     ->ArgsProduct({{1, 4}, {0, 4}, {1, 2}})
     ->ArgNames({"spp", "cam", "threads"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// Moving scene (datasets/moving_target.yaml, 1 spp, 640x480): one iteration renders the five
+// cameras' images of the next frame, frames 1..59 (a forth-and-back sweep when repeated), with
+// the radiance
+// reused where no moved body or its shadow can reach (arg 1) or traced in full (arg 0).
+std::unique_ptr<Renderer> make_moving_renderer(bool reuse) {
+  auto scene = netvmo::io::load_render_scenario(NETVMO_SOURCE_DIR "/datasets/moving_target.yaml");
+  scene.imaging.spp = 1;
+  scene.imaging.reuse_radiance = reuse;
+  return std::make_unique<Renderer>(scene);
+}
+
+constexpr int kMovingFrames = 60;
+
+// Frame of step i of a forth-and-back sweep over 0..kMovingFrames-1.
+int sweep_frame(long i) {
+  const long period = 2 * (kMovingFrames - 1), k = i % period;
+  return int(k < kMovingFrames ? k : period - k);
+}
+
+void BM_RenderMovingScene(benchmark::State& state) {
+  auto r = make_moving_renderer(state.range(0) != 0);
+  for (int c = 0; c < r->camera_count(); ++c) r->render(c, 0);
+  long step = 1;
+  double traced = 0;
+  for (auto _ : state) {
+    const int frame = sweep_frame(step++);
+    for (int c = 0; c < r->camera_count(); ++c) {
+      cv::Mat img = r->render(c, frame);
+      benchmark::DoNotOptimize(img.data);
+      traced += r->traced_fraction(c);
+    }
+  }
+  const double images = double(state.iterations()) * r->camera_count();
+  state.counters["images/s"] = benchmark::Counter(images, benchmark::Counter::kIsRate);
+  state.counters["traced_fraction"] = traced / images;
+}
+BENCHMARK(BM_RenderMovingScene)
+    ->Arg(1)
+    ->Arg(0)
+    ->ArgName("reuse")
+    ->Iterations(kMovingFrames - 1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// The bare rtcIntersect1 loop over the same five cameras and frames, 2 threads.
+void BM_BareIntersect1MovingScene(benchmark::State& state) {
+  auto r = make_moving_renderer(false);
+  long step = 1;
+  for (auto _ : state) {
+    const int frame = sweep_frame(step++);
+    for (int c = 0; c < r->camera_count(); ++c)
+      benchmark::DoNotOptimize(r->intersect_bare(c, frame, 2));
+  }
+  state.counters["images/s"] = benchmark::Counter(double(state.iterations()) * r->camera_count(),
+                                                  benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_BareIntersect1MovingScene)
+    ->Iterations(kMovingFrames - 1)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -62,6 +62,9 @@ class Renderer {
   void set_frame(int frame);
   /// The 8-bit grayscale image of camera `camera_index` at `frame` (CV_8UC1, height x width).
   cv::Mat render(int camera_index, int frame);
+  /// Fraction of the primary-ray packets of camera `camera_index`'s last image that were traced
+  /// (the others reused its previous radiance, imaging.reuse_radiance); 1 before any image.
+  double traced_fraction(int camera_index);
   /// Ground truth of camera `camera_index` at `frame`.
   FrameTruth truth(int camera_index, int frame);
   /// True target pose at frame k.

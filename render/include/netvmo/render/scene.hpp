@@ -82,9 +82,10 @@ struct Imaging {
   int threads = 0;           ///< render threads; 0 = std::thread::hardware_concurrency()
   int tile = 16;             ///< tile side [px]
   int visibility_grid = 16;  ///< samples per side over the printed tag for visible_fraction
-  /// When no body has moved since a camera's previous image, reuse its noise-free radiance and
-  /// draw new sensor noise only (the image is byte-identical to tracing again).
-  bool reuse_static = true;
+  /// Reuse a camera's previous noise-free radiance wherever no body that moved since (nor its
+  /// shadow) can have changed it, re-trace the rest, and draw new sensor noise over the whole
+  /// image; the image is byte-identical to tracing everything again.
+  bool reuse_radiance = true;
 };
 
 struct SceneDescription {
