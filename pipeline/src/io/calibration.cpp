@@ -26,6 +26,23 @@ void validate(const Calibration& c, const std::string& file) {
     if (!std::isfinite(c.dist[i])) throw InputError(file + ": distortion_coefficients: not finite");
 }
 
+// An opencv-matrix node, its declared size checked first: OpenCV allocates rows x cols before
+// reading the data, so a damaged size (e.g. `cols: /`) would ask for gigabytes.
+cv::Mat read_matrix(const cv::FileNode& n, const std::string& file, const char* key,
+                    int max_elements) {
+  const std::string what = file + ": " + key + ": ";
+  if (!n.isMap()) throw InputError(what + "expected an opencv-matrix (rows, cols, dt, data)");
+  const cv::FileNode rows = n["rows"], cols = n["cols"];
+  if (!rows.isInt() || !cols.isInt()) throw InputError(what + "rows and cols must be integers");
+  const long long r = static_cast<int>(rows), c = static_cast<int>(cols);
+  if (r < 1 || c < 1 || r * c > max_elements)
+    throw InputError(what + "expected at most " + std::to_string(max_elements) +
+                     " numbers, got rows " + std::to_string(r) + " x cols " + std::to_string(c));
+  cv::Mat m;
+  n >> m;
+  return m;
+}
+
 }  // namespace
 
 Calibration load_calibration_opencv(const fs::path& path) {
@@ -46,14 +63,13 @@ Calibration load_calibration_opencv(const fs::path& path) {
       throw InputError(file + ": image_width/image_height: expected integers");
     c.width = static_cast<int>(w);
     c.height = static_cast<int>(h);
-    cv::Mat K, D;
-    need("camera_matrix") >> K;
+    cv::Mat K = read_matrix(need("camera_matrix"), file, "camera_matrix", 9);
     if (K.rows != 3 || K.cols != 3)
       throw InputError(file + ": camera_matrix: expected a 3x3 matrix");
     K.convertTo(K, CV_64F);
     for (int r = 0; r < 3; ++r)
       for (int col = 0; col < 3; ++col) c.K(r, col) = K.at<double>(r, col);
-    need("distortion_coefficients") >> D;
+    cv::Mat D = read_matrix(need("distortion_coefficients"), file, "distortion_coefficients", 14);
     D.convertTo(D, CV_64F);
     D = D.reshape(1, 1);
     const int n = D.empty() ? 0 : D.cols;
