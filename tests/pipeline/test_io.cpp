@@ -76,6 +76,18 @@ TEST(Calibration, OpenCvMatrixSizeCheckedBeforeReading) {
                             "  dt: d\n  data: [1]\n");
   expect_input_error([&] { load_calibration_opencv(dir / "b.yaml"); },
                      {"b.yaml", "camera_matrix", "at most 9 numbers", "rows 100000 x cols 100000"});
+  // corpus calibration_opencv/empty_key_length_error: OpenCV's YAML parser throws
+  // std::length_error (not a cv::Exception) on this line.
+  write(dir / "c.yaml", head + K +
+                            "distortion_coefficients: !!opencv-matrix\n  rows: 1\n"
+                            "  cols: 5\n   :t: d\n * data: [0, 0, 0, 0, 0]\n");
+  expect_input_error([&] { load_calibration_opencv(dir / "c.yaml"); },
+                     {"c.yaml", "cannot parse calibration"});
+  // corpus calibration_opencv/nul_byte_hang: OpenCV's parser did not return on this file.
+  write(dir / "d.yaml", std::string("%YAML:1.0\n cols:age_width:i640\nim") + '\0' +
+                            "%YAML:1.0\n---\nimage_width: 640\n");
+  expect_input_error([&] { load_calibration_opencv(dir / "d.yaml"); },
+                     {"d.yaml", "not a text file"});
 }
 
 TEST(Calibration, VispXml) {

@@ -3,6 +3,8 @@
 #include <visp3/core/vpCameraParameters.h>
 #include <visp3/core/vpException.h>
 #include <visp3/core/vpXmlParserCamera.h>
+#include <fstream>
+#include <iterator>
 #include <opencv2/calib3d.hpp>
 
 #include "netvmo/pipeline/error.hpp"
@@ -48,6 +50,14 @@ cv::Mat read_matrix(const cv::FileNode& n, const std::string& file, const char* 
 Calibration load_calibration_opencv(const fs::path& path) {
   const std::string file = path.string();
   if (!fs::is_regular_file(path)) throw InputError(file + ": calibration file not found");
+  {
+    // OpenCV's FileStorage parser can loop for ever on a NUL byte inside the text (found by
+    // fuzzing); calibration files are text.
+    std::ifstream in(path, std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (text.find('\0') != std::string::npos)
+      throw InputError(file + ": not a text file (it contains a NUL byte)");
+  }
   Calibration c;
   c.source = file;
   try {
@@ -88,6 +98,12 @@ Calibration load_calibration_opencv(const fs::path& path) {
     }
   } catch (const cv::Exception& e) {
     throw InputError(file + ": cannot parse calibration: " + e.err);
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    // OpenCV's parsers let some standard exceptions through (e.g. std::length_error on a key
+    // made of nothing but a colon).
+    throw InputError(file + ": cannot parse calibration: " + e.what());
   }
   validate(c, file);
   return c;
