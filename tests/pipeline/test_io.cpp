@@ -58,6 +58,38 @@ TEST(Calibration, OpenCvFileErrorsNameFileAndNode) {
   expect_input_error([&] { load_calibration_opencv(dir / "c.yaml"); }, {"c.yaml"});
 }
 
+// Found by fuzzing (tests/fuzz/corpus/calibration_opencv/cols_not_a_number_oom): OpenCV allocates
+// rows x cols before reading the data, so the declared size is checked first.
+TEST(Calibration, OpenCvMatrixSizeCheckedBeforeReading) {
+  const auto dir = testing::fresh_dir("calib_size");
+  const std::string K =
+      "camera_matrix: !!opencv-matrix\n  rows: 3\n  cols: 3\n  dt: d\n"
+      "  data: [600, 0, 320, 0, 600, 240, 0, 0, 1]\n";
+  const std::string head = "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n";
+  write(dir / "a.yaml", head + K +
+                            "distortion_coefficients: !!opencv-matrix\n  rows: 1\n  cols: /\n"
+                            "  dt: d\n  data: [0, 0, 0, 0, 0]\n");
+  expect_input_error([&] { load_calibration_opencv(dir / "a.yaml"); },
+                     {"a.yaml", "distortion_coefficients", "rows and cols must be integers"});
+  write(dir / "b.yaml", head +
+                            "camera_matrix: !!opencv-matrix\n  rows: 100000\n  cols: 100000\n"
+                            "  dt: d\n  data: [1]\n");
+  expect_input_error([&] { load_calibration_opencv(dir / "b.yaml"); },
+                     {"b.yaml", "camera_matrix", "at most 9 numbers", "rows 100000 x cols 100000"});
+  // corpus calibration_opencv/empty_key_length_error: OpenCV's YAML parser throws
+  // std::length_error (not a cv::Exception) on this line.
+  write(dir / "c.yaml", head + K +
+                            "distortion_coefficients: !!opencv-matrix\n  rows: 1\n"
+                            "  cols: 5\n   :t: d\n * data: [0, 0, 0, 0, 0]\n");
+  expect_input_error([&] { load_calibration_opencv(dir / "c.yaml"); },
+                     {"c.yaml", "cannot parse calibration"});
+  // corpus calibration_opencv/nul_byte_hang: OpenCV's parser did not return on this file.
+  write(dir / "d.yaml", std::string("%YAML:1.0\n cols:age_width:i640\nim") + '\0' +
+                            "%YAML:1.0\n---\nimage_width: 640\n");
+  expect_input_error([&] { load_calibration_opencv(dir / "d.yaml"); },
+                     {"d.yaml", "not a text file"});
+}
+
 TEST(Calibration, VispXml) {
   const auto dir = testing::fresh_dir("calib_xml");
   {
@@ -151,6 +183,29 @@ TEST(NetworkConfig, ErrorsNameFileAndKey) {
   expect_input_error([&] { load_network_config(f); }, {"network.yaml", "cameras[1].r_wi"});
   with("id: 4,", "id: 0,");
   expect_input_error([&] { load_network_config(f); }, {"network.yaml", "positive"});
+}
+
+// Found by fuzzing (corpus truth_csv/frame_out_of_int_range, network_config/edge_id_1e10):
+// integer fields outside int's range were converted before being checked (undefined behaviour,
+// reported by the sanitizer build); they are errors naming the field.
+TEST(NetworkConfig, EdgeIdOutOfIntRange) {
+  const auto dir = testing::fresh_dir("net_edge_range");
+  std::string s = kNetwork;
+  s.replace(s.find("[[1, 4]]"), 8, "[[1, 1e10]]");
+  write(dir / "network.yaml", s);
+  expect_input_error([&] { load_network_config(dir / "network.yaml"); },
+                     {"network.yaml", "edges[0]", "expected a pair of camera ids"});
+}
+
+TEST(TruthIo, IntegerOutOfIntRange) {
+  const auto dir = testing::fresh_dir("truth_int_range");
+  write(dir / "target.csv",
+        std::string(kTargetHeader) + "\n2147483648,0,0,0,0,0,0,0\n-3e9,0,0,0,0,0,0,0\n");
+  expect_input_error([&] { read_target_csv(dir / "target.csv"); },
+                     {"target.csv:2", "frame", "expected an integer"});
+  write(dir / "truth_cameras.csv", std::string(kTruthCamerasHeader) + "\n1e300,0,0,0,0,0,0\n");
+  expect_input_error([&] { read_truth_cameras_csv(dir / "truth_cameras.csv"); },
+                     {"truth_cameras.csv:2", "camera", "expected an integer"});
 }
 
 TEST(TruthIo, ReadsSynthesizedTruthAndTarget) {

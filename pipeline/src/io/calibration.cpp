@@ -3,6 +3,8 @@
 #include <visp3/core/vpCameraParameters.h>
 #include <visp3/core/vpException.h>
 #include <visp3/core/vpXmlParserCamera.h>
+#include <fstream>
+#include <iterator>
 #include <opencv2/calib3d.hpp>
 
 #include "netvmo/pipeline/error.hpp"
@@ -26,11 +28,36 @@ void validate(const Calibration& c, const std::string& file) {
     if (!std::isfinite(c.dist[i])) throw InputError(file + ": distortion_coefficients: not finite");
 }
 
+// An opencv-matrix node, its declared size checked first: OpenCV allocates rows x cols before
+// reading the data, so a damaged size (e.g. `cols: /`) would ask for gigabytes.
+cv::Mat read_matrix(const cv::FileNode& n, const std::string& file, const char* key,
+                    int max_elements) {
+  const std::string what = file + ": " + key + ": ";
+  if (!n.isMap()) throw InputError(what + "expected an opencv-matrix (rows, cols, dt, data)");
+  const cv::FileNode rows = n["rows"], cols = n["cols"];
+  if (!rows.isInt() || !cols.isInt()) throw InputError(what + "rows and cols must be integers");
+  const long long r = static_cast<int>(rows), c = static_cast<int>(cols);
+  if (r < 1 || c < 1 || r * c > max_elements)
+    throw InputError(what + "expected at most " + std::to_string(max_elements) +
+                     " numbers, got rows " + std::to_string(r) + " x cols " + std::to_string(c));
+  cv::Mat m;
+  n >> m;
+  return m;
+}
+
 }  // namespace
 
 Calibration load_calibration_opencv(const fs::path& path) {
   const std::string file = path.string();
   if (!fs::is_regular_file(path)) throw InputError(file + ": calibration file not found");
+  {
+    // OpenCV's FileStorage parser can loop for ever on a NUL byte inside the text (found by
+    // fuzzing); calibration files are text.
+    std::ifstream in(path, std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (text.find('\0') != std::string::npos)
+      throw InputError(file + ": not a text file (it contains a NUL byte)");
+  }
   Calibration c;
   c.source = file;
   try {
@@ -46,14 +73,13 @@ Calibration load_calibration_opencv(const fs::path& path) {
       throw InputError(file + ": image_width/image_height: expected integers");
     c.width = static_cast<int>(w);
     c.height = static_cast<int>(h);
-    cv::Mat K, D;
-    need("camera_matrix") >> K;
+    cv::Mat K = read_matrix(need("camera_matrix"), file, "camera_matrix", 9);
     if (K.rows != 3 || K.cols != 3)
       throw InputError(file + ": camera_matrix: expected a 3x3 matrix");
     K.convertTo(K, CV_64F);
     for (int r = 0; r < 3; ++r)
       for (int col = 0; col < 3; ++col) c.K(r, col) = K.at<double>(r, col);
-    need("distortion_coefficients") >> D;
+    cv::Mat D = read_matrix(need("distortion_coefficients"), file, "distortion_coefficients", 14);
     D.convertTo(D, CV_64F);
     D = D.reshape(1, 1);
     const int n = D.empty() ? 0 : D.cols;
@@ -72,6 +98,12 @@ Calibration load_calibration_opencv(const fs::path& path) {
     }
   } catch (const cv::Exception& e) {
     throw InputError(file + ": cannot parse calibration: " + e.err);
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    // OpenCV's parsers let some standard exceptions through (e.g. std::length_error on a key
+    // made of nothing but a colon).
+    throw InputError(file + ": cannot parse calibration: " + e.what());
   }
   validate(c, file);
   return c;

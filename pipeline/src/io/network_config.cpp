@@ -1,5 +1,7 @@
 #include "netvmo/pipeline/io/network_config.hpp"
 
+#include <climits>
+#include <cmath>
 #include <set>
 
 #include <yaml-cpp/yaml.h>
@@ -22,7 +24,9 @@ std::vector<std::pair<int, int>> read_edges(const Value& edges, const std::set<i
   std::set<std::pair<int, int>> seen;
   for (const auto& ev : edges.sequence()) {
     const auto e = ev.numbers();
-    if (e.size() != 2 || e[0] != static_cast<int>(e[0]) || e[1] != static_cast<int>(e[1]))
+    // Range first: converting a double outside int's range is undefined behaviour.
+    const auto is_int = [](double v) { return v >= INT_MIN && v <= INT_MAX && v == std::floor(v); };
+    if (e.size() != 2 || !is_int(e[0]) || !is_int(e[1]))
       ev.fail("expected a pair of camera ids [i, j]");
     const int i = static_cast<int>(e[0]), j = static_cast<int>(e[1]);
     for (int k : {i, j})

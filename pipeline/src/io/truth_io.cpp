@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -68,7 +69,8 @@ double num(const std::vector<std::string>& f, const std::vector<std::string>& na
 int integer(const std::vector<std::string>& f, const std::vector<std::string>& names, size_t i,
             const std::string& where) {
   const double v = num(f, names, i, where);
-  if (v != static_cast<int>(v))
+  // Range first: converting a double outside int's range is undefined behaviour.
+  if (!(v >= INT_MIN && v <= INT_MAX) || v != std::floor(v))
     throw InputError(where + ": " + names[i] + ": expected an integer, got '" + f[i] + "'");
   return static_cast<int>(v);
 }

@@ -121,6 +121,18 @@ std::string label(const std::vector<int>& labels, int i) {
 
 }  // namespace
 
+obs::EstimateMessage decode_estimate(const netvmo_msg_Estimate& s, std::uint64_t own_digest,
+                                     int self, const std::vector<int>& labels) {
+  if (own_digest != 0 && s.graph != 0 && s.graph != own_digest) {
+    const std::string other = label(labels, s.sender), me = label(labels, self);
+    throw GraphMismatch("camera " + me + " and camera " + other +
+                        ": their network.yaml graphs differ (camera " + other +
+                        "'s message carries another graph digest; every node of a run "
+                        "needs the same network.yaml)");
+  }
+  return from_sample(s);
+}
+
 DdsTransport::DdsTransport(int self, std::vector<int> neighbours, std::vector<int> labels,
                            DdsSettings settings)
     : self_(self),
@@ -185,15 +197,12 @@ void DdsTransport::take_all() {
       if (infos[k].publication_handle == own_writer_handle_) continue;
       const auto& s = *static_cast<const netvmo_msg_Estimate*>(samples[k]);
       ++stats_.received;
-      if (settings_.graph_digest != 0 && s.graph != 0 && s.graph != settings_.graph_digest) {
-        const std::string other = label(labels_, s.sender), me = label(labels_, self_);
+      try {
+        pending_.push_back(decode_estimate(s, settings_.graph_digest, self_, labels_));
+      } catch (const GraphMismatch&) {
         dds_return_loan(reader_, samples, n);
-        throw GraphMismatch("camera " + me + " and camera " + other +
-                            ": their network.yaml graphs differ (camera " + other +
-                            "'s message carries another graph digest; every node of a run "
-                            "needs the same network.yaml)");
+        throw;
       }
-      pending_.push_back(from_sample(s));
     }
     if (n > 0) dds_return_loan(reader_, samples, n);
     if (n < kMaxTake) return;

@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# Runs every libFuzzer target of BUILD_DIR (default build-asan, made by tools/sanitize.sh) for
+# SECONDS_PER_TARGET (default 30), one after the other, starting from the checked-in seed corpus
+# tests/fuzz/corpus/<target>/ and dictionary tests/fuzz/dict/<target>.dict. Fails on any crash,
+# leak, undefined behaviour, timeout (> 10 s per input) or out-of-memory (> 2048 MB): the input
+# that did it is saved in OUT/crashes/ (printed), with the log in OUT/logs/. New inputs found
+# go to OUT/corpus/<target>/ (the seed corpus is not modified). Prints each target's executions.
+# Usage: tools/fuzz.sh [SECONDS_PER_TARGET] [BUILD_DIR] [OUT]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=${1:-30}
+build=${2:-build-asan}
+out=${3:-$build/fuzz-out}
+src=tests/fuzz
+export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_string_checks=1}
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/tools/lsan.supp:print_suppressions=0}
+
+shopt -s nullglob
+targets=("$build"/tests/fuzz/fuzz_*)
+if [ ${#targets[@]} -eq 0 ]; then
+  echo "fuzz.sh: no fuzz targets in $build/tests/fuzz (build with tools/sanitize.sh first)" >&2
+  exit 1
+fi
+mkdir -p "$out/crashes" "$out/logs"
+failed=()
+for bin in "${targets[@]}"; do
+  name=${bin##*/fuzz_}
+  mkdir -p "$out/corpus/$name"
+  dict=()
+  [ -f "$src/dict/$name.dict" ] && dict=(-dict="$src/dict/$name.dict")
+  log="$out/logs/$name.log"
+  t0=$(date +%s)
+  rc=0
+  "$bin" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=16384 \
+    -close_fd_mask=1 -print_final_stats=1 -artifact_prefix="$out/crashes/$name-" "${dict[@]}" \
+    "$out/corpus/$name" "$src/corpus/$name" >"$log" 2>&1 || rc=$?
+  execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+  echo "fuzz.sh: $name: ${execs:-?} executions in $(($(date +%s) - t0)) s, exit $rc"
+  if [ "$rc" -ne 0 ]; then
+    failed+=("$name")
+    grep -E "ERROR|runtime error|SUMMARY|Test unit written" "$log" | head -5 || true
+  fi
+done
+if [ ${#failed[@]} -ne 0 ]; then
+  echo "fuzz.sh: FAILED: ${failed[*]} (inputs in $out/crashes/, logs in $out/logs/)" >&2
+  exit 1
+fi
+echo "fuzz.sh: no failure in ${#targets[@]} targets (${seconds} s each)"
