@@ -76,6 +76,11 @@ CameraObserver::CameraObserver(int index, std::vector<int> neighbours, ObserverS
 
 EstimateMessage CameraObserver::publish(double stamp) {
   EstimateMessage m;
+  publish(m, stamp);
+  return m;
+}
+
+void CameraObserver::publish(EstimateMessage& m, double stamp) {
   m.sender = index_;
   m.round = ++round_;
   m.stamp = stamp;
@@ -84,15 +89,19 @@ EstimateMessage CameraObserver::publish(double stamp) {
   m.g_w = g_wi_ * st_.g_bar;
   const auto k = static_cast<size_t>(estimator_->state_size());
   std::copy(st_.consensus.begin(), st_.consensus.begin() + k, m.state.begin());
-  return m;
 }
 
 MessageVerdict check_pose(const SE3& g) {
   if (!g.matrix().allFinite()) return MessageVerdict::not_finite;
-  const Mat3 R = g.linear();
-  if (!((R.transpose() * R - Mat3::Identity()).cwiseAbs().maxCoeff() <= 1e-6) ||
-      !(R.determinant() > 0.0))
-    return MessageVerdict::not_a_rotation;
+  // |R^T R - I| <= 1e-6 entrywise (the Gram matrix is symmetric: six entries) and det R > 0.
+  const auto& R = g.linear();
+  double worst = 0.0;
+  for (int a = 0; a < 3; ++a)
+    for (int b = a; b < 3; ++b) {
+      const double gram = R(0, a) * R(0, b) + R(1, a) * R(1, b) + R(2, a) * R(2, b);
+      worst = std::max(worst, std::abs(gram - (a == b ? 1.0 : 0.0)));
+    }
+  if (!(worst <= 1e-6) || !(R.determinant() > 0.0)) return MessageVerdict::not_a_rotation;
   return MessageVerdict::accepted;
 }
 
@@ -100,7 +109,7 @@ MessageVerdict CameraObserver::receive(const EstimateMessage& m) {
   const auto it = std::find(neighbours_.begin(), neighbours_.end(), m.sender);
   MessageVerdict v = it == neighbours_.end() ? MessageVerdict::not_a_neighbour : check_pose(m.g_w);
   if (v == MessageVerdict::accepted &&
-      !std::all_of(m.state.begin(), m.state.end(), [](double x) { return std::isfinite(x); }))
+      !Eigen::Map<const Eigen::Matrix<double, kConsensusStateSize, 1>>(m.state.data()).allFinite())
     v = MessageVerdict::not_finite;
   auto* slot = v == MessageVerdict::accepted
                    ? &latest_[static_cast<size_t>(it - neighbours_.begin())]
@@ -113,7 +122,16 @@ MessageVerdict CameraObserver::receive(const EstimateMessage& m) {
     ++refused_[static_cast<size_t>(v)];
     return v;
   }
-  *slot = m;
+  // Stored field by field, the consensus state only as far as the estimator reads it (the
+  // rest of the stored state stays zero): the paper's observer copies no consensus state.
+  auto& kept = slot->has_value() ? **slot : slot->emplace();
+  kept.sender = m.sender;
+  kept.round = m.round;
+  kept.stamp = m.stamp;
+  kept.initialized = m.initialized;
+  kept.incarnation = m.incarnation;
+  kept.g_w = m.g_w;
+  std::copy(m.state.begin(), m.state.begin() + estimator_->state_size(), kept.state.begin());
   return v;
 }
 

@@ -13,18 +13,6 @@ constexpr double kSmallAngle = 1e-4;
 constexpr double kNearPi = 1e-3;
 }  // namespace
 
-Mat3 hat(const Vec3& a) {
-  Mat3 S;
-  S << 0.0, -a.z(), a.y(),  //
-      a.z(), 0.0, -a.x(),   //
-      -a.y(), a.x(), 0.0;
-  return S;
-}
-
-Vec3 vee(const Mat3& S) {
-  return Vec3(S(2, 1) - S(1, 2), S(0, 2) - S(2, 0), S(1, 0) - S(0, 1)) * 0.5;
-}
-
 Mat3 exp_so3(const Vec3& w) {
   const double t2 = w.squaredNorm();
   const double t = std::sqrt(t2);
@@ -104,10 +92,6 @@ Vec6 log_se3(const SE3& g) {
 
 Mat3 sk(const Mat3& R) {
   return (R - R.transpose()) * 0.5;
-}
-
-Vec3 e_R(const Mat3& R) {
-  return vee(R);
 }
 
 Vec6 E_R(const SE3& g) {

@@ -1,7 +1,9 @@
 #include "netvmo/observer/networked_observer.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 namespace netvmo::obs {
 
@@ -10,10 +12,34 @@ NetworkedObserver::NetworkedObserver(Graph graph, ObserverSettings settings)
   if (!graph_.connected())
     throw std::invalid_argument("communication graph is disconnected (Assumption 1); components: " +
                                 describe_components(graph_.components(), {}));
+  if (settings_.threads < 0)
+    throw std::invalid_argument("threads must be >= 0 (0: one per core), not " +
+                                std::to_string(settings_.threads));
   cameras_.reserve(static_cast<size_t>(graph_.size()));
   for (int i = 0; i < graph_.size(); ++i)
     cameras_.emplace_back(i, graph_.neighbors(i), settings_, graph_.size());
-  transport_ = std::make_unique<InProcessTransport>(graph_);
+  outbox_.resize(cameras_.size());
+  const int cores = settings_.threads > 0
+                        ? settings_.threads
+                        : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  const int threads = std::min(cores, std::max(1, graph_.size() / kCamerasPerThread));
+  if (threads > 1) pool_ = std::make_unique<WorkerPool>(threads);
+}
+
+NetworkedObserver::~NetworkedObserver() = default;
+NetworkedObserver::NetworkedObserver(NetworkedObserver&&) noexcept = default;
+NetworkedObserver& NetworkedObserver::operator=(NetworkedObserver&&) noexcept = default;
+
+int NetworkedObserver::threads() const {
+  return pool_ ? pool_->size() : 1;
+}
+
+void NetworkedObserver::for_each_camera(const std::function<void(int)>& f) {
+  const int n = size();
+  if (pool_)
+    pool_->for_each(n, pool_->size(), f);
+  else
+    for (int i = 0; i < n; ++i) f(i);
 }
 
 void NetworkedObserver::check_count(size_t count, const char* what) const {
@@ -50,6 +76,16 @@ std::vector<bool> NetworkedObserver::active() const {
 
 void NetworkedObserver::set_transport(std::unique_ptr<Transport> transport) {
   if (!transport) throw std::invalid_argument("set_transport: no transport");
+  // Direct delivery over the same graph is what the in-process exchange does already.
+  if (const auto* direct = dynamic_cast<const InProcessTransport*>(transport.get())) {
+    bool same = direct->graph().size() == graph_.size();
+    for (int i = 0; same && i < graph_.size(); ++i)
+      same = direct->graph().neighbors(i) == graph_.neighbors(i);
+    if (same) {
+      transport_.reset();
+      return;
+    }
+  }
   transport_ = std::move(transport);
 }
 
@@ -59,18 +95,28 @@ int NetworkedObserver::substeps(double dt) const {
 
 void NetworkedObserver::step(double dt, const std::vector<Measurement>& z) {
   check_count(z.size(), "step: measurements");
-  for (size_t i = 0; i < cameras_.size(); ++i) cameras_[i].set_measurement(z[i]);
+  for_each_camera([&](int i) { camera(i).set_measurement(z[static_cast<size_t>(i)]); });
   const int N = substeps(dt);
   const double h = dt / N;
   for (int k = 0; k < N; ++k) {
     // One exchange round: every camera publishes g_wi g_bar_i, then every camera takes in its
     // neighbours' messages and steps (all on the estimates of the previous sub-step).
+    if (!transport_) {
+      for_each_camera([&](int i) { camera(i).publish(outbox_[static_cast<size_t>(i)]); });
+      for_each_camera([&](int i) {
+        auto& c = camera(i);
+        // In neighbour order, as InProcessTransport delivers them.
+        for (int j : graph_.neighbors(i)) c.receive(outbox_[static_cast<size_t>(j)]);
+        c.step(h);  // (eq:EsRRBM) with (eq:input_f-)
+      });
+      continue;
+    }
     for (auto& c : cameras_) transport_->send(c.publish());
     for (auto& c : cameras_) {
       transport_->receive(c.index(), inbox_);
       for (const auto& m : inbox_) c.receive(m);
     }
-    for (auto& c : cameras_) c.step(h);  // (eq:EsRRBM) with (eq:input_f-)
+    for_each_camera([&](int i) { camera(i).step(h); });  // (eq:EsRRBM) with (eq:input_f-)
   }
 }
 

@@ -1,6 +1,7 @@
 // One networked-observer frame (all sub-steps) for n = 5 ... 10,000 cameras on ring-with-chords
-// graphs (every node has degree 4, so the sub-step count is the same for every n). The
-// reported complexity is fitted against n + |E|.
+// graphs (every node has degree 4, so the sub-step count is the same for every n), on 1 and 2
+// threads (ObserverSettings::threads; fewer when n < 2 x kCamerasPerThread, see the counter). The
+// reported complexity is fitted against n + |E|, per thread count.
 #include <benchmark/benchmark.h>
 
 #include "netvmo/observer/networked_observer.hpp"
@@ -23,6 +24,7 @@ void BM_ObserverFrame(benchmark::State& state, const char* error_model) {
   const Graph g = ring_with_chords(n);
   ObserverSettings s;  // k_e = 1, k_s = 50
   s.error_model = error_model;
+  s.threads = static_cast<int>(state.range(1));
   NetworkedObserver obs(g, s);
   std::vector<SE3> g_wi(static_cast<size_t>(n)), g_bar(static_cast<size_t>(n));
   std::vector<Measurement> z(static_cast<size_t>(n));
@@ -50,23 +52,29 @@ void BM_ObserverFrame(benchmark::State& state, const char* error_model) {
   state.SetComplexityN(work);
   state.counters["cameras"] = n;
   state.counters["substeps"] = obs.substeps(dt);
+  state.counters["threads"] = obs.threads();
   state.counters["ns_per_(n+|E|)"] =
       benchmark::Counter(static_cast<double>(work), benchmark::Counter::kIsIterationInvariantRate |
                                                         benchmark::Counter::kInvert);
   state.SetItemsProcessed(state.iterations() * work);
 }
 // n = 5 ... 10,000 cameras, the complexity fitted against n + |E|.
-void sizes(benchmark::internal::Benchmark* b) {
-  b->Arg(5)
-      ->Arg(100)
-      ->Arg(1000)
-      ->Arg(10000)
-      ->Unit(benchmark::kMicrosecond)
-      ->Complexity(benchmark::oN);
+void sizes(benchmark::internal::Benchmark* b, int threads) {
+  b->ArgNames({"n", "threads"});
+  for (int n : {5, 100, 1000, 10000}) b->Args({n, threads});
+  b->Unit(benchmark::kMicrosecond)->UseRealTime()->Complexity(benchmark::oN);
+}
+void one_thread(benchmark::internal::Benchmark* b) {
+  sizes(b, 1);
+}
+void two_threads(benchmark::internal::Benchmark* b) {
+  sizes(b, 2);
 }
 }  // namespace
 
-BENCHMARK_CAPTURE(BM_ObserverFrame, pose_error, "exact")->Apply(sizes);
-BENCHMARK_CAPTURE(BM_ObserverFrame, feature_error, "jacobian")->Apply(sizes);
+BENCHMARK_CAPTURE(BM_ObserverFrame, pose_error, "exact")->Apply(one_thread);
+BENCHMARK_CAPTURE(BM_ObserverFrame, pose_error, "exact")->Apply(two_threads);
+BENCHMARK_CAPTURE(BM_ObserverFrame, feature_error, "jacobian")->Apply(one_thread);
+BENCHMARK_CAPTURE(BM_ObserverFrame, feature_error, "jacobian")->Apply(two_threads);
 
 BENCHMARK_MAIN();

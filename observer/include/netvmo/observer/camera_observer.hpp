@@ -50,7 +50,15 @@ struct ObserverSettings {
   /// zero-offset: the output is held while the camera's estimate x_delta,i of the fraction of
   /// cameras that see the target is below this; 0 = 1/(2n), half the smallest non-zero fraction.
   double hold_threshold = 0.0;
+  /// NetworkedObserver: threads that run the per-camera steps, the calling thread included;
+  /// 0 = one per core (std::thread::hardware_concurrency()). Results are bit-identical for any
+  /// count. A network uses at most one thread per kCamerasPerThread cameras (below that a
+  /// sub-step's synchronisation costs more than the thread saves).
+  int threads = 0;
 };
+
+/// The fewest cameras per thread of NetworkedObserver (ObserverSettings::threads).
+constexpr int kCamerasPerThread = 256;
 
 /// What a camera publishes to its neighbours once per exchange round.
 struct EstimateMessage {
@@ -131,12 +139,16 @@ class CameraObserver {
 
   /// This round's message: the estimate in the world frame, g_wi g_bar_i. Advances the round.
   EstimateMessage publish(double stamp = 0.0);
+  /// The same message written into `out`, whose consensus state beyond the estimator's
+  /// state_size() is left as it is (zero in a message that only this camera writes).
+  void publish(EstimateMessage& out, double stamp = 0.0);
   /// Stores a neighbour's message as its latest estimate, after checking it (MessageVerdict).
   MessageVerdict receive(const EstimateMessage& m);
   /// Forgets neighbour j's estimate (e.g. silent past a staleness bound): it leaves the mutual
   /// term until it is heard again. No effect when j is not a neighbour.
   void forget(int j);
-  /// The latest accepted message of each neighbour, in neighbours() order (empty if none).
+  /// The latest accepted message of each neighbour, in neighbours() order (empty if none), its
+  /// consensus state kept as far as the estimator reads it (state_size(); the rest zero).
   const std::vector<std::optional<EstimateMessage>>& latest() const { return latest_; }
   /// Messages refused so far, by verdict (index = MessageVerdict value).
   const std::vector<std::uint64_t>& refused() const { return refused_; }

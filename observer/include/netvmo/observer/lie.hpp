@@ -20,9 +20,17 @@ using Mat4 = Eigen::Matrix4d;
 using SE3 = Eigen::Isometry3d;
 
 /// a^ such that hat(a) * b = a x b.
-Mat3 hat(const Vec3& a);
+inline Mat3 hat(const Vec3& a) {
+  Mat3 S;
+  S << 0.0, -a.z(), a.y(),  //
+      a.z(), 0.0, -a.x(),   //
+      -a.y(), a.x(), 0.0;
+  return S;
+}
 /// Inverse of hat for a skew-symmetric matrix (reads the skew part only).
-Vec3 vee(const Mat3& S);
+inline Vec3 vee(const Mat3& S) {
+  return Vec3(S(2, 1) - S(1, 2), S(0, 2) - S(2, 0), S(1, 0) - S(0, 1)) * 0.5;
+}
 
 /// Rodrigues' formula e^{hat(w)}; exact Taylor branch near w = 0.
 Mat3 exp_so3(const Vec3& w);
@@ -46,7 +54,9 @@ Vec6 log_se3(const SE3& g);
 /// sk(R) = (R - R^T) / 2 (eq:ER).
 Mat3 sk(const Mat3& R);
 /// e_R(R) = sk(R)^vee (eq:ER); equals xi*sin(theta) for R = e^{hat(xi) theta}.
-Vec3 e_R(const Mat3& R);
+inline Vec3 e_R(const Mat3& R) {
+  return vee(R);
+}
 /// E_R(g) = [p; e_R(R)] (eq:ER).
 Vec6 E_R(const SE3& g);
 

@@ -12,14 +12,23 @@
 // so h (k_e + 2 k_s d_max) < 2 is stable and h (k_e + 2 k_s d_max) <= 1 is stable and
 // non-oscillating. By default N is the smallest count with h (k_e + 2 k_s d_max) <= step_factor
 // (= 1): k_e = 1, k_s = 50, d_max = 3 at 30 frames/s gives N = 11.
+//
+// Cost and threads. A sub-step is O(n + |E|): with the in-process exchange every camera publishes
+// into its slot of an outbox, then every camera reads its neighbours' slots and steps. Both
+// phases run over ObserverSettings::threads threads (contiguous blocks of cameras, each camera
+// writing only its own state), so the results are bit-identical for any thread count. Another
+// transport (set_transport) is called from the calling thread only; the steps still run on the
+// threads.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <vector>
 
 #include "netvmo/observer/camera_observer.hpp"
 #include "netvmo/observer/graph.hpp"
 #include "netvmo/observer/transport.hpp"
+#include "netvmo/observer/worker_pool.hpp"
 
 namespace netvmo::obs {
 
@@ -28,6 +37,9 @@ class NetworkedObserver {
   /// Throws std::invalid_argument if the graph is disconnected (Assumption 1), a gain is
   /// negative or the error model is unknown. Exchanges in process until set_transport().
   NetworkedObserver(Graph graph, ObserverSettings settings);
+  ~NetworkedObserver();
+  NetworkedObserver(NetworkedObserver&&) noexcept;
+  NetworkedObserver& operator=(NetworkedObserver&&) noexcept;
 
   int size() const { return graph_.size(); }
   const Graph& graph() const { return graph_; }
@@ -45,12 +57,16 @@ class NetworkedObserver {
   /// Cameras that take part (CameraObserver::set_initialized). Default: all.
   void set_active(const std::vector<bool>& active);
   std::vector<bool> active() const;
-  /// Replaces the in-process exchange.
+  /// Replaces the in-process exchange (an InProcessTransport of the same graph keeps it).
   void set_transport(std::unique_ptr<Transport> transport);
+  /// Threads that run the per-camera steps (1: the calling thread only).
+  int threads() const;
 
   /// Sub-steps used for a frame of length dt.
   int substeps(double dt) const;
-  /// Advances all estimates by dt with z held over the frame; z.size() == size().
+  /// Advances all estimates by dt with z held over the frame; z.size() == size(). When a camera
+  /// throws (the error model's std::domain_error) the exception of the smallest camera index
+  /// is rethrown after the sub-step; the estimates are then unspecified.
   void step(double dt, const std::vector<Measurement>& z);
 
   std::vector<SE3> estimates() const;
@@ -61,12 +77,16 @@ class NetworkedObserver {
 
  private:
   void check_count(size_t count, const char* what) const;
+  /// f(i) for every camera i, on the pool's threads when there is one.
+  void for_each_camera(const std::function<void(int)>& f);
 
   Graph graph_;
   ObserverSettings settings_;
   std::vector<CameraObserver> cameras_;
-  std::unique_ptr<Transport> transport_;
+  std::unique_ptr<Transport> transport_;  ///< null: the in-process exchange through outbox_
+  std::vector<EstimateMessage> outbox_;   ///< in process: each camera's message of the round
   std::vector<EstimateMessage> inbox_;
+  std::unique_ptr<WorkerPool> pool_;  ///< null: every step on the calling thread
 };
 
 }  // namespace netvmo::obs

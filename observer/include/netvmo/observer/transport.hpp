@@ -31,6 +31,7 @@ class Transport {
 class InProcessTransport final : public Transport {
  public:
   explicit InProcessTransport(Graph graph);
+  const Graph& graph() const { return graph_; }
   void send(const EstimateMessage& m) override;
   void receive(int receiver, std::vector<EstimateMessage>& out) override;
 
