@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Final error to g* of `netvmo launch --mode async` against injected loss and delay, on a rendered
-# dataset, with the gains of the async test (k_e = 10, k_s = 100) at --speed 0.25 (a delay of
-# D ms wall is D/4 ms of camera time). Writes OUT/sweep.dat (loss, delay_ms, worst camera's final
+# dataset, by default with the gains of the async test (k_e = 10, k_s = 100; KE=... KS=... to
+# change them) at --speed 0.25 (a delay of D ms wall is D/4 ms of camera time). Writes OUT/sweep.dat (loss, delay_ms, worst camera's final
 # position error [mm] and orientation error [deg], converged 1/0 against 1 cm / 1 deg) and draws
 # OUT/sweep.png with gnuplot (pngcairo). Every launch is bounded (--timeout 60, and `timeout`);
 # the Cyclone configuration is launch's own, loopback only. Not run by CI.
@@ -26,11 +26,13 @@ r = max(c["networked"]["vs_g_star"]["final_orientation_deg"] for c in s["cameras
 print(f"{1000 * p:.2f} {r:.3f}")
 PY
 }
-common=(--mode async --speed 0.25 --ke 10 --ks 100 --no-overlays --no-plots --timeout 60
+ke=${KE:-10}
+ks=${KS:-100}
+common=(--mode async --speed 0.25 --ke "$ke" --ks "$ks" --no-overlays --no-plots --timeout 60
         --stale "${STALE:-0.25}" --seed 7)
 dat="$out/sweep.dat"
 echo "# loss delay_ms position_mm orientation_deg converged" > "$dat"
-timeout 120 "$build/netvmo" launch "$out/ds" --out "$out/lockstep" --ke 10 --ks 100 \
+timeout 120 "$build/netvmo" launch "$out/ds" --out "$out/lockstep" --ke "$ke" --ks "$ks" \
   --no-overlays --no-plots --timeout 60 > /dev/null
 echo "# lock-step: $(worst "$out/lockstep/summary.json")" >> "$dat"
 for loss in ${LOSSES:-0 0.1 0.3 0.5}; do

@@ -5,7 +5,10 @@
 # leak, undefined behaviour, timeout (> 10 s per input) or out-of-memory (> 2048 MB): the input
 # that did it is saved in OUT/crashes/ (printed), with the log in OUT/logs/. New inputs found
 # go to OUT/corpus/<target>/ (the seed corpus is not modified). Prints each target's executions.
-# Usage: tools/fuzz.sh [SECONDS_PER_TARGET] [BUILD_DIR] [OUT]
+# With FUZZ_SEED set, every target starts from that libFuzzer seed, so a run repeats the same
+# inputs (CI sets it: a bounded CI run checks a known sequence and never fails on a finding that a
+# longer run has not made first; fuzz longer without it to explore).
+# Usage: [FUZZ_SEED=N] tools/fuzz.sh [SECONDS_PER_TARGET] [BUILD_DIR] [OUT]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-30}
@@ -28,12 +31,14 @@ for bin in "${targets[@]}"; do
   name=${bin##*/fuzz_}
   mkdir -p "$out/corpus/$name"
   dict=()
+  seed=()
+  [ -n "${FUZZ_SEED:-}" ] && seed=(-seed="$FUZZ_SEED")
   [ -f "$src/dict/$name.dict" ] && dict=(-dict="$src/dict/$name.dict")
   log="$out/logs/$name.log"
   t0=$(date +%s)
   rc=0
   "$bin" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=16384 \
-    -close_fd_mask=1 -print_final_stats=1 -artifact_prefix="$out/crashes/$name-" "${dict[@]}" \
+    -close_fd_mask=1 -print_final_stats=1 -artifact_prefix="$out/crashes/$name-" "${dict[@]}" "${seed[@]}" \
     "$out/corpus/$name" "$src/corpus/$name" >"$log" 2>&1 || rc=$?
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
   echo "fuzz.sh: $name: ${execs:-?} executions in $(($(date +%s) - t0)) s, exit $rc"

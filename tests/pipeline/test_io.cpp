@@ -88,6 +88,14 @@ TEST(Calibration, OpenCvMatrixSizeCheckedBeforeReading) {
                             "%YAML:1.0\n---\nimage_width: 640\n");
   expect_input_error([&] { load_calibration_opencv(dir / "d.yaml"); },
                      {"d.yaml", "not a text file"});
+  // corpus calibration_opencv/document_marker_hang: OpenCV's parser did not return on a
+  // document marker followed by text and a later line ending in "---" (both forms).
+  write(dir / "e.yaml", "%YAML:1.0\n-----mage_width: v40\nim---\nimage_width: 640\n");
+  expect_input_error([&] { load_calibration_opencv(dir / "e.yaml"); },
+                     {"e.yaml:2", "'---' must stand alone"});
+  write(dir / "f.yaml", "%YAML:1.0\n--- a: v\nb---\n");
+  expect_input_error([&] { load_calibration_opencv(dir / "f.yaml"); },
+                     {"f.yaml:2", "'---' must stand alone"});
 }
 
 TEST(Calibration, VispXml) {

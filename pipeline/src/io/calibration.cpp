@@ -3,6 +3,7 @@
 #include <visp3/core/vpCameraParameters.h>
 #include <visp3/core/vpException.h>
 #include <visp3/core/vpXmlParserCamera.h>
+#include <algorithm>
 #include <fstream>
 #include <iterator>
 #include <opencv2/calib3d.hpp>
@@ -57,6 +58,17 @@ Calibration load_calibration_opencv(const fs::path& path) {
     const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     if (text.find('\0') != std::string::npos)
       throw InputError(file + ": not a text file (it contains a NUL byte)");
+    // It also loops for ever on a YAML document marker with text after it ("--- a: 1" or
+    // "-----a: 1", then a later line ending in "---"; found by fuzzing). OpenCV writes the marker
+    // alone on its line, so only that form is accepted.
+    size_t line_no = 1;
+    for (size_t at = 0; at < text.size(); ++line_no) {
+      const size_t end = std::min(text.find('\n', at), text.size());
+      if (text.compare(at, 3, "---") == 0 && text.find_first_not_of(" \t\r", at + 3) < end)
+        throw InputError(file + ":" + std::to_string(line_no) +
+                         ": a YAML document marker '---' must stand alone on its line");
+      at = end + 1;
+    }
   }
   Calibration c;
   c.source = file;
