@@ -39,9 +39,13 @@ struct CliResult {
 };
 
 /// Runs `netvmo ARGS` from the build folder, capturing stdout and stderr in files under `scratch`.
-inline CliResult run_netvmo(const std::string& args, const std::filesystem::path& scratch) {
+/// The process is killed after `seconds` (SIGTERM, then SIGKILL 5 s later): no test waits for
+/// ever on a child.
+inline CliResult run_netvmo(const std::string& args, const std::filesystem::path& scratch,
+                            int seconds = 600) {
   const auto out = scratch / "stdout.txt", err = scratch / "stderr.txt";
-  const std::string cmd = std::string(NETVMO_BINARY_DIR) + "/netvmo " + args + " > " +
+  const std::string cmd = "timeout -k 5 " + std::to_string(seconds) + " " +
+                          std::string(NETVMO_BINARY_DIR) + "/netvmo " + args + " > " +
                           out.string() + " 2> " + err.string();
   const int status = std::system(cmd.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};

@@ -43,12 +43,7 @@ inline std::vector<net::ChildResult> run_all(const std::vector<std::vector<std::
 /// `netvmo ARGS` from the build folder, killed after `seconds` (and 5 s later for good).
 inline test::CliResult netvmo_bounded(const std::string& args, const std::filesystem::path& scratch,
                                       int seconds) {
-  const auto out = scratch / "stdout.txt", err = scratch / "stderr.txt";
-  const std::string cmd = "timeout -k 5 " + std::to_string(seconds) + " " +
-                          std::string(NETVMO_BINARY_DIR) + "/netvmo " + args + " > " +
-                          out.string() + " 2> " + err.string();
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, test::slurp(out), test::slurp(err)};
+  return test::run_netvmo(args, scratch, seconds);
 }
 
 /// A CSV file's rows (header included), cells as text (a trailing empty cell kept).
