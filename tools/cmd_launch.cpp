@@ -12,6 +12,7 @@
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/io/output_dir.hpp"
 #include "netvmo/pipeline/net/cyclone_config.hpp"
 #include "netvmo/pipeline/net/node.hpp"
 #include "netvmo/pipeline/net/process.hpp"
@@ -73,7 +74,10 @@ void add_launch(CLI::App& app, int& exit_code) {
       "Writes OUT/cyclonedds.xml (loopback only), starts one `netvmo node` per camera\n"
       "(lock-step by default), and merges their outputs into exactly those of `netvmo run`:\n"
       "OUT/estimates.csv, energies.csv, errors.csv, summary.json, plots and overlays/, plus\n"
-      "OUT/nodes/ (per-node CSV, statistics and log) and OUT/messages.json.");
+      "OUT/nodes/ (per node: node_<id>.log and the node's folder node_<id>/) and\n"
+      "OUT/messages.json. OUT is built in OUT.partial-<pid> and swapped into place at the end\n"
+      "(a killed launch leaves the previous OUT intact), locked by OUT.lock; when a node fails\n"
+      "the unfinished folder is kept as OUT.failed/ for its logs.");
   cmd->add_option("DATASET", o->dataset, "Dataset folder")->required();
   cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
   cmd->add_option("--domain", o->domain,
@@ -90,21 +94,25 @@ void add_launch(CLI::App& app, int& exit_code) {
   cmd->add_option("--restart-after", o->restart_after,
                   "async: restart the killed node this many seconds later (it joins at the "
                   "current frame, with a new incarnation)")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--timeout", o->timeout, "Stop every node and fail after this many seconds")
+      ->check(CLI::Range(0.0, 3600.0));
+  cmd->add_option("--timeout", o->timeout,
+                  "Stop every node and fail after this many seconds (at most a day)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(0.001, 86400.0));
   cmd->add_option("--node-timeout", o->node_timeout,
-                  "A node fails when a neighbour is silent this long [s] in a round")
+                  "A node fails when a neighbour is silent this long [s] in a round (at most an "
+                  "hour)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(0.001, 3600.0));
   add_run_options(*cmd, o->run, /*in_process_transport=*/false);
   cmd->callback([o, &exit_code] {
     exit_code = guarded("launch", [&] {
       const auto options = to_image_run_options(o->run);
-      auto provider = sources::open_dataset_source(o->dataset);
+      auto provider = sources::open_dataset_source(o->dataset, {}, options.keep_going);
       const auto& netcfg = provider->network();
       for (const auto& w : provider->warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
+      run::checked_rounds(1.0 / netcfg.fps, options.runner.k_e, options.runner.k_s,
+                          run::network_graph(netcfg).max_degree(), options.runner.rounds);
       int frames = provider->frame_count();
       if (options.max_frames) frames = std::min(frames, *options.max_frames);
 
@@ -135,7 +143,9 @@ void add_launch(CLI::App& app, int& exit_code) {
         throw InputError("--restart-after needs --kill ID@T");
       }
 
-      const fs::path dir = o->out, nodes = dir / "nodes";
+      io::check_output_apart(o->out, o->dataset);
+      io::OutputDir out(o->out, "launch");
+      const fs::path dir = out.path(), nodes = dir / "nodes";
       io::ensure_directory(nodes);
       const int domain = o->domain >= 0 ? o->domain : net::domain_from_pid(::getpid());
       net::write_loopback_config(dir / "cyclonedds.xml");
@@ -167,7 +177,7 @@ void add_launch(CLI::App& app, int& exit_code) {
                                          "--camera",
                                          std::to_string(c.id),
                                          "--out",
-                                         nodes.string(),
+                                         (nodes / ("node_" + std::to_string(c.id))).string(),
                                          "--domain",
                                          std::to_string(domain),
                                          "--frames",
@@ -183,8 +193,6 @@ void add_launch(CLI::App& app, int& exit_code) {
                 std::to_string(o->seed), std::string("--start-at"), num(start_at)})
             argv.push_back(a);
         const fs::path log = nodes / ("node_" + std::to_string(c.id) + ".log");
-        fs::remove(log);
-        fs::remove(nodes / ("node_" + std::to_string(c.id) + ".csv"));
         if (have_plan && pids.size() == plan.index) {
           plan.argv = argv;
           plan.log = log;
@@ -203,25 +211,29 @@ void add_launch(CLI::App& app, int& exit_code) {
           stopped.push_back(id);
           continue;
         }
-        const fs::path log = nodes / ("node_" + std::to_string(id) + ".log");
+        const std::string log = "node_" + std::to_string(id) + ".log";
+        const fs::path kept = fs::path(o->out + ".failed") / "nodes" / log;  // see keep_failed
         std::fprintf(stderr, "netvmo launch: node of camera %d failed (%s): %s [%s]\n", id,
-                     net::describe(res[i]).c_str(), last_line(log).c_str(), log.string().c_str());
+                     net::describe(res[i]).c_str(), last_line(nodes / log).c_str(),
+                     kept.string().c_str());
         failed = true;
       }
-      if (failed) throw std::runtime_error("a node failed; see " + nodes.string());
+      // The logs of a failed launch are kept in OUT.failed/; OUT is untouched.
+      if (failed)
+        throw std::runtime_error("a node failed; see " + (out.keep_failed() / "nodes").string());
       if (!stopped.empty()) {
         std::string ids;
         for (int id : stopped) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
         throw std::runtime_error("timeout after " + num(o->timeout) +
                                  " s: stopped the nodes of cameras " + ids + "; see " +
-                                 nodes.string());
+                                 (out.keep_failed() / "nodes").string());
       }
 
       // Merge: the same result structure as run_images, then the same writers as `netvmo run`.
       auto result = net::merge_nodes(*provider, options, nodes, frames, async);
       json messages = json::object();
       for (const auto& c : netcfg.cameras) {
-        const fs::path f = nodes / ("node_" + std::to_string(c.id) + ".json");
+        const fs::path f = net::node_file(nodes, c.id, ".json");
         if (async && !fs::exists(f)) {  // killed and not restarted: it never finished
           messages[std::to_string(c.id)] = nullptr;
           continue;
@@ -278,7 +290,8 @@ void add_launch(CLI::App& app, int& exit_code) {
                     m["dropped"].get<unsigned long long>(), m["late"].get<unsigned long long>(),
                     foreign, rejected);
       }
-      print_run_summary(s, dir);
+      out.commit();
+      print_run_summary(s, o->out);
       return 0;
     });
   });

@@ -7,6 +7,7 @@
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/io/output_dir.hpp"
 #include "netvmo/pipeline/net/cyclone_config.hpp"
 #include "netvmo/pipeline/net/node.hpp"
 #include "run_options.hpp"
@@ -15,21 +16,24 @@ namespace netvmo::tools {
 
 void add_async_options(CLI::App& cmd, double& speed, double& stale, double& drop, double& delay,
                        std::uint64_t& seed) {
-  cmd.add_option("--speed", speed, "async: camera time per wall time (1 = real time)")
+  cmd.add_option("--speed", speed,
+                 "async: camera time per wall time (1 = real time; 0.01 to 100: slower than "
+                 "0.01 a 10 s recording takes over 15 minutes)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(0.01, 100.0));
   cmd.add_option("--stale", stale,
                  "async: staleness bound [s of camera time]; a neighbour's estimate older than "
-                 "this leaves the mutual term until it is heard again")
+                 "this leaves the mutual term until it is heard again (at most 3600)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1e-6, 3600.0));
   cmd.add_option("--drop", drop, "async: probability that a received message is dropped")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
   cmd.add_option("--delay", delay,
-                 "async: every received message reaches the observer this late [ms]")
+                 "async: every received message reaches the observer this late [ms]; at most "
+                 "10000 (delayed messages are held in memory: ~3,000 a second for 5 cameras)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0.0, 10000.0));
   cmd.add_option("--seed", seed, "Seed of the injected drops (combined with the camera id)")
       ->capture_default_str();
 }
@@ -49,10 +53,13 @@ void add_node(CLI::App& app, int& exit_code) {
       "Reads network.yaml and the camera's own calibration and frames. Writes OUT/node_<id>.csv\n"
       "(per frame: detection, PnP pose, networked and independent estimates, %.17g) and\n"
       "OUT/node_<id>.json (message statistics). Without CYCLONEDDS_URI it writes and uses the\n"
-      "loopback-only configuration OUT/cyclonedds.xml.");
+      "loopback-only configuration OUT/cyclonedds.xml. OUT is this node's own folder, built in\n"
+      "OUT.partial-<pid> and swapped into place when the node ends (a killed node leaves the\n"
+      "previous OUT intact), locked by OUT.lock.");
   cmd->add_option("DATASET", o->dataset, "Dataset folder")->required();
   cmd->add_option("--camera", o->camera, "This node's camera id (network.yaml)")->required();
-  cmd->add_option("--out", o->out, "Output directory")->required();
+  cmd->add_option("--out", o->out, "This node's output folder (launch: OUT/nodes/node_<id>)")
+      ->required();
   cmd->add_option("--mode", o->mode,
                   "Exchange: lockstep (wait for every neighbour's message of each round: the "
                   "in-process algorithm) or async (paced on the camera's timestamps, latest value "
@@ -72,19 +79,21 @@ void add_node(CLI::App& app, int& exit_code) {
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--timeout", o->timeout,
-                  "Longest wait [s] for a neighbour's message of a round before failing")
+                  "Longest wait [s] for a neighbour's message of a round before failing (at most "
+                  "an hour)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(0.001, 3600.0));
   add_run_options(*cmd, o->run, /*in_process_transport=*/false);
   cmd->callback([o, &exit_code] {
     exit_code = guarded("node", [&] {
-      if (!std::getenv("CYCLONEDDS_URI")) {
-        io::ensure_directory(o->out);
-        net::write_loopback_config(std::filesystem::path(o->out) / "cyclonedds.xml");
-        net::use_config(std::filesystem::path(o->out) / "cyclonedds.xml");
-      }
       net::NodeOptions no;
       no.run = to_image_run_options(o->run);
+      io::check_output_apart(o->out, o->dataset);
+      io::OutputDir out(o->out, "node");
+      if (!std::getenv("CYCLONEDDS_URI")) {
+        net::write_loopback_config(out.path() / "cyclonedds.xml");
+        net::use_config(out.path() / "cyclonedds.xml");
+      }
       no.run.progress = false;
       no.camera_id = o->camera;
       no.dds.domain = o->domain;
@@ -100,7 +109,8 @@ void add_node(CLI::App& app, int& exit_code) {
       std::printf("netvmo node: camera %d, DDS domain %d, %s, config %s\n", o->camera, o->domain,
                   o->mode.c_str(), std::getenv("CYCLONEDDS_URI"));
       std::fflush(stdout);
-      const auto s = net::run_node(o->dataset, o->out, no);
+      const auto s = net::run_node(o->dataset, out.path(), no);
+      out.commit();
       std::printf(
           "netvmo node: camera %d done: %d frames, %d rounds/frame, %llu sent, %llu received, "
           "%llu late, %llu from non-neighbours, %llu dropped, %llu forgotten, %.2f s\n",

@@ -38,10 +38,13 @@ struct CliResult {
   std::string out, err;
 };
 
-/// Runs `netvmo ARGS` from the build folder, capturing stdout and stderr in files under `scratch`.
-inline CliResult run_netvmo(const std::string& args, const std::filesystem::path& scratch) {
+/// Runs `netvmo ARGS` from the build folder, capturing stdout and stderr in files under `scratch`;
+/// killed after `seconds` (SIGTERM, SIGKILL 5 s later), which gives exit code 124 or -1.
+inline CliResult run_netvmo(const std::string& args, const std::filesystem::path& scratch,
+                            int seconds = 300) {
   const auto out = scratch / "stdout.txt", err = scratch / "stderr.txt";
-  const std::string cmd = std::string(NETVMO_BINARY_DIR) + "/netvmo " + args + " > " +
+  const std::string cmd = "timeout -k 5 " + std::to_string(seconds) + " " +
+                          std::string(NETVMO_BINARY_DIR) + "/netvmo " + args + " > " +
                           out.string() + " 2> " + err.string();
   const int status = std::system(cmd.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};

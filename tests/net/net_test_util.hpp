@@ -38,15 +38,10 @@ inline std::vector<net::ChildResult> run_all(const std::vector<std::vector<std::
   return net::supervise(pids, timeout_s, true);
 }
 
-/// `netvmo ARGS` from the build folder, killed after `seconds` (and 5 s later for good).
+/// `netvmo ARGS` from the build folder, killed after `seconds` (test::run_netvmo).
 inline test::CliResult netvmo_bounded(const std::string& args, const std::filesystem::path& scratch,
                                       int seconds) {
-  const auto out = scratch / "stdout.txt", err = scratch / "stderr.txt";
-  const std::string cmd = "timeout -k 5 " + std::to_string(seconds) + " " +
-                          std::string(NETVMO_BINARY_DIR) + "/netvmo " + args + " > " +
-                          out.string() + " 2> " + err.string();
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, test::slurp(out), test::slurp(err)};
+  return test::run_netvmo(args, scratch, seconds);
 }
 
 inline nlohmann::json read_json(const std::filesystem::path& f) {

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "net_test_util.hpp"
+#include "netvmo/pipeline/net/node.hpp"
 
 using namespace netvmo;
 namespace fs = std::filesystem;
@@ -72,7 +73,8 @@ TEST(Async, NodesConvergeWithDropsDelaysAndARestartedNode) {
         common + first + " --kill 3@1 --restart-after 0 --out " + (dir / "c").string(), dir, 90);
     ASSERT_EQ(c.code, 0) << c.out << c.err;
     expect_converged(net_test::read_json(dir / "c" / "summary.json"), "kill and restart");
-    EXPECT_GT(net_test::read_json(dir / "c" / "nodes" / "node_3.json")["first_frame"].get<int>(),
+    EXPECT_GT(net_test::read_json(net::node_file(dir / "c" / "nodes", 3, ".json"))["first_frame"]
+                  .get<int>(),
               0);
     const auto m = net_test::read_json(dir / "c" / "messages.json");
     for (const auto& [id, s] : m.items())
@@ -101,8 +103,8 @@ TEST(Async, NodesConvergeWithDropsDelaysAndARestartedNode) {
     // The effective graph each node logged: camera 3 is in camera 1's mutual term before the
     // kill and out of it at the last frame (forgotten); camera 5 keeps both its neighbours.
     auto links = [&](int camera) {
-      std::istringstream in(netvmo::test::slurp(dir / "d" / "nodes" /
-                                                ("node_" + std::to_string(camera) + "_links.csv")));
+      std::istringstream in(
+          netvmo::test::slurp(net::node_file(dir / "d" / "nodes", camera, "_links.csv")));
       std::vector<std::string> sets;  // the neighbours field of every frame
       std::string l;
       std::getline(in, l);  // header

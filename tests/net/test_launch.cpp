@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "net_test_util.hpp"
+#include "netvmo/pipeline/net/node.hpp"
 #include "netvmo/pipeline/run/image_run.hpp"
 #include "netvmo/pipeline/sources/network_source.hpp"
 #include "test_util.hpp"
@@ -151,7 +152,7 @@ TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
   double worst = 0.0;
   const auto& cams = provider->network().cameras;
   for (size_t i = 0; i < cams.size(); ++i) {
-    const auto rows = read_csv(launch / "nodes" / ("node_" + std::to_string(cams[i].id) + ".csv"));
+    const auto rows = read_csv(net::node_file(launch / "nodes", cams[i].id, ".csv"));
     ASSERT_EQ(rows.size(), static_cast<size_t>(kFrames + 1));
     for (int k = 0; k < kFrames; ++k) {
       const auto& row = rows[static_cast<size_t>(k + 1)];
@@ -173,7 +174,7 @@ TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
   // first ones may go out before the subscriber is discovered).
   {
     std::ifstream in(*dir_ / "ros.txt");
-    const auto rows = read_csv(launch / "nodes" / "node_1.csv");
+    const auto rows = read_csv(net::node_file(launch / "nodes", 1, ".csv"));
     int count = 0;
     std::string frame_id;
     long sec = 0;

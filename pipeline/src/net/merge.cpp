@@ -110,8 +110,7 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
   const obs::Graph graph = run::network_graph(net);
   std::vector<std::vector<Row>> rows;
   for (const auto& c : net.cameras)
-    rows.push_back(
-        read_node_csv(nodes_dir / ("node_" + std::to_string(c.id) + ".csv"), frames, allow_gaps));
+    rows.push_back(read_node_csv(node_file(nodes_dir, c.id, ".csv"), frames, allow_gaps));
 
   run::RunnerSettings rs = options.runner;
   rs.tag_size = net.target.size;

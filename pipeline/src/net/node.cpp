@@ -77,11 +77,16 @@ void sleep_until_epoch(double t) {
 
 }  // namespace
 
+fs::path node_file(const fs::path& nodes_dir, int camera_id, const std::string& suffix) {
+  const std::string stem = "node_" + std::to_string(camera_id);
+  return nodes_dir / stem / (stem + suffix);
+}
+
 NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const NodeOptions& o) {
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
   const double started = now_epoch();  // a node started after the common start joins late
-  auto provider = sources::open_dataset_source(dataset, o.camera_id);
+  auto provider = sources::open_dataset_source(dataset, o.camera_id, o.run.keep_going);
   const io::NetworkConfig& netcfg = provider->network();
   const int self = netcfg.index_of(o.camera_id);
   if (self < 0)
@@ -108,6 +113,8 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   net.set_incarnation(incarnation);
   const double dt = 1.0 / netcfg.fps;
   // Sub-steps as NetworkedObserver::substeps: the independent baseline (k_s = 0) needs fewer.
+  run::checked_rounds(dt, o.run.runner.k_e, o.run.runner.k_s, graph.max_degree(),
+                      o.run.runner.rounds);
   const int N = obs::frame_substeps(dt, net.settings(), graph.max_degree());
   const int N_ind = obs::frame_substeps(dt, ind.settings(), graph.max_degree());
   const double h = dt / N, h_ind = dt / N_ind;

@@ -27,6 +27,22 @@ std::string list_frames(const std::vector<int>& v) {
   return s;
 }
 
+// A camera whose stream could not be opened (with keep_going): blind at every frame.
+class UnreadableStream : public CameraStream {
+ public:
+  explicit UnreadableStream(fs::path p) : path_(std::move(p)) {}
+  int frame_count() const override { return 0; }
+  bool has_frame(int) const override { return false; }
+  cv::Mat read(int) override { return {}; }
+  std::string frame_name(int f) const override {
+    return path_.string() + " frame " + std::to_string(f);
+  }
+  const fs::path& path() const override { return path_; }
+
+ private:
+  fs::path path_;
+};
+
 }  // namespace
 
 cv::Mat Dataset::read(size_t camera_index, int frame) {
@@ -42,7 +58,7 @@ cv::Mat Dataset::read(size_t camera_index, int frame) {
   return m;
 }
 
-Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera) {
+Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera, bool keep_going) {
   if (!fs::is_directory(dir)) throw InputError(dir.string() + ": dataset folder not found");
   Dataset ds;
   ds.dir = dir;
@@ -90,7 +106,16 @@ Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera) {
                        " has both " + found[0].second.filename().string() + " (" +
                        found[0].first->name + ") and " + found[1].second.filename().string() +
                        " (" + found[1].first->name + "); keep one");
-    cam.source = found[0].first->open(found[0].second);
+    try {
+      cam.source = found[0].first->open(found[0].second);
+    } catch (const InputError& e) {
+      if (!keep_going) throw;
+      ds.warnings.push_back(std::string(e.what()) + "; camera " + std::to_string(cc.id) +
+                            " is blind for the whole run (--keep-going)");
+      cam.source = std::make_unique<UnreadableStream>(found[0].second);
+      ds.cameras.push_back(std::move(cam));
+      continue;
+    }
     const auto missing = cam.source->missing_frames();
     if (!missing.empty())
       ds.warnings.push_back(cam.source->path().string() + ": " + std::to_string(missing.size()) +
@@ -112,7 +137,7 @@ Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera) {
     if (c.source) longest = std::max(longest, c.source->frame_count());
   ds.frame_count = ds.network.frames ? *ds.network.frames : longest;
   for (const auto& c : ds.cameras) {
-    if (!c.source) continue;
+    if (!c.source || dynamic_cast<const UnreadableStream*>(c.source.get())) continue;
     const int n = c.source->frame_count();
     if (n < ds.frame_count)
       ds.warnings.push_back(c.source->path().string() + ": camera " + std::to_string(c.id) +

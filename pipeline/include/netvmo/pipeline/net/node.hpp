@@ -58,6 +58,11 @@ struct NodeSummary {
 
 /// Runs camera `options.camera_id` of the dataset; writes node_<id>.csv and node_<id>.json into
 /// out_dir. Throws InputError on bad input, DdsTimeout when a neighbour stays silent.
+/// A node's output file under launch's nodes folder: NODES/node_<id>/node_<id><suffix> (each
+/// node's --out is its own folder NODES/node_<id>, swapped into place whole by `netvmo node`).
+std::filesystem::path node_file(const std::filesystem::path& nodes_dir, int camera_id,
+                                const std::string& suffix);
+
 NodeSummary run_node(const std::filesystem::path& dataset, const std::filesystem::path& out_dir,
                      const NodeOptions& options);
 
