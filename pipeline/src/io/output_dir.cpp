@@ -9,6 +9,8 @@
 #include <cstring>
 #include <fstream>
 #include <system_error>
+#include <utility>
+#include <vector>
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
@@ -51,6 +53,25 @@ std::string read_holder(int fd) {
   std::string s(buf, n > 0 ? static_cast<size_t>(n) : 0);
   while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
   return s;
+}
+
+// A folder written before the marker existed: it holds the files `command` always writes.
+bool legacy_output(const fs::path& dir, const std::string& command) {
+  static const std::vector<std::pair<std::string, std::vector<const char*>>> kFiles = {
+      {"run", {"summary.json", "estimates.csv", "energies.csv"}},
+      {"demo", {"summary.json", "estimates.csv", "dataset/network.yaml"}},
+      {"launch", {"summary.json", "estimates.csv", "messages.json"}},
+      {"render", {"network.yaml", "truth.csv", "target.csv", "truth_cameras.csv"}},
+      {"detect", {"detections.csv"}},
+      {"simulate", {"summary.json", "energies.csv", "orientation_x.csv"}},
+  };
+  for (const auto& [name, files] : kFiles) {
+    if (name != command) continue;
+    for (const char* f : files)
+      if (!fs::is_regular_file(dir / f)) return false;
+    return true;
+  }
+  return false;
 }
 
 }  // namespace
@@ -99,7 +120,8 @@ OutputDir::OutputDir(fs::path dir, std::string command)
     if (fs::exists(fs::symlink_status(dir_))) {
       if (!fs::is_directory(fs::symlink_status(dir_)))
         throw InputError(shown + ": exists and is not a folder; choose another output folder");
-      if (!fs::is_empty(dir_) && !fs::exists(dir_ / kOutputMarker))
+      if (!fs::is_empty(dir_) && !fs::exists(dir_ / kOutputMarker) &&
+          !legacy_output(dir_, command_))
         throw InputError(shown + ": exists and was not written by netvmo (no " +
                          std::string(kOutputMarker) +
                          "); it would be replaced whole: remove it or choose another output "

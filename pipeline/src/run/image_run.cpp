@@ -63,7 +63,7 @@ int checked_rounds(double dt, double k_e, double k_s, int max_degree, int rounds
   if (rounds > limit)
     throw InputError("--rounds " + std::to_string(rounds) + ": at most " + std::to_string(limit) +
                      " exchange rounds per frame (each is an observer step of every camera: " +
-                     std::to_string(limit) + " already cost ~30 ms a frame); " + range +
+                     std::to_string(limit) + " already cost ~50 ms a frame); " + range +
                      "; 0 picks the smallest stable N");
   if (rounds <= 0 && stable > limit)
     throw InputError("--ke/--ks: the gains need more than " + std::to_string(limit) +

@@ -10,9 +10,10 @@
 //    let a third process lock a new file while the second holds the old one).
 //  - Holding the lock, siblings named DIR.partial-<pid> are stale (left by a killed run) and
 //    removed.
-//  - An existing DIR must be a folder that is empty or was written by netvmo (it holds the
-//    marker file `.netvmo-output`); anything else is refused, so that `--out ~` never replaces a
-//    folder of the user's.
+//  - An existing DIR must be a folder that is empty or was written by the same netvmo command
+//    (it holds the marker file `.netvmo-output` naming the command, or, written before the
+//    marker existed, every file that command always writes); anything else is refused, so that
+//    `--out ~` never replaces a folder of the user's.
 //  - The command writes into path() = DIR.partial-<pid>. commit() writes the marker, then
 //    renameat2(RENAME_EXCHANGE) swaps the two folders in one step (or rename() when DIR does not
 //    exist), then removes the old result (now under the temporary name).

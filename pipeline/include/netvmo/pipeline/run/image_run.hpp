@@ -63,7 +63,7 @@ std::optional<std::string> step_factor_warning(int substeps, double step_factor)
 
 /// The most exchange rounds per frame a run accepts (--rounds, or the smallest stable count the
 /// gains need). Each round is one observer step of every camera (and, across processes, one
-/// message round trip): 10,000 rounds cost ~30 ms per frame for 5 cameras in one process and
+/// message round trip): 10,000 rounds cost ~50 ms per frame for 5 cameras in one process and
 /// ~0.25 s over DDS (25 us a round), so such a run no longer keeps up with a camera; beyond the
 /// smallest stable count more rounds only shrink the O(h) Euler error. 10^9 would take hours
 /// per frame.
