@@ -21,7 +21,7 @@ plot() {
   gnuplot <<GP
 set terminal pngcairo size 900,420 enhanced font 'Sans,10'
 set output '$out/soak.png.partial'
-set multiplot layout 1,2 title 'Soak: $(head -1 "$out/soak.dat" | sed 's/^# //; s/'"'"'//g')' font 'Sans,9'
+set multiplot layout 1,2 title 'soak: $(head -1 "$out/soak.dat" | sed 's/^# netvmo bench --soak: //; s/'"'"'//g')' noenhanced font 'Sans,9'
 set grid
 set xlabel 'network frames [thousands]'
 set ylabel 'resident memory VmRSS [MB]'
