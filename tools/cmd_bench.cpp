@@ -2,11 +2,15 @@
 // detection + observer) and on live rendering (render + detection + observer).
 #include <unistd.h>
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 
 #include "commands.hpp"
+#include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/dataset_writer.hpp"
 #include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/pipeline/run/image_run.hpp"
@@ -27,6 +31,65 @@ void report(const char* what, const run::ImageRunResult& r, size_t cameras) {
       std::string(what).find("live") != std::string::npos ? " incl. rendering" : " incl. decoding",
       1000.0 * r.seconds_observer / frames);
 }
+// Resident memory of this process [kB] (VmRSS of /proc/self/status), or -1.
+long vm_rss_kb() {
+  std::ifstream f("/proc/self/status");
+  std::string line;
+  while (std::getline(f, line))
+    if (line.rfind("VmRSS:", 0) == 0) return std::strtol(line.c_str() + 6, nullptr, 10);
+  return -1;
+}
+
+// A source that plays another one's frames over and over (frame k is frame k mod n).
+class LoopSource final : public sources::NetworkSource {
+ public:
+  LoopSource(std::unique_ptr<sources::NetworkSource> inner, int frames)
+      : inner_(std::move(inner)), frames_(frames), n_(inner_->frame_count()) {}
+  const io::NetworkConfig& network() const override { return inner_->network(); }
+  const io::Calibration& calibration(size_t i) const override { return inner_->calibration(i); }
+  int frame_count() const override { return frames_; }
+  cv::Mat read(size_t i, int frame) override { return inner_->read(i, frame % n_); }
+  std::optional<obs::SE3> target_truth(int frame) const override {
+    return inner_->target_truth(frame % n_);
+  }
+  std::optional<obs::SE3> camera_truth(size_t i) const override { return inner_->camera_truth(i); }
+  std::string name() const override { return inner_->name() + " (looped)"; }
+
+ private:
+  std::unique_ptr<sources::NetworkSource> inner_;
+  int frames_, n_;
+};
+
+// The soak: `source` (a looped recorded dataset, or live rendering) -> front end -> networked
+// observer for its frames, keeping no per-frame history; every `every` frames one row of
+// `frames seconds ms_per_frame vmrss_kb` (ms per frame over the last `every` frames) is
+// appended to `log` and flushed, so a partial run is usable.
+void soak(sources::NetworkSource& source, const std::string& what, int every, const fs::path& log) {
+  std::ofstream out(log);
+  if (!out) throw InputError(log.string() + ": cannot open for writing");
+  out << "# netvmo bench --soak: " << what << ", " << source.network().cameras.size()
+      << " cameras, in-process networked observer, " << source.frame_count() << " frames\n"
+      << "# frames seconds ms_per_frame vmrss_kb\n";
+  run::ImageRunOptions run;
+  run.progress = false;
+  run.runner.keep_history = false;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto last = t0;
+  const auto hook = [&](int k, const std::vector<cv::Mat>&, const std::vector<run::CameraFrame>&,
+                        const run::FrameRecord&) {
+    if ((k + 1) % every != 0) return;
+    const auto now = std::chrono::steady_clock::now();
+    const double total = std::chrono::duration<double>(now - t0).count();
+    const double ms = 1000.0 * std::chrono::duration<double>(now - last).count() / every;
+    last = now;
+    char row[128];
+    std::snprintf(row, sizeof row, "%d %.3f %.3f %ld\n", k + 1, total, ms, vm_rss_kb());
+    out << row << std::flush;
+    std::fputs(row, stdout);
+    std::fflush(stdout);
+  };
+  run::run_images(source, run, hook);
+}
 }  // namespace
 
 void add_bench(CLI::App& app, int& exit_code) {
@@ -35,6 +98,8 @@ void add_bench(CLI::App& app, int& exit_code) {
     std::string moving = "datasets/moving_target.yaml";
     int frames = 60;
     int live_spp = 1;
+    int soak = 0, soak_every = 1000;
+    std::string soak_log = "soak.dat", soak_source = "recorded";
   };
   auto o = std::make_shared<Options>();
   auto* cmd = app.add_subcommand(
@@ -46,16 +111,39 @@ void add_bench(CLI::App& app, int& exit_code) {
                   "Scenario with moving bodies, rendered live (re-tracing where bodies moved, and "
                   "again traced in full every frame)")
       ->capture_default_str();
-  cmd->add_option("--frames", o->frames, "Frames per measurement")
+  cmd->add_option("--frames", o->frames, "Frames per measurement (1 to 100000)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--live-spp", o->live_spp, "Samples per pixel for live rendering")
+      ->check(CLI::Range(1, io::kMaxDatasetFrames));
+  cmd->add_option("--live-spp", o->live_spp, "Samples per pixel for live rendering (1 to 1024)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1, 1024));
+  cmd->add_option("--soak", o->soak,
+                  "Instead: the soak, N network frames of --scenario through the front end and "
+                  "the networked observer, no history kept (tools/soak.sh)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 10000000));
+  cmd->add_option("--soak-every", o->soak_every, "Soak: a row every this many frames")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000000));
+  cmd->add_option("--soak-source", o->soak_source,
+                  "Soak: recorded (a --frames render of --scenario, played in a loop: "
+                  "PNG decoding) or live (rendered every frame; static scenes reuse the radiance)")
+      ->check(CLI::IsMember({"recorded", "live"}))
+      ->capture_default_str();
+  cmd->add_option("--soak-log", o->soak_log,
+                  "Soak: table of frames, seconds, ms per frame, VmRSS [kB]")
+      ->capture_default_str();
   cmd->callback([o, &exit_code] {
     exit_code = guarded("bench", [&] {
       const fs::path scenario = find_scenario(o->scenario);
       const auto scene = io::load_render_scenario(scenario);
+      if (o->soak > 0 && o->soak_source == "live") {
+        auto live_scene = scene;
+        live_scene.imaging.spp = o->live_spp;
+        auto live = sources::make_render_source(live_scene, o->soak);
+        soak(*live, "live rendering of " + scenario.string(), o->soak_every, o->soak_log);
+        return 0;
+      }
       run::ImageRunOptions run;
       run.progress = false;
       run.max_frames = o->frames;
@@ -70,6 +158,13 @@ void add_bench(CLI::App& app, int& exit_code) {
         std::printf("rendering %d frames of %s for the recorded measurement...\n", o->frames,
                     scenario.string().c_str());
         io::write_dataset(renderer, tmp, d);
+      }
+      if (o->soak > 0) {  // recorded: the dataset just rendered (o->frames), looped
+        LoopSource looped(sources::open_dataset_source(tmp), o->soak);
+        soak(looped, std::to_string(o->frames) + " frames of " + scenario.string() + " looped",
+             o->soak_every, o->soak_log);
+        fs::remove_all(tmp);
+        return 0;
       }
       auto recorded = sources::open_dataset_source(tmp);
       const auto r1 = run::run_images(*recorded, run);

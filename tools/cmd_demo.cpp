@@ -6,6 +6,7 @@
 
 #include "commands.hpp"
 #include "netvmo/pipeline/io/dataset_writer.hpp"
+#include "netvmo/pipeline/io/output_dir.hpp"
 #include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/render/renderer.hpp"
 #include "run_options.hpp"
@@ -30,25 +31,31 @@ void add_demo(CLI::App& app, int& exit_code) {
       "summary.json, energies.png, errors.png, overlays/).");
   cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
   cmd->add_option("--scenario", o->scenario, "Render scenario")->capture_default_str();
-  cmd->add_option("--frames", o->frames, "Frames to render (0 = the scenario's)")
+  cmd->add_option("--frames", o->frames, "Frames to render (0 = the scenario's), at most 100000")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0, io::kMaxDatasetFrames));
   add_run_options(*cmd, o->run);
   cmd->callback([o, &exit_code] {
     exit_code = guarded("demo", [&] {
-      const fs::path out = o->out, dataset = out / "dataset";
+      to_image_run_options(o->run);  // option ranges first
       const fs::path scenario = find_scenario(o->scenario);
-      std::printf("rendering %s into %s\n", scenario.string().c_str(), dataset.string().c_str());
+      io::OutputDir out_dir(o->out, "demo");
+      const fs::path out = out_dir.path(), dataset = out / "dataset";
+      std::printf("rendering %s into %s\n", scenario.string().c_str(),
+                  (fs::path(o->out) / "dataset").string().c_str());
       render::Renderer renderer(io::load_render_scenario(scenario));
       io::DatasetOptions dopt;
       dopt.frames = o->frames;
       io::write_dataset(renderer, dataset, dopt);
-      std::printf("running the networked observer on %s\n", dataset.string().c_str());
-      auto provider = sources::open_dataset_source(dataset);
+      std::printf("running the networked observer on %s\n",
+                  (fs::path(o->out) / "dataset").string().c_str());
+      auto provider = sources::open_dataset_source(dataset, {}, o->run.keep_going);
       const auto summary = run_and_report(*provider, o->run, out);
-      print_run_summary(summary, out);
+      out_dir.commit();
+      const fs::path shown = o->out;
+      print_run_summary(summary, shown);
       std::printf("open %s/overlays/mosaic.png, %s/energies.png and %s/errors.png\n",
-                  out.string().c_str(), out.string().c_str(), out.string().c_str());
+                  shown.string().c_str(), shown.string().c_str(), shown.string().c_str());
       return 0;
     });
   });

@@ -19,6 +19,7 @@
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/frontend/front_end.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/io/output_dir.hpp"
 #include "netvmo/pipeline/io/truth_io.hpp"
 #include "netvmo/pipeline/progress.hpp"
 #include "netvmo/pipeline/sources/dataset.hpp"
@@ -87,15 +88,16 @@ struct TruthTally {
 int run_detect(DetectOptions o) {
   o.det.refinement = parse_refinement(o.refinement);
   o.det.border_check = !o.no_border_check;
-  Dataset ds = open_dataset(o.dataset);
+  io::check_output_apart(o.out, o.dataset);
+  io::OutputDir out(o.out, "detect");
+  Dataset ds = open_dataset(o.dataset, {}, o.keep_going);
   for (const auto& w : ds.warnings) std::fprintf(stderr, "netvmo detect: warning: %s\n", w.c_str());
   o.det.family = ds.network.target.family;
   o.det.target_id = ds.network.target.id;
   FrontEnd fe(o.det, o.tracking);
 
   const fs::path out_dir(o.out);
-  io::ensure_directory(out_dir);
-  io::AtomicFile csv(out_dir / "detections.csv");
+  io::AtomicFile csv(out.path() / "detections.csv");
   csv << kDetectionsHeader << "\n";
 
   std::vector<CameraStats> stats(ds.cameras.size());
@@ -150,6 +152,7 @@ int run_detect(DetectOptions o) {
   }
   progress.finish();
   csv.commit();
+  out.commit();  // complete, even when frames were unreadable (reported below)
 
   std::printf("netvmo detect: %s -> %s (%d frames, target %s id %d)\n", o.dataset.c_str(),
               (out_dir / "detections.csv").string().c_str(), ds.frame_count,
@@ -204,39 +207,52 @@ void add_detect(CLI::App& app, int& exit_code) {
                   "Dataset folder (network.yaml, calib/, cam_<id>/ or cam_<id>.<ext>)")
       ->required();
   cmd->add_option("--out,-o", o->out, "Output folder (created)")->required();
-  cmd->add_option("--decimate", o->det.quad_decimate, "libapriltag quad_decimate (>= 1)")
-      ->capture_default_str();
-  cmd->add_option("--sigma", o->det.quad_sigma, "libapriltag quad_sigma (Gaussian blur)")
-      ->capture_default_str();
-  cmd->add_option("--threads", o->det.nthreads, "libapriltag nthreads")->capture_default_str();
+  cmd->add_option("--decimate", o->det.quad_decimate, "libapriltag quad_decimate (1 to 8)")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 8.0));
+  cmd->add_option("--sigma", o->det.quad_sigma, "libapriltag quad_sigma (Gaussian blur, 0 to 10)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 10.0));
+  cmd->add_option("--threads", o->det.nthreads, "libapriltag nthreads (1 to 64)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 64));
   cmd->add_option("--refine-edges", o->det.refine_edges, "libapriltag refine_edges (true/false)")
       ->capture_default_str();
-  cmd->add_option("--sharpening", o->det.decode_sharpening, "libapriltag decode_sharpening")
-      ->capture_default_str();
-  cmd->add_option(
-         "--min-contrast", o->det.min_white_black_diff,
-         "libapriltag qtp.min_white_black_diff (gray levels; libapriltag's own default is 5)")
-      ->capture_default_str();
+  cmd->add_option("--sharpening", o->det.decode_sharpening,
+                  "libapriltag decode_sharpening (0 to 10)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 10.0));
+  cmd->add_option("--min-contrast", o->det.min_white_black_diff,
+                  "libapriltag qtp.min_white_black_diff (gray levels 0 to 255; libapriltag's own "
+                  "default is 5)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 255));
   cmd->add_option("--min-margin", o->det.min_decision_margin,
-                  "Minimum decision margin to accept the target")
-      ->capture_default_str();
+                  "Minimum decision margin to accept the target (0 to 255)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 255.0));
   cmd->add_option("--max-hamming", o->det.max_hamming,
-                  "Maximum corrected bits to accept the target")
-      ->capture_default_str();
+                  "Maximum corrected bits to accept the target (0 to 3)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 3));
   cmd->add_flag("--no-border-check", o->no_border_check,
                 "Accept the target without checking that its corners frame a black border inside "
                 "a white quiet zone (the check rejects quads on an occluder's outline)");
   cmd->add_option("--border-min-contrast", o->det.border_min_contrast,
                   "Border check: a sample passes when quiet zone - border >= this x (local white "
-                  "- border)")
-      ->capture_default_str();
+                  "- border), 0 to 1")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--border-max-failed", o->det.border_max_failed_fraction,
-                  "Border check: a side fails when more than this fraction of its samples fail")
-      ->capture_default_str();
+                  "Border check: a side fails when more than this fraction of its samples fail (0 "
+                  "to 1)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--border-max-thickness", o->det.border_max_thickness_error,
                   "Border check: a side fails when the inner edge of the border is further than "
-                  "this from one cell inside it [px]")
-      ->capture_default_str();
+                  "this from one cell inside it [px], 0 to 10")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 10.0));
   cmd->add_option("--refine", o->refinement,
                   "Corner refinement of the target: none, subpix (cv::cornerSubPix) or edges "
                   "(lines fitted to the border edges)")

@@ -14,6 +14,7 @@
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/io/output_dir.hpp"
 #include "netvmo/pipeline/net/cyclone_config.hpp"
 #include "netvmo/pipeline/net/node.hpp"
 #include "netvmo/pipeline/net/process.hpp"
@@ -76,9 +77,10 @@ json read_node_json(const fs::path& f) {
 
 // The merge of `launch` and `merge`: every node's node_<id>.csv in `nodes` into the outputs of
 // `netvmo run` in `dir` (the same result structure as run_images, the same writers), plus
-// messages.json from the nodes' statistics; prints the message and result tables. A node
-// without statistics (killed for good) is listed as such.
-void merge_and_report(sources::NetworkSource& provider, const run::ImageRunOptions& options,
+// messages.json from the nodes' statistics; prints the message table and returns the summary
+// (for print_run_summary once `dir` is in place). A node without statistics (killed for good)
+// is listed as such.
+json merge_and_report(sources::NetworkSource& provider, const run::ImageRunOptions& options,
                       const RunCliOptions& cli, const fs::path& nodes, const fs::path& dir,
                       int frames, bool allow_gaps) {
   const auto& netcfg = provider.network();
@@ -140,7 +142,7 @@ void merge_and_report(sources::NetworkSource& provider, const run::ImageRunOptio
                 m["dropped"].get<unsigned long long>(), m["late"].get<unsigned long long>(),
                 foreign, rejected);
   }
-  print_run_summary(s, dir);
+  return s;
 }
 
 }  // namespace
@@ -162,7 +164,11 @@ void add_launch(CLI::App& app, int& exit_code) {
       "Writes OUT/cyclonedds.xml (loopback only), starts one `netvmo node` per camera\n"
       "(lock-step by default), and merges their outputs into exactly those of `netvmo run`:\n"
       "OUT/estimates.csv, energies.csv, errors.csv, summary.json, plots and overlays/, plus\n"
-      "OUT/nodes/ (per-node CSV, statistics and log) and OUT/messages.json.");
+      "OUT/nodes/ (per node: node_<id>.csv, node_<id>_links.csv, node_<id>.json and\n"
+      "node_<id>.log; the nodes write there with --in-place) and OUT/messages.json. OUT is built "
+      "in OUT.partial-<pid> and swapped into place at the end\n"
+      "(a killed launch leaves the previous OUT intact), locked by OUT.lock; when a node fails\n"
+      "the unfinished folder is kept as OUT.failed/ for its logs.");
   cmd->add_option("DATASET", o->dataset, "Dataset folder")->required();
   cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
   cmd->add_option("--domain", o->domain,
@@ -179,22 +185,26 @@ void add_launch(CLI::App& app, int& exit_code) {
   cmd->add_option("--restart-after", o->restart_after,
                   "async: restart the killed node this many seconds later (it joins at the "
                   "current frame, with a new incarnation)")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--timeout", o->timeout, "Stop every node and fail after this many seconds")
+      ->check(CLI::Range(0.0, 3600.0));
+  cmd->add_option("--timeout", o->timeout,
+                  "Stop every node and fail after this many seconds (at most a day)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(0.001, 86400.0));
   cmd->add_option("--node-timeout", o->node_timeout,
-                  "A node fails when a neighbour is silent this long [s] in a round")
+                  "A node fails when a neighbour is silent this long [s] in a round (at most an "
+                  "hour)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(0.001, 3600.0));
   add_run_options(*cmd, o->run, /*in_process_transport=*/false);
   cmd->callback([o, &exit_code] {
     exit_code = guarded("launch", [&] {
       const auto options = to_image_run_options(o->run);
       require_paper_observer(options);
-      auto provider = sources::open_dataset_source(o->dataset);
+      auto provider = sources::open_dataset_source(o->dataset, {}, options.keep_going);
       const auto& netcfg = provider->network();
       for (const auto& w : provider->warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
+      run::checked_rounds(1.0 / netcfg.fps, options.runner.k_e, options.runner.k_s,
+                          run::network_graph(netcfg).max_degree(), options.runner.rounds);
       int frames = provider->frame_count();
       if (options.max_frames) frames = std::min(frames, *options.max_frames);
 
@@ -229,7 +239,9 @@ void add_launch(CLI::App& app, int& exit_code) {
         throw InputError("--restart-after needs --kill ID@T");
       }
 
-      const fs::path dir = o->out, nodes = dir / "nodes";
+      io::check_output_apart(o->out, o->dataset);
+      io::OutputDir out(o->out, "launch");
+      const fs::path dir = out.path(), nodes = dir / "nodes";
       io::ensure_directory(nodes);
       const int domain = o->domain >= 0 ? o->domain : net::domain_from_pid(::getpid());
       net::write_loopback_config(dir / "cyclonedds.xml");
@@ -251,6 +263,7 @@ void add_launch(CLI::App& app, int& exit_code) {
                                          std::to_string(c.id),
                                          "--out",
                                          nodes.string(),
+                                         "--in-place",
                                          "--domain",
                                          std::to_string(domain),
                                          "--frames",
@@ -266,11 +279,6 @@ void add_launch(CLI::App& app, int& exit_code) {
                 std::to_string(o->seed), std::string("--start-file"), start_file.string()})
             argv.push_back(a);
         const fs::path log = nodes / ("node_" + std::to_string(c.id) + ".log");
-        fs::remove(log);
-        fs::remove(nodes / ("node_" + std::to_string(c.id) + ".ready"));
-        fs::remove(nodes / ("node_" + std::to_string(c.id) + ".csv"));
-        fs::remove(net::partial_path(nodes / ("node_" + std::to_string(c.id) + ".csv")));
-        fs::remove(net::partial_path(nodes / ("node_" + std::to_string(c.id) + "_links.csv")));
         if (have_plan && pids.size() == plan.index) {
           plan.argv = argv;
           plan.argv.push_back("--resume");  // keeps the rows it finished before the kill
@@ -329,21 +337,27 @@ void add_launch(CLI::App& app, int& exit_code) {
           stopped.push_back(id);
           continue;
         }
-        const fs::path log = nodes / ("node_" + std::to_string(id) + ".log");
+        const std::string log = "node_" + std::to_string(id) + ".log";
+        const fs::path kept = fs::path(o->out + ".failed") / "nodes" / log;  // see keep_failed
         std::fprintf(stderr, "netvmo launch: node of camera %d failed (%s): %s [%s]\n", id,
-                     net::describe(res[i]).c_str(), last_line(log).c_str(), log.string().c_str());
+                     net::describe(res[i]).c_str(), last_line(nodes / log).c_str(),
+                     kept.string().c_str());
         failed = true;
       }
-      if (failed) throw std::runtime_error("a node failed; see " + nodes.string());
+      // The logs of a failed launch are kept in OUT.failed/; OUT is untouched.
+      if (failed)
+        throw std::runtime_error("a node failed; see " + (out.keep_failed() / "nodes").string());
       if (!stopped.empty()) {
         std::string ids;
         for (int id : stopped) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
         throw std::runtime_error("timeout after " + num(o->timeout) +
                                  " s: stopped the nodes of cameras " + ids + "; see " +
-                                 nodes.string());
+                                 (out.keep_failed() / "nodes").string());
       }
 
-      merge_and_report(*provider, options, o->run, nodes, dir, frames, async);
+      const json s = merge_and_report(*provider, options, o->run, nodes, dir, frames, async);
+      out.commit();
+      print_run_summary(s, o->out);
       return 0;
     });
   });
@@ -362,7 +376,8 @@ void add_merge(CLI::App& app, int& exit_code) {
       "node_<id>.csv.partial). The gains, error model, initialisation, rounds, mode and frame\n"
       "count are read from the nodes' statistics and must agree. Writes the outputs of\n"
       "`netvmo launch` into OUT: estimates.csv, energies.csv, errors.csv, summary.json,\n"
-      "messages.json, plots and overlays/.");
+      "messages.json, plots and overlays/. OUT is built in OUT.partial-<pid> and swapped into\n"
+      "place at the end, locked by OUT.lock (as launch's); it may not hold NODES.");
   cmd->add_option("NODES", o->nodes, "Folder of the nodes' outputs")->required();
   cmd->add_option("--dataset", o->dataset, "The dataset the nodes ran on")->required();
   cmd->add_option("--out", o->out, "Output directory")->required();
@@ -373,8 +388,10 @@ void add_merge(CLI::App& app, int& exit_code) {
       auto provider = sources::open_dataset_source(o->dataset);
       const auto& netcfg = provider->network();
       for (const auto& w : provider->warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
-      // The run's settings, from the nodes' statistics: every node must have run the same.
       const fs::path nodes = o->nodes;
+      io::check_output_apart(o->out, o->dataset);
+      io::check_output_apart(o->out, nodes, "--out", "NODES folder");
+      // The run's settings, from the nodes' statistics: every node must have run the same.
       json ref;
       fs::path ref_file;
       for (const auto& c : netcfg.cameras) {
@@ -416,8 +433,11 @@ void add_merge(CLI::App& app, int& exit_code) {
       cli.no_overlays = o->no_overlays;
       cli.no_plots = o->no_plots;
       const bool async = ref["mode"] == "async";
-      merge_and_report(*provider, to_image_run_options(cli), cli, nodes, o->out,
-                       ref["dataset_frames"].get<int>(), async);
+      io::OutputDir out(o->out, "merge");
+      const json s = merge_and_report(*provider, to_image_run_options(cli), cli, nodes, out.path(),
+                                      ref["dataset_frames"].get<int>(), async);
+      out.commit();
+      print_run_summary(s, o->out);
       return 0;
     });
   });

@@ -2,34 +2,41 @@
 // neighbours over Cyclone DDS (normally started by `netvmo launch`).
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <memory>
+#include <optional>
 
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/io/output_dir.hpp"
 #include "netvmo/pipeline/net/cyclone_config.hpp"
 #include "netvmo/pipeline/net/node.hpp"
 #include "run_options.hpp"
 
 namespace netvmo::tools {
+namespace fs = std::filesystem;
 
 void add_async_options(CLI::App& cmd, double& speed, double& stale, double& drop, double& delay,
                        std::uint64_t& seed) {
-  cmd.add_option("--speed", speed, "async: camera time per wall time (1 = real time)")
+  cmd.add_option("--speed", speed,
+                 "async: camera time per wall time (1 = real time; 0.01 to 100: slower than "
+                 "0.01 a 10 s recording takes over 15 minutes)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(0.01, 100.0));
   cmd.add_option("--stale", stale,
                  "async: staleness bound [s of camera time]; a neighbour's estimate older than "
-                 "this leaves the mutual term until it is heard again")
+                 "this leaves the mutual term until it is heard again (at most 3600)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1e-6, 3600.0));
   cmd.add_option("--drop", drop, "async: probability that a received message is dropped")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
   cmd.add_option("--delay", delay,
-                 "async: every received message reaches the observer this late [ms]")
+                 "async: every received message reaches the observer this late [ms]; at most "
+                 "10000 (delayed messages are held in memory: ~3,000 a second for 5 cameras)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0.0, 10000.0));
   cmd.add_option("--seed", seed, "Seed of the injected drops (combined with the camera id)")
       ->capture_default_str();
 }
@@ -40,7 +47,7 @@ void add_node(CLI::App& app, int& exit_code) {
     int camera = 0, domain = -1, frames = 0;
     double timeout = 20.0, speed = 1.0, stale = 0.25, drop = 0.0, delay = 0.0, start_at = 0.0;
     std::uint64_t seed = 0;
-    bool resume = false;
+    bool resume = false, in_place = false;
     std::string start_file;
     RunCliOptions run;
   };
@@ -49,12 +56,20 @@ void add_node(CLI::App& app, int& exit_code) {
       "node", "Run one camera of a dataset as its own process, exchanging over Cyclone DDS");
   cmd->footer(
       "Reads network.yaml and the camera's own calibration and frames. Writes OUT/node_<id>.csv\n"
-      "(per frame: detection, PnP pose, networked and independent estimates, %.17g) and\n"
-      "OUT/node_<id>.json (message statistics). Without CYCLONEDDS_URI it writes and uses the\n"
-      "loopback-only configuration OUT/cyclonedds.xml.");
+      "(per frame: detection, PnP pose, networked and independent estimates, %.17g),\n"
+      "OUT/node_<id>_links.csv (the neighbours heard at each frame) and OUT/node_<id>.json\n"
+      "(message statistics). Without CYCLONEDDS_URI it writes and uses the loopback-only\n"
+      "configuration OUT/cyclonedds.xml. OUT is this node's own folder, built in\n"
+      "OUT.partial-<pid> and swapped into place when the node ends (a killed node leaves the\n"
+      "previous OUT intact, and its finished rows in OUT.partial-<pid>/node_<id>.csv.partial),\n"
+      "locked by OUT.lock. With --in-place (what launch passes) the node writes straight into\n"
+      "OUT, a folder inside launch's own staging folder.");
   cmd->add_option("DATASET", o->dataset, "Dataset folder")->required();
   cmd->add_option("--camera", o->camera, "This node's camera id (network.yaml)")->required();
-  cmd->add_option("--out", o->out, "Output directory")->required();
+  cmd->add_option("--out", o->out, "This node's output folder")->required();
+  cmd->add_flag("--in-place", o->in_place,
+                "Write straight into OUT, without a lock, staging folder or swap: for a caller "
+                "that makes OUT crash safe itself (launch: OUT lies inside its staging folder)");
   cmd->add_option("--mode", o->mode,
                   "Exchange: lockstep (wait for every neighbour's message of each round: the "
                   "in-process algorithm) or async (paced on the camera's timestamps, latest value "
@@ -67,11 +82,12 @@ void add_node(CLI::App& app, int& exit_code) {
                   "joins at the current frame")
       ->capture_default_str();
   cmd->add_option("--start-file", o->start_file,
-                  "async: instead of --start-at, write OUT/node_<id>.ready once set up, then "
-                  "wait (at most --timeout) for this file to hold the common start");
+                  "async: instead of --start-at, write node_<id>.ready next to this file once set "
+                  "up, then wait (at most --timeout) for this file to hold the common start");
   cmd->add_flag("--resume", o->resume,
-                "async restart: keep the rows a killed predecessor finished (OUT/node_<id>.csv"
-                ".partial) before the frame this node joins at");
+                "async restart: keep the rows a killed predecessor finished before the frame this "
+                "node joins at (node_<id>.csv.partial: in its staging folder OUT.partial-<pid>, "
+                "which this node takes over, or with --in-place in OUT)");
   cmd->add_option("--domain", o->domain, "DDS domain id (the same for every node of a run)")
       ->required()
       ->check(CLI::Range(0, 230));
@@ -80,20 +96,28 @@ void add_node(CLI::App& app, int& exit_code) {
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--timeout", o->timeout,
-                  "Longest wait [s] for a neighbour's message of a round before failing")
+                  "Longest wait [s] for a neighbour's message of a round before failing (at most "
+                  "an hour)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(0.001, 3600.0));
   add_run_options(*cmd, o->run, /*in_process_transport=*/false);
   cmd->callback([o, &exit_code] {
     exit_code = guarded("node", [&] {
-      if (!std::getenv("CYCLONEDDS_URI")) {
-        io::ensure_directory(o->out);
-        net::write_loopback_config(std::filesystem::path(o->out) / "cyclonedds.xml");
-        net::use_config(std::filesystem::path(o->out) / "cyclonedds.xml");
-      }
       net::NodeOptions no;
       no.run = to_image_run_options(o->run);
       require_paper_observer(no.run);
+      io::check_output_apart(o->out, o->dataset);
+      // Standalone: the node's own locked staging folder, swapped in at the end (with --resume,
+      // the killed predecessor's staging folder is taken over). --in-place (launch): OUT lies in
+      // launch's staging folder, which launch swaps in.
+      std::optional<io::OutputDir> staged;
+      if (!o->in_place) staged.emplace(o->out, "node", o->resume);
+      const fs::path dir = staged ? staged->path() : fs::path(o->out);
+      io::ensure_directory(dir);
+      if (!std::getenv("CYCLONEDDS_URI")) {
+        net::write_loopback_config(dir / "cyclonedds.xml");
+        net::use_config(dir / "cyclonedds.xml");
+      }
       no.run.progress = false;
       no.camera_id = o->camera;
       no.dds.domain = o->domain;
@@ -111,7 +135,8 @@ void add_node(CLI::App& app, int& exit_code) {
       std::printf("netvmo node: camera %d, DDS domain %d, %s, config %s\n", o->camera, o->domain,
                   o->mode.c_str(), std::getenv("CYCLONEDDS_URI"));
       std::fflush(stdout);
-      const auto s = net::run_node(o->dataset, o->out, no);
+      const auto s = net::run_node(o->dataset, dir, no);
+      if (staged) staged->commit();
       for (const auto& note : s.notes) std::printf("note: %s\n", note.c_str());
       std::printf(
           "netvmo node: camera %d done: %d frames, %d rounds/frame, %llu sent, %llu received, "

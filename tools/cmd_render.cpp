@@ -6,6 +6,7 @@
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/dataset_writer.hpp"
+#include "netvmo/pipeline/io/output_dir.hpp"
 #include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/render/renderer.hpp"
 
@@ -23,13 +24,18 @@ void add_render(CLI::App& app, int& exit_code) {
   CLI::App* cmd = add_command(
       app, "render", "Render a scenario into a dataset folder (Embree)",
       "Writes DATASET/cam_<id>/<frame>.png, calib/cam_<id>.yaml, network.yaml, truth.csv,\n"
-      "target.csv and truth_cameras.csv (layout: datasets/README.md).");
+      "target.csv and truth_cameras.csv (layout: datasets/README.md). DATASET is built in\n"
+      "DATASET.partial-<pid> and swapped into place at the end (a killed render leaves the\n"
+      "previous DATASET intact); DATASET.lock keeps a second command from writing it at the same\n"
+      "time. An existing DATASET is replaced only if netvmo render wrote it (or it is empty).");
   cmd->add_option("SCENARIO", o->scenario, "render scenario YAML, e.g. datasets/paper5_render.yaml")
       ->required();
   cmd->add_option("--out", o->out, "dataset folder to write (created if needed)")->required();
-  cmd->add_option("--frames", o->frames, "number of frames (0 = the scenario's frames)")
+  cmd->add_option("--frames", o->frames,
+                  "number of frames (0 = the scenario's frames), at most 100000 (5 cameras of "
+                  "640x480 PNGs take ~1 MB a frame)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0, io::kMaxDatasetFrames));
   cmd->add_option("--spp", o->spp, "samples per pixel (0 = the scenario's imaging.spp)")
       ->capture_default_str()
       ->check(CLI::Range(0, 1024));
@@ -43,15 +49,22 @@ void add_render(CLI::App& app, int& exit_code) {
       if (o->spp > 0) scene.imaging.spp = o->spp;
       if (o->seed >= 0) scene.imaging.seed = static_cast<std::uint64_t>(o->seed);
       if (o->frames > 0) scene.frames = o->frames;
+      if (scene.frames > io::kMaxDatasetFrames)
+        throw InputError(o->scenario + ": frames: " + std::to_string(scene.frames) +
+                         " is more than " + std::to_string(io::kMaxDatasetFrames) +
+                         " frames (~1 MB of PNGs per frame for 5 cameras)");
       std::unique_ptr<render::Renderer> renderer;
       try {
         renderer = std::make_unique<render::Renderer>(scene);
       } catch (const std::invalid_argument& e) {
         throw InputError(o->scenario + ": " + e.what());
       }
+      io::check_output_apart(o->out, {});
+      io::OutputDir out(o->out, "render");
       io::DatasetOptions opt;
       opt.progress = !o->quiet;
-      const auto summary = io::write_dataset(*renderer, o->out, opt);
+      const auto summary = io::write_dataset(*renderer, out.path(), opt);
+      out.commit();
 
       std::printf("wrote %s: %d frames x %zu cameras at %.6g fps, %d spp, seed %llu\n",
                   o->out.c_str(), summary.frames, summary.cameras.size(), scene.fps,

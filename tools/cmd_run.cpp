@@ -5,6 +5,7 @@
 
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/io/output_dir.hpp"
 #include "netvmo/pipeline/run/overlay.hpp"
 #include "netvmo/pipeline/run/run_report.hpp"
 #include "run_options.hpp"
@@ -23,15 +24,22 @@ void add_run(CLI::App& app, int& exit_code) {
       app, "run", "Run the networked observer on a dataset's images",
       "Writes OUT/estimates.csv, OUT/energies.csv, OUT/errors.csv, OUT/summary.json,\n"
       "OUT/energies.png, OUT/errors.png and OUT/overlays/ (per-camera MP4s, mosaic.mp4,\n"
-      "mosaic.png). delta_i(t) is the front end's detection success.");
+      "mosaic.png). delta_i(t) is the front end's detection success.\n"
+      "OUT is built in the temporary sibling OUT.partial-<pid> and swapped into place at the end\n"
+      "(a killed run leaves the previous OUT intact); OUT.lock keeps a second command from\n"
+      "writing OUT at the same time. OUT must not be the dataset folder or lie inside it.");
   cmd->add_option("DATASET", o->dataset, "Dataset folder (netvmo render output or recorded)")
       ->required();
   cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
   add_run_options(*cmd, o->run);
   cmd->callback([o, &exit_code] {
     exit_code = guarded("run", [&] {
-      auto provider = sources::open_dataset_source(o->dataset);
-      const auto summary = run_and_report(*provider, o->run, o->out);
+      to_image_run_options(o->run);  // option ranges first
+      io::check_output_apart(o->out, o->dataset);
+      io::OutputDir out(o->out, "run");
+      auto provider = sources::open_dataset_source(o->dataset, {}, o->run.keep_going);
+      const auto summary = run_and_report(*provider, o->run, out.path());
+      out.commit();
       print_run_summary(summary, o->out);
       return 0;
     });

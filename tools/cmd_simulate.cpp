@@ -1,4 +1,5 @@
 // netvmo simulate: the paper's Section 5 simulation from a scenario file.
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -7,6 +8,8 @@
 #include "choices.hpp"
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/io/output_dir.hpp"
+#include "netvmo/pipeline/run/image_run.hpp"
 #include "netvmo/pipeline/sim/simulation.hpp"
 #include "plot.hpp"
 
@@ -14,6 +17,8 @@ namespace netvmo::tools {
 namespace fs = std::filesystem;
 
 namespace {
+constexpr double kMaxDuration = 3600.0;  ///< [s] of simulated time
+
 struct SimulateOptions {
   std::string scenario;
   std::string out = "results/simulate";
@@ -75,7 +80,8 @@ void add_simulate(CLI::App& app, int& exit_code) {
   cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
   cmd->add_option("--ke", o->k_e, "Visual feedback gain k_e")->default_str("from scenario");
   cmd->add_option("--ks", o->k_s, "Mutual feedback gain k_s")->default_str("from scenario");
-  cmd->add_option("--duration", o->duration, "Simulated time [s]")->default_str("from scenario");
+  cmd->add_option("--duration", o->duration, "Simulated time [s], at most 3600")
+      ->default_str("from scenario");
   add_error_model_option(*cmd, o->error, ErrorModelUse::simulation)->default_str("from scenario");
   add_estimator_option(*cmd, o->estimator)->default_str("from scenario");
   cmd->add_option(
@@ -94,9 +100,18 @@ void add_simulate(CLI::App& app, int& exit_code) {
         s.error_model = o->error;
       }
       if (!o->estimator.empty()) s.estimator = o->estimator;
-      if (!(s.k_e > 0) || !(s.k_s >= 0) || !(s.duration > 0))
-        throw InputError("--ke must be > 0, --ks >= 0 and --duration > 0");
-      const fs::path dir = o->out;
+      if (!(s.duration > 0) || !(s.duration <= kMaxDuration))
+        throw InputError("--duration " + std::to_string(s.duration) +
+                         ": must be > 0 and at most 3600 s (every frame's estimates are kept "
+                         "for the outputs)");
+      {
+        std::vector<int> degree(s.cameras.size(), 0);
+        for (const auto& [a, b] : s.edges) ++degree.at(size_t(a)), ++degree.at(size_t(b));
+        const int d_max = degree.empty() ? 0 : *std::max_element(degree.begin(), degree.end());
+        run::checked_rounds(1.0 / s.fps, s.k_e, s.k_s, d_max, 0);  // gains: finite, not absurd
+      }
+      io::OutputDir out(o->out, "simulate");
+      const fs::path dir = out.path();
       const auto r = sim::simulate(s);
       sim::write_outputs(s, r, dir);
       std::optional<std::pair<double, fs::path>> compare;
@@ -118,7 +133,8 @@ void add_simulate(CLI::App& app, int& exit_code) {
       std::printf("  graph: W = %g (%s), diam = %d\n", r.W.value, r.W.exact ? "exact" : "bound",
                   r.diameter);
       if (!o->no_plots) make_plots(s, r, dir, compare);
-      std::printf("results in %s/\n", dir.string().c_str());
+      out.commit();
+      std::printf("results in %s/\n", o->out.c_str());
       return 0;
     });
   });

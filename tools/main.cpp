@@ -1,10 +1,14 @@
 // netvmo: cooperative 3D pose estimation of a tagged target by a camera network, with the
 // networked visual motion observer under imperfect visibility.
 #include <cstdio>
+#include <cstdlib>
 
 #include "commands.hpp"
 
 int main(int argc, char** argv) {
+  // A corrupt or truncated video is reported once, by netvmo, naming the file; FFmpeg's own
+  // messages ("moov atom not found", "overread") are silenced unless the user asks for them.
+  ::setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", /*overwrite=*/0);
   CLI::App app{
       "netvmo: a network of cameras cooperatively estimates the pose of an AprilTag-tagged target\n"
       "with the networked visual motion observer (Hatanaka, Nishi, Fujita)."};

@@ -1,5 +1,6 @@
 #include "run_options.hpp"
 
+#include <cmath>
 #include <cstdio>
 
 #include "choices.hpp"
@@ -23,8 +24,11 @@ void add_run_options(CLI::App& cmd, RunCliOptions& o, bool in_process_transport)
                    "gains and report it in summary.json (cameras[].compared, final)")
         ->check(CLI::IsMember(names));
   }
-  cmd.add_option("--ke", o.k_e, "Visual feedback gain k_e")->capture_default_str();
-  cmd.add_option("--ks", o.k_s, "Mutual feedback gain k_s (0: independent observers)")
+  cmd.add_option("--ke", o.k_e,
+                 "Visual feedback gain k_e > 0 (with --rounds 0 it sets the rounds: "
+                 "k_e + 2 k_s d_max <= 10000 x fps)")
+      ->capture_default_str();
+  cmd.add_option("--ks", o.k_s, "Mutual feedback gain k_s >= 0 (0: independent observers)")
       ->capture_default_str();
   add_error_model_option(cmd, o.error, ErrorModelUse::images)->capture_default_str();
   cmd.add_option("--init", o.init,
@@ -33,12 +37,14 @@ void add_run_options(CLI::App& cmd, RunCliOptions& o, bool in_process_transport)
       ->check(CLI::IsMember({"pnp", "paper"}))
       ->capture_default_str();
   cmd.add_option("--rounds", o.rounds,
-                 "Consensus (exchange) rounds per frame; 0 = the smallest stable count")
+                 "Consensus (exchange) rounds per frame N, at most 10000; 0 = the smallest "
+                 "stable count, h (k_e + 2 k_s d_max) <= 1 with h = 1 / (fps N)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   cmd.add_flag("--keep-going", o.keep_going,
-               "Treat a camera whose image cannot be read as blind for that frame instead of "
-               "stopping");
+               "Treat a camera whose image cannot be read as blind for that frame, and one whose "
+               "video cannot be opened (or stops decoding) as blind from then on, with a "
+               "warning, instead of stopping");
   cmd.add_flag("--no-overlays", o.no_overlays, "Do not write overlays/");
   cmd.add_flag("--no-plots", o.no_plots, "Do not draw energies.png and errors.png");
   cmd.add_option("--max-frames", o.max_frames, "Stop after this many frames (0 = all)")
@@ -55,7 +61,8 @@ void add_run_options(CLI::App& cmd, RunCliOptions& o, bool in_process_transport)
 }
 
 run::ImageRunOptions to_image_run_options(const RunCliOptions& o) {
-  if (!(o.k_e > 0) || !(o.k_s >= 0)) throw InputError("--ke must be > 0 and --ks >= 0");
+  if (!(o.k_e > 0) || !(o.k_s >= 0) || !std::isfinite(o.k_e) || !std::isfinite(o.k_s))
+    throw InputError("--ke must be finite and > 0, --ks finite and >= 0");
   run::ImageRunOptions r;
   r.runner.estimator = o.estimator;
   r.runner.compare_estimators = o.compare;

@@ -133,7 +133,7 @@ class RowJournal {
 NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const NodeOptions& o) {
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
-  auto provider = sources::open_dataset_source(dataset, o.camera_id);
+  auto provider = sources::open_dataset_source(dataset, o.camera_id, o.run.keep_going);
   const io::NetworkConfig& netcfg = provider->network();
   const int self = netcfg.index_of(o.camera_id);
   if (self < 0)
@@ -168,6 +168,8 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   // camera's own images, from one image's time to the next (timestamps.csv, else frame / its
   // fps), the last one lasting its nominal 1/fps.
   const double dt = 1.0 / netcfg.fps, dt_own = 1.0 / netcfg.camera_fps(si);
+  run::checked_rounds(dt, o.run.runner.k_e, o.run.runner.k_s, graph.max_degree(),
+                      o.run.runner.rounds);
   const int own_frames = provider->camera_frame_count(si);
   const auto frame_time = [&](int k) { return async ? provider->frame_time(si, k) : k * dt; };
   const auto frame_length = [&](int k) {
@@ -215,7 +217,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   const std::string stem = "node_" + std::to_string(o.camera_id);
   std::optional<double> start_epoch = o.start_epoch;
   if (async && o.start_file) {  // ready: tell the launcher, then wait for the common start
-    io::write_file_atomic(out_dir / (stem + ".ready"), "ready\n");
+    io::write_file_atomic(o.start_file->parent_path() / (stem + ".ready"), "ready\n");
     start_epoch = read_start(*o.start_file, o.dds.timeout_s);
   }
   NodeSummary summary;

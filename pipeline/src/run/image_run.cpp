@@ -1,6 +1,7 @@
 #include "netvmo/pipeline/run/image_run.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <thread>
@@ -58,6 +59,33 @@ std::optional<std::string> step_factor_warning(int substeps, double step_factor)
   return std::string(b);
 }
 
+int checked_rounds(double dt, double k_e, double k_s, int max_degree, int rounds) {
+  // Gershgorin: lambda_max(k_e Delta + k_s L) <= k_e + 2 k_s d_max (README, "Discretisation").
+  const double bound = k_e + 2.0 * k_s * max_degree;
+  if (!std::isfinite(bound) || !(k_e > 0) || !(k_s >= 0))
+    throw InputError("--ke " + std::to_string(k_e) + ", --ks " + std::to_string(k_s) +
+                     ": gains must be finite, k_e > 0 and k_s >= 0");
+  const double stable = std::max(1.0, std::ceil(dt * bound - 1e-12));           // h bound <= 1
+  const double unstable_below = std::max(1.0, std::floor(dt * bound / 2) + 1);  // h bound < 2
+  char range[400];
+  std::snprintf(range, sizeof range,
+                "with these gains and graph (k_e + 2 k_s d_max = %.6g, d_max = %d, dt = %.6g s) "
+                "N >= %.6g rounds keep h (k_e + 2 k_s d_max) <= 1 (stable, no oscillation); "
+                "N < %.6g give h (k_e + 2 k_s d_max) >= 2, where it may diverge (it does once "
+                "h lambda_max >= 2)",
+                bound, max_degree, dt, stable, unstable_below);
+  const int limit = kMaxRoundsPerFrame;
+  if (rounds > limit)
+    throw InputError("--rounds " + std::to_string(rounds) + ": at most " + std::to_string(limit) +
+                     " exchange rounds per frame (each is an observer step of every camera: " +
+                     std::to_string(limit) + " already cost ~50 ms a frame); " + range +
+                     "; 0 picks the smallest stable N");
+  if (rounds <= 0 && stable > limit)
+    throw InputError("--ke/--ks: the gains need more than " + std::to_string(limit) +
+                     " exchange rounds per frame; " + range + "; lower the gains");
+  return rounds > 0 ? rounds : static_cast<int>(stable);
+}
+
 ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOptions& options,
                           const FrameHook& hook) {
   const io::NetworkConfig& net = provider.network();
@@ -67,6 +95,8 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
     throw InputError(*m +
                      ": the in-process run needs one clock for every camera (cameras on "
                      "their own clocks run with `netvmo launch --mode async`)");
+  checked_rounds(1.0 / net.fps, options.runner.k_e, options.runner.k_s, graph.max_degree(),
+                 options.runner.rounds);
 
   run::RunnerSettings rs = options.runner;
   rs.tag_size = net.target.size;
@@ -154,7 +184,7 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
     const auto& record = runner.process(k, k * dt, dt, in, target);
     result.seconds_observer += seconds_since(t_obs);
     if (hook) hook(k, images, cams, record);
-    result.frames.push_back(cams);
+    if (options.runner.keep_history) result.frames.push_back(cams);
     progress.update(k + 1);
   }
   progress.finish();

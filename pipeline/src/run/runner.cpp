@@ -155,6 +155,7 @@ const FrameRecord& NetworkRunner::process(int frame, double t, double dt,
       c.fictitious_w = g_wi_[i] * *in[i].g_io_true;  // g_wo_i = g_wi g_io_i
   }
   evaluate_frame(r);
+  if (!settings_.keep_history) history_.clear();
   history_.push_back(std::move(r));
   return history_.back();
 }

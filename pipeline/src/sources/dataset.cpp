@@ -29,6 +29,27 @@ std::string list_frames(const std::vector<int>& v) {
   return s;
 }
 
+// A camera whose stream could not be opened (with keep_going): blind at every frame.
+class UnreadableStream : public CameraStream {
+ public:
+  explicit UnreadableStream(fs::path p) : path_(std::move(p)) {}
+  int frame_count() const override { return 0; }
+  bool has_frame(int) const override { return false; }
+  cv::Mat read(int) override { return {}; }
+  std::string frame_name(int f) const override {
+    return path_.string() + " frame " + std::to_string(f);
+  }
+  const fs::path& path() const override { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+// A camera whose images can be read (not another camera's process, not an unreadable stream).
+bool readable(const DatasetCamera& cam) {
+  return cam.source && !dynamic_cast<const UnreadableStream*>(cam.source.get());
+}
+
 // timestamps.csv (io::read_timestamps_csv checks the file itself): every listed camera is in
 // network.yaml, and an opened camera it lists has a row for each of its images and none past
 // its last.
@@ -49,9 +70,10 @@ void read_timestamps(Dataset& ds) {
                        " is not in network.yaml");
     listed.insert(r.camera);
     auto& cam = ds.cameras[static_cast<size_t>(i)];
-    // A camera that was not opened (another camera's process) keeps its times unchecked.
-    const int n = cam.source ? cam.source->frame_count() : r.frame + 1;
-    if (!cam.source && cam.times.size() < static_cast<size_t>(n))
+    // A camera that was not opened (another camera's process) or cannot be read keeps its
+    // times unchecked.
+    const int n = readable(cam) ? cam.source->frame_count() : r.frame + 1;
+    if (!readable(cam) && cam.times.size() < static_cast<size_t>(n))
       cam.times.resize(static_cast<size_t>(n), std::nan(""));
     if (r.frame >= n)
       throw InputError(where + ": frame: " + std::to_string(r.frame) +
@@ -62,7 +84,7 @@ void read_timestamps(Dataset& ds) {
     cam.times[static_cast<size_t>(r.frame)] = r.t;
   }
   for (auto& cam : ds.cameras) {
-    if (!cam.source || !listed.count(cam.id)) continue;
+    if (!readable(cam) || !listed.count(cam.id)) continue;
     for (int k = 0; k < cam.source->frame_count(); ++k)
       if (cam.source->has_frame(k) && std::isnan(cam.times[static_cast<size_t>(k)]))
         throw InputError(file.string() + ": camera " + std::to_string(cam.id) +
@@ -109,7 +131,7 @@ cv::Mat Dataset::read(size_t camera_index, int frame) {
   return m;
 }
 
-Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera) {
+Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera, bool keep_going) {
   if (!fs::is_directory(dir)) throw InputError(dir.string() + ": dataset folder not found");
   Dataset ds;
   ds.dir = dir;
@@ -157,7 +179,16 @@ Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera) {
                        " has both " + found[0].second.filename().string() + " (" +
                        found[0].first->name + ") and " + found[1].second.filename().string() +
                        " (" + found[1].first->name + "); keep one");
-    cam.source = found[0].first->open(found[0].second);
+    try {
+      cam.source = found[0].first->open(found[0].second);
+    } catch (const InputError& e) {
+      if (!keep_going) throw;
+      ds.warnings.push_back(std::string(e.what()) + "; camera " + std::to_string(cc.id) +
+                            " is blind for the whole run (--keep-going)");
+      cam.source = std::make_unique<UnreadableStream>(found[0].second);
+      ds.cameras.push_back(std::move(cam));
+      continue;
+    }
     const auto missing = cam.source->missing_frames();
     if (!missing.empty())
       ds.warnings.push_back(cam.source->path().string() + ": " + std::to_string(missing.size()) +
@@ -186,7 +217,7 @@ Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera) {
   ds.frame_count = ds.network.frames ? *ds.network.frames : longest;
   for (size_t i = 0; i < ds.cameras.size(); ++i) {
     const auto& c = ds.cameras[i];
-    if (!c.source || own_clock(i)) continue;
+    if (!readable(c) || own_clock(i)) continue;
     const int n = c.source->frame_count();
     if (n < ds.frame_count)
       ds.warnings.push_back(c.source->path().string() + ": camera " + std::to_string(c.id) +

@@ -20,8 +20,8 @@ std::string fmt(double v) {
 
 class DatasetProvider final : public NetworkSource {
  public:
-  DatasetProvider(const fs::path& dir, std::optional<int> only_camera)
-      : ds_(open_dataset(dir, only_camera)) {
+  DatasetProvider(const fs::path& dir, std::optional<int> only_camera, bool keep_going)
+      : ds_(open_dataset(dir, only_camera, keep_going)) {
     const fs::path target = dir / "target.csv", cams = dir / "truth_cameras.csv";
     if (fs::exists(target) && fs::exists(cams)) {
       for (const auto& r : io::read_target_csv(target)) target_[r.frame] = r.g_wo;
@@ -102,8 +102,9 @@ std::optional<std::string> clock_mismatch(const NetworkSource& source) {
 }
 
 std::unique_ptr<NetworkSource> open_dataset_source(const fs::path& dir,
-                                                   std::optional<int> only_camera) {
-  return std::make_unique<DatasetProvider>(dir, only_camera);
+                                                   std::optional<int> only_camera,
+                                                   bool keep_going) {
+  return std::make_unique<DatasetProvider>(dir, only_camera, keep_going);
 }
 
 }  // namespace netvmo::sources

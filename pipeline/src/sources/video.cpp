@@ -1,6 +1,7 @@
 // Video files: cam_<id>.<ext>, anything cv::VideoCapture decodes (avi, mp4, mkv, ...).
 #include <cmath>
 #include <opencv2/videoio.hpp>
+#include <opencv2/videoio/registry.hpp>
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/sources/camera_stream.hpp"
@@ -28,7 +29,7 @@ class VideoStream : public CameraStream {
   int frame_count() const override { return count_; }
   bool has_frame(int f) const override { return f >= 0 && f < count_; }
   cv::Mat read(int f) override {
-    if (!has_frame(f)) return {};
+    if (!has_frame(f) || (failed_at_ >= 0 && f > failed_at_)) return {};
     if (f < next_) open();
     while (next_ < f) {
       if (!cap_.grab()) fail(next_);
@@ -48,8 +49,12 @@ class VideoStream : public CameraStream {
   void open() {
     cap_.release();
     bool ok = false;
+    // FFmpeg when OpenCV has it: the other backends (GStreamer) only add their own complaints
+    // about a file FFmpeg cannot open.
+    const int api =
+        cv::videoio_registry::hasBackend(cv::CAP_FFMPEG) ? int(cv::CAP_FFMPEG) : int(cv::CAP_ANY);
     try {
-      ok = cap_.open(file_.string(), cv::CAP_ANY);
+      ok = cap_.open(file_.string(), api);
     } catch (const cv::Exception&) {
       ok = false;
     }
@@ -57,16 +62,20 @@ class VideoStream : public CameraStream {
       throw InputError(file_.string() + ": cannot open video (unsupported or corrupt file)");
     next_ = 0;
   }
+  // A stream that stops decoding does not come back: the camera is blind from that frame on
+  // (later reads return no image instead of failing again).
   [[noreturn]] void fail(int f) {
-    const int at = f;
-    open();  // leave the capture in a known state for the next call
-    throw InputError(file_.string() + ": cannot decode frame " + std::to_string(at) + " of " +
-                     std::to_string(count_) + " (corrupt or truncated video)");
+    failed_at_ = f;
+    next_ = count_;  // the next read of an earlier frame reopens
+    throw InputError(file_.string() + ": cannot decode frame " + std::to_string(f) + " of " +
+                     std::to_string(count_) +
+                     " (corrupt or truncated video); blind from that frame on");
   }
   fs::path file_;
   cv::VideoCapture cap_;
   int count_ = 0;
   int next_ = 0;
+  int failed_at_ = -1;  ///< the first frame that could not be decoded, or -1
 };
 }  // namespace
 

@@ -18,6 +18,10 @@
 
 namespace netvmo::io {
 
+/// The most frames `netvmo render`, `demo` and `bench` write: 5 cameras of 640x480 PNGs take
+/// ~1 MB a frame, so 100,000 frames (55 minutes at 30 frames/s) are ~100 GB.
+inline constexpr int kMaxDatasetFrames = 100000;
+
 struct DatasetOptions {
   int frames = 0;        ///< frames to write; 0 = the scene's frame count
   bool progress = true;  ///< progress bar on stderr

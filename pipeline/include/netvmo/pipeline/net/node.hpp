@@ -38,7 +38,8 @@ struct NodeOptions {
   /// node started after it (a restart) joins at the current frame.
   std::optional<double> start_epoch;
   /// Instead of start_epoch: once set up and matched with its neighbours, the node writes
-  /// node_<id>.ready into its output folder and waits (at most dds.timeout_s) for this file to
+  /// node_<id>.ready next to this file (not into its output folder, which may be a staging
+  /// folder named after its process id) and waits (at most dds.timeout_s) for this file to
   /// hold the common start (seconds since the epoch); `launch` writes it when every node is
   /// ready. A restarted node finds it there and joins late.
   std::optional<std::filesystem::path> start_file;
@@ -49,7 +50,9 @@ struct NodeOptions {
   double delay_ms = 0.0;   ///< every received message is handed to the observer this late
   std::uint64_t seed = 0;  ///< seed of the drops (with the camera id)
   /// A restart (`launch --restart-after`): keep the killed predecessor's finished rows of
-  /// node_<id>.csv.partial (frames before the one this node joins at).
+  /// node_<id>.csv.partial in out_dir (frames before the one this node joins at). `netvmo node`
+  /// makes out_dir the predecessor's folder: its staging folder (io::OutputDir with resume), or
+  /// with --in-place the folder itself.
   bool resume = false;
 };
 

@@ -52,6 +52,8 @@ struct EstimateRow {
 };
 
 struct ImageRunResult {
+  /// Every frame's record and front-end results; only the last record when
+  /// runner.keep_history is false (then `frames` stays empty).
   std::vector<run::FrameRecord> history;
   std::vector<std::vector<CameraFrame>> frames;  ///< [frame][camera]
   std::vector<std::string> warnings;
@@ -83,6 +85,20 @@ std::vector<CameraInput> camera_inputs(const std::vector<CameraFrame>& cams,
 /// The warning a run gives when h (k_e + 2 k_s d_max) = step_factor reaches 2 (the forward-Euler
 /// stability limit), or none.
 std::optional<std::string> step_factor_warning(int substeps, double step_factor);
+
+/// The most exchange rounds per frame a run accepts (--rounds, or the smallest stable count the
+/// gains need). Each round is one observer step of every camera (and, across processes, one
+/// message round trip): 10,000 rounds cost ~50 ms per frame for 5 cameras in one process and
+/// ~0.25 s over DDS (25 us a round), so such a run no longer keeps up with a camera; beyond the
+/// smallest stable count more rounds only shrink the O(h) Euler error. 10^9 would take hours
+/// per frame.
+inline constexpr int kMaxRoundsPerFrame = 10000;
+
+/// The exchange rounds per frame of a run: `rounds`, or when 0 the smallest N with
+/// h (k_e + 2 k_s d_max) <= 1, h = dt / N (the README's step-factor rule). Throws InputError
+/// naming --rounds (or --ke/--ks when the gains need too many) with the stable range when the
+/// count exceeds kMaxRoundsPerFrame or the gains are not finite.
+int checked_rounds(double dt, double k_e, double k_s, int max_degree, int rounds);
 
 /// Runs the whole network over the provider's frames. Throws InputError for bad input (an
 /// unreadable image without keep_going, a disconnected graph, an unknown camera id).

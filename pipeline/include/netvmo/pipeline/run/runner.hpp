@@ -41,6 +41,9 @@ struct RunnerSettings {
   /// A feature-model estimate whose tag corner comes closer to the camera plane than this is
   /// re-initialised from PnP when the camera sees the target (its image features are undefined).
   double min_feature_depth = 0.05;
+  /// Keep every frame's record in history() (for the outputs). false: only the latest frame's,
+  /// so memory stays flat over arbitrarily long runs (the soak).
+  bool keep_history = true;
 };
 
 /// The paper's initial estimate for image runs: 1 m in front of the camera, tag facing it

@@ -80,6 +80,9 @@ struct Dataset {
 /// images or video for a declared camera, both a folder and a video, ...). With `only_camera`
 /// (a camera id), the other cameras keep their network.yaml entry but neither their calibration
 /// nor their frames are opened (a camera's own process); reading them throws InputError.
-Dataset open_dataset(const std::filesystem::path& dir, std::optional<int> only_camera = {});
+/// With `keep_going`, a camera whose video or image folder cannot be opened at all (e.g. a
+/// truncated MP4) is blind for the whole run, with one warning, instead of an InputError.
+Dataset open_dataset(const std::filesystem::path& dir, std::optional<int> only_camera = {},
+                     bool keep_going = false);
 
 }  // namespace netvmo::sources

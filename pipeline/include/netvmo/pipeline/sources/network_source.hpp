@@ -62,8 +62,10 @@ std::optional<std::string> clock_mismatch(const NetworkSource& source);
 
 /// A dataset folder (sources/dataset.hpp documents the layout). Ground truth is read from
 /// target.csv (true target poses) and truth_cameras.csv (true camera poses,
-/// header camera,px,py,pz,rx,ry,rz) when both are present. `only_camera`: see open_dataset.
+/// header camera,px,py,pz,rx,ry,rz) when both are present. `only_camera`, `keep_going`: see
+/// open_dataset.
 std::unique_ptr<NetworkSource> open_dataset_source(const std::filesystem::path& dir,
-                                                   std::optional<int> only_camera = {});
+                                                   std::optional<int> only_camera = {},
+                                                   bool keep_going = false);
 
 }  // namespace netvmo::sources
