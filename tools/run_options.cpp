@@ -44,7 +44,8 @@ void add_run_options(CLI::App& cmd, RunCliOptions& o, bool in_process_transport)
   cmd.add_flag("--keep-going", o.keep_going,
                "Treat a camera whose image cannot be read as blind for that frame, and one whose "
                "video cannot be opened (or stops decoding) as blind from then on, with a "
-               "warning, instead of stopping");
+               "warning, instead of stopping (bad dataset files, e.g. timestamps.csv going "
+               "backwards or repeating, still stop: no fallback guesses a clock)");
   cmd.add_flag("--no-overlays", o.no_overlays, "Do not write overlays/");
   cmd.add_flag("--no-plots", o.no_plots, "Do not draw energies.png and errors.png");
   cmd.add_option("--max-frames", o.max_frames, "Stop after this many frames (0 = all)")

@@ -13,6 +13,7 @@
 #include <opencv2/videoio.hpp>
 #include <sstream>
 
+#include "netvmo/pipeline/io/calibration.hpp"
 #include "netvmo/pipeline/io/dataset_writer.hpp"
 #include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/pipeline/run/image_run.hpp"
@@ -222,6 +223,47 @@ TEST_F(SmallDataset, RecordedFoldersAndVideoGiveTheSameEstimates) {
     }
   }
   EXPECT_EQ(detections, 36);
+}
+
+// The same dataset with every calibration as a ROS camera_info file (detected by its content):
+// `netvmo run` gives the same summary.json, timing and the dataset's name aside.
+TEST_F(SmallDataset, RosCalibrationFilesGiveTheSameSummary) {
+  const fs::path rendered = *dir_ / "rendered", ros = *dir_ / "ros";
+  fs::copy(rendered, ros, fs::copy_options::recursive);
+  for (int id = 1; id <= 5; ++id) {
+    const fs::path f = ros / "calib" / ("cam_" + std::to_string(id) + ".yaml");
+    const io::Calibration c = io::load_calibration_opencv(f);
+    io::save_calibration_ros(f, c, "cam_" + std::to_string(id));
+    ASSERT_TRUE(io::looks_like_ros_camera_info(f));
+  }
+  const auto summary = [&](const fs::path& ds, const std::string& out) {
+    const auto c = test::run_netvmo(
+        "run " + ds.string() + " --out " + (*dir_ / out).string() + " --no-overlays --no-plots",
+        *dir_);
+    EXPECT_EQ(c.code, 0) << c.err;
+    auto s = nlohmann::json::parse(slurp(*dir_ / out / "summary.json"));
+    s.erase("timing");
+    s.erase("dataset");
+    return s;
+  };
+  const auto a = summary(rendered, "run_opencv"), b = summary(ros, "run_ros");
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(a["cameras"].size(), 5u);
+  EXPECT_EQ(slurp(*dir_ / "run_opencv" / "estimates.csv"),
+            slurp(*dir_ / "run_ros" / "estimates.csv"));
+  // An image size that differs from the ROS file's: one line naming the image and the file.
+  std::string text = slurp(ros / "calib" / "cam_2.yaml");
+  text.replace(text.find("image_width: 640"), 16, "image_width: 800");
+  std::ofstream(ros / "calib" / "cam_2.yaml") << text;
+  const auto c = test::run_netvmo(
+      "run " + ros.string() + " --out " + (*dir_ / "run_ros_bad").string() + " --no-overlays",
+      *dir_);
+  EXPECT_NE(c.code, 0);
+  EXPECT_NE(
+      c.err.find("is 640x480 but " + (ros / "calib" / "cam_2.yaml").string() + " says 800x480"),
+      std::string::npos)
+      << c.err;
+  EXPECT_EQ(std::count(c.err.begin(), c.err.end(), '\n'), 1) << c.err;
 }
 
 TEST_F(SmallDataset, BadInputGivesOneClearLineAndKeepGoingBlindsTheCamera) {

@@ -57,7 +57,8 @@ const std::vector<cv::Point2d>& subsample_rays(const Calibration& c, int ss) {
   static std::vector<std::unique_ptr<Entry>> cache;
   for (const auto& e : cache)
     if (e->ss == ss && e->calib.width == c.width && e->calib.height == c.height &&
-        cv::norm(cv::Mat(e->calib.K), cv::Mat(c.K)) == 0 && cv::norm(e->calib.dist - c.dist) == 0)
+        cv::norm(cv::Mat(e->calib.K), cv::Mat(c.K)) == 0 && cv::norm(e->calib.dist - c.dist) == 0 &&
+        cv::norm(e->calib.rational - c.rational) == 0)
       return e->rays;
   if (cache.size() >= 4) cache.erase(cache.begin());
   auto entry = std::make_unique<Entry>();
@@ -166,7 +167,7 @@ std::array<cv::Point2d, 4> project_corners(const Calibration& calib, const obs::
   }
   std::vector<cv::Point2d> px;
   cv::projectPoints(cam_pts, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(calib.K),
-                    cv::Mat(calib.dist), px);
+                    calib.distortion(), px);
   return {px[0], px[1], px[2], px[3]};
 }
 

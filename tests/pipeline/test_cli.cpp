@@ -141,5 +141,28 @@ TEST(Cli, DatasetErrorsOneLineNothingWritten) {
   EXPECT_FALSE(fs::exists(dir / "out2" / "detections.csv"));
 }
 
+// timestamps.csv going backwards stops `netvmo run` with one line naming the file, line and
+// field, --keep-going or not (it only blinds cameras whose image cannot be read), and writes
+// nothing.
+TEST(Cli, BackwardsTimestampsStopRunEvenWithKeepGoing) {
+  const auto dir = testing::fresh_dir("cli_times");
+  testing::write_synth_dataset(dir / "ds", testing::simple_dataset_spec(2, 3));
+  std::ofstream(dir / "ds" / "timestamps.csv")
+      << "camera,frame,t\n1,0,0\n1,1,0.1\n1,2,0.2\n2,0,0\n2,1,0.2\n2,2,0.1\n";
+  const std::string file = (dir / "ds" / "timestamps.csv").string();
+  for (const std::string extra : {"", " --keep-going"}) {
+    const auto r =
+        test::run_netvmo("run " + (dir / "ds").string() + " --out " + (dir / "out").string() +
+                             " --no-overlays --no-plots" + extra,
+                         dir);
+    EXPECT_NE(r.code, 0) << extra;
+    EXPECT_EQ(count_lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find(file + ":7: t: camera 2 frame 2 at t = 0.1 s is not after its frame 1"),
+              std::string::npos)
+        << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out" / "summary.json"));
+  }
+}
+
 }  // namespace
 }  // namespace netvmo

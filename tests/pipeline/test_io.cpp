@@ -4,6 +4,7 @@
 
 #include <visp3/core/vpCameraParameters.h>
 #include <visp3/core/vpXmlParserCamera.h>
+#include <algorithm>
 #include <fstream>
 
 #include "netvmo/pipeline/error.hpp"
@@ -96,6 +97,128 @@ TEST(Calibration, OpenCvMatrixSizeCheckedBeforeReading) {
   write(dir / "f.yaml", "%YAML:1.0\n--- a: v\nb---\n");
   expect_input_error([&] { load_calibration_opencv(dir / "f.yaml"); },
                      {"f.yaml:2", "'---' must stand alone"});
+}
+
+// A ROS camera_info file as ROS's camera_calibration writes it (monocular: identity
+// rectification; P is the rectified images' matrix, different from K).
+std::string ros_camera_info(const std::string& model = "plumb_bob",
+                            const std::string& D = "[-0.12, 0.05, 0.0004, -0.0003, 0.0021]",
+                            const std::string& R = "[1, 0, 0, 0, 1, 0, 0, 0, 1]",
+                            const std::string& K = "[610.25, 0, 321.7, 0, 605.5, 238.4, 0, 0, 1]",
+                            const std::string& extra = "") {
+  const int n = static_cast<int>(std::count(D.begin(), D.end(), ',')) + 1;
+  return "image_width: 640\nimage_height: 480\ncamera_name: narrow_stereo\n"
+         "camera_matrix:\n  rows: 3\n  cols: 3\n  data: " +
+         K + "\ndistortion_model: " + model +
+         "\ndistortion_coefficients:\n  rows: 1\n  cols: " + std::to_string(n) + "\n  data: " + D +
+         "\nrectification_matrix:\n  rows: 3\n  cols: 3\n  data: " + R +
+         "\nprojection_matrix:\n  rows: 3\n  cols: 4\n"
+         "  data: [590.1, 0, 322.4, 0, 0, 596.3, 237.9, 0, 0, 0, 1, 0]\n" +
+         extra;
+}
+
+// The same camera as a ROS camera_info and as an OpenCV FileStorage file: identical intrinsics.
+TEST(Calibration, RosCameraInfoEqualsOpenCv) {
+  const auto dir = testing::fresh_dir("calib_ros");
+  write(dir / "ros.yaml", ros_camera_info());
+  write(dir / "cv.yaml",
+        "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n"
+        "camera_matrix: !!opencv-matrix\n  rows: 3\n  cols: 3\n  dt: d\n"
+        "  data: [610.25, 0, 321.7, 0, 605.5, 238.4, 0, 0, 1]\n"
+        "distortion_coefficients: !!opencv-matrix\n  rows: 1\n  cols: 5\n  dt: d\n"
+        "  data: [-0.12, 0.05, 0.0004, -0.0003, 0.0021]\n");
+  EXPECT_TRUE(looks_like_ros_camera_info(dir / "ros.yaml"));
+  EXPECT_FALSE(looks_like_ros_camera_info(dir / "cv.yaml"));
+  const Calibration r = load_calibration_ros(dir / "ros.yaml");
+  const Calibration c = load_calibration_opencv(dir / "cv.yaml");
+  EXPECT_EQ(r.width, c.width);
+  EXPECT_EQ(r.height, c.height);
+  EXPECT_EQ(cv::norm(cv::Mat(r.K), cv::Mat(c.K)), 0.0);
+  EXPECT_EQ(cv::norm(r.dist - c.dist), 0.0);
+  EXPECT_FALSE(r.is_rational());
+  EXPECT_DOUBLE_EQ(r.K(1, 1), 605.5);
+  EXPECT_DOUBLE_EQ(r.dist[4], 0.0021);
+  EXPECT_EQ(r.source, (dir / "ros.yaml").string());
+  // save_calibration_ros writes what load_calibration_ros reads, to the last bit.
+  save_calibration_ros(dir / "saved.yaml", c, "cam_1");
+  const Calibration s = load_calibration_ros(dir / "saved.yaml");
+  EXPECT_EQ(cv::norm(cv::Mat(s.K), cv::Mat(c.K)), 0.0);
+  EXPECT_EQ(cv::norm(s.dist - c.dist), 0.0);
+}
+
+// rational_polynomial (8 coefficients) is OpenCV's rational model: the same as an OpenCV file
+// with 8 coefficients, and undistortion inverts it.
+TEST(Calibration, RosRationalPolynomial) {
+  const auto dir = testing::fresh_dir("calib_ros_rat");
+  const std::string D = "[0.31, -0.12, 0.0004, -0.0003, 0.02, 0.65, -0.05, 0.07]";
+  write(dir / "ros.yaml", ros_camera_info("rational_polynomial", D));
+  write(dir / "cv.yaml",
+        "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n"
+        "camera_matrix: !!opencv-matrix\n  rows: 3\n  cols: 3\n  dt: d\n"
+        "  data: [610.25, 0, 321.7, 0, 605.5, 238.4, 0, 0, 1]\n"
+        "distortion_coefficients: !!opencv-matrix\n  rows: 1\n  cols: 8\n  dt: d\n  data: " +
+            D + "\n");
+  const Calibration r = load_calibration_ros(dir / "ros.yaml");
+  const Calibration c = load_calibration_opencv(dir / "cv.yaml");
+  ASSERT_TRUE(r.is_rational());
+  EXPECT_EQ(cv::norm(r.dist - c.dist), 0.0);
+  EXPECT_EQ(cv::norm(r.rational - c.rational), 0.0);
+  EXPECT_DOUBLE_EQ(r.rational[0], 0.65);
+  EXPECT_EQ(r.distortion().cols, 8);
+  const std::vector<cv::Point2d> xy = {{0.4, -0.3}, {-0.5, 0.38}, {0.01, 0.02}};
+  const auto px = denormalize_points(xy, r);
+  // Not the 5-coefficient model: k4..k6 move the points.
+  Calibration five = r;
+  five.rational = {0, 0, 0};
+  EXPECT_GT(cv::norm(denormalize_points(xy, five)[0] - px[0]), 1.0);
+  const auto back = normalize_points(px, r);
+  for (size_t i = 0; i < xy.size(); ++i) EXPECT_LT(cv::norm(back[i] - xy[i]), 1e-9);
+  save_calibration_opencv(dir / "saved_cv.yaml", r);
+  EXPECT_EQ(cv::norm(load_calibration_opencv(dir / "saved_cv.yaml").rational - r.rational), 0.0);
+  save_calibration_ros(dir / "saved_ros.yaml", r, "cam_1");
+  EXPECT_EQ(cv::norm(load_calibration_ros(dir / "saved_ros.yaml").rational - r.rational), 0.0);
+}
+
+TEST(Calibration, RosErrorsNameFileAndField) {
+  const auto dir = testing::fresh_dir("calib_ros_err");
+  const auto fails = [&](const std::string& text, std::initializer_list<std::string> needles) {
+    write(dir / "cam_1.yaml", text);
+    try {
+      load_calibration_ros(dir / "cam_1.yaml");
+      ADD_FAILURE() << "no InputError for\n" << text;
+    } catch (const InputError& e) {
+      const std::string m = e.what();
+      EXPECT_EQ(m.find('\n'), std::string::npos) << "one line: " << m;
+      EXPECT_EQ(m.rfind((dir / "cam_1.yaml").string(), 0), 0u) << m;
+      for (const auto& n : needles) EXPECT_NE(m.find(n), std::string::npos) << m << " lacks " << n;
+    }
+  };
+  fails(ros_camera_info("equidistant", "[0.1, 0.01, 0.001, 0.0001]"),
+        {"distortion_model", "'equidistant' is not supported"});
+  fails(ros_camera_info("plumb_bob", "[-0.12, 0.05, 0.0004, -0.0003]"),
+        {"distortion_coefficients", "expected a 1x5 matrix", "cols 4"});
+  fails(ros_camera_info("rational_polynomial"), {"distortion_coefficients", "1x8"});
+  fails(ros_camera_info("plumb_bob", "[-0.12, 0.05, .nan, -0.0003, 0.0021]"),
+        {"distortion_coefficients.data[2]", "not finite"});
+  fails(ros_camera_info("plumb_bob", "[-0.12, 0.05, 0.0004, -0.0003, 0.0021]",
+                        "[1, 0, 0, 0, 1, 0, 0, 0, 1]", "[610, 0, 321, 0, 605, 238, 0, 0, .inf]"),
+        {"camera_matrix.data[8]", "not finite"});
+  fails(ros_camera_info("plumb_bob", "[-0.12, 0.05, 0.0004, -0.0003, 0.0021]",
+                        "[1, 0, 0, 0, 1, 0, 0, 0, 1]", "[610, 0, 321, 0, 605, 238, 0, 0]"),
+        {"camera_matrix.data", "expected 9 numbers", "got 8"});
+  fails(ros_camera_info("plumb_bob", "[-0.12, 0.05, 0.0004, -0.0003, 0.0021]",
+                        "[0.999, 0.04, 0, -0.04, 0.999, 0, 0, 0, 1]"),
+        {"rectification_matrix", "not the identity"});
+  fails(ros_camera_info("plumb_bob", "[-0.12, 0.05, 0.0004, -0.0003, 0.0021]",
+                        "[1, 0, 0, 0, 1, 0, 0, 0, 1]", "[-610, 0, 321, 0, 605, 238, 0, 0, 1]"),
+        {"camera_matrix", "focal lengths"});
+  fails(ros_camera_info() + "binning_x: 1\n", {"binning_x"});
+  std::string no_width = ros_camera_info();
+  no_width.erase(0, no_width.find('\n') + 1);
+  fails(no_width, {"image_width", "missing"});
+  std::string bad_proj = ros_camera_info();
+  bad_proj.replace(bad_proj.find("cols: 4"), 7, "cols: 3");
+  fails(bad_proj, {"projection_matrix", "expected a 3x4 matrix"});
 }
 
 TEST(Calibration, VispXml) {

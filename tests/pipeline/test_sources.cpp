@@ -274,6 +274,14 @@ TEST(Sources, TimestampErrorsNameFileLineAndColumn) {
   expect_input_error([&] { open_dataset(dir); }, {file + ":3", "t:", "abc"});
   with("1,0,0\n1,1,0.2\n1,2,0.1\n" + cam2);  // backwards
   expect_input_error([&] { open_dataset(dir); }, {file + ":4", "t:", "not after its frame 1"});
+  with("1,0,0\n1,1,0.1\n1,2,0.1\n" + cam2);  // a time repeated
+  expect_input_error([&] { open_dataset(dir); },
+                     {file + ":4", "t:", "frame 2 at t = 0.1 s is not after its frame 1"});
+  with("1,0,0\n1,1,0.1\n1,2,0.2\n2,1,0.1\n2,0,0.15\n2,2,0.2\n");  // backwards, rows out of order
+  expect_input_error([&] { open_dataset(dir); },
+                     {file + ":5", "t:", "camera 2 frame 1", "not after its frame 0"});
+  with("1,0,0\n1,1,inf\n1,2,0.2\n" + cam2);  // not finite
+  expect_input_error([&] { open_dataset(dir); }, {file + ":3", "t:", "expected a number"});
   with("1,0,0\n1,1,0.1\n1,1,0.15\n1,2,0.2\n" + cam2);  // a frame twice
   expect_input_error([&] { open_dataset(dir); }, {file + ":4", "frame:", "second row"});
   with("1,0,0\n1,1,0.1\n1,2,0.2\n" + cam2 + "7,0,0\n");  // unknown camera

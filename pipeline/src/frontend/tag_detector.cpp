@@ -119,7 +119,7 @@ bool refine_edge_lines(const cv::Mat& g, std::array<cv::Point2d, 4>& c, int bord
     if (undistort) {
       std::vector<cv::Point2d> u;
       cv::undistortPoints(
-          pts, u, cv::Mat(calib->K), cv::Mat(calib->dist), cv::noArray(), cv::Mat(calib->K),
+          pts, u, cv::Mat(calib->K), calib->distortion(), cv::noArray(), cv::Mat(calib->K),
           cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 50, 1e-10));
       pts.swap(u);
     }

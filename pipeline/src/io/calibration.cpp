@@ -4,12 +4,15 @@
 #include <visp3/core/vpException.h>
 #include <visp3/core/vpXmlParserCamera.h>
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <iterator>
 #include <opencv2/calib3d.hpp>
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/io/yaml_reader.hpp"
 
 namespace netvmo::io {
 namespace fs = std::filesystem;
@@ -27,6 +30,9 @@ void validate(const Calibration& c, const std::string& file) {
     throw InputError(file + ": camera_matrix: expected [fx s cx; 0 fy cy; 0 0 1]");
   for (int i = 0; i < 5; ++i)
     if (!std::isfinite(c.dist[i])) throw InputError(file + ": distortion_coefficients: not finite");
+  for (int i = 0; i < 3; ++i)
+    if (!std::isfinite(c.rational[i]))
+      throw InputError(file + ": distortion_coefficients: not finite");
 }
 
 // An opencv-matrix node, its declared size checked first: OpenCV allocates rows x cols before
@@ -96,16 +102,18 @@ Calibration load_calibration_opencv(const fs::path& path) {
     D = D.reshape(1, 1);
     const int n = D.empty() ? 0 : D.cols;
     if (n != 4 && n != 5 && n != 8 && n != 12 && n != 14)
-      throw InputError(file + ": distortion_coefficients: expected 4 or 5 numbers, got " +
+      throw InputError(file + ": distortion_coefficients: expected 4, 5 or 8 numbers, got " +
                        std::to_string(n));
     for (int i = 0; i < n; ++i) {
       const double v = D.at<double>(0, i);
       if (i < 5)
         c.dist[i] = v;
+      else if (i < 8)
+        c.rational[i - 5] = v;
       else if (v != 0.0)
         throw InputError(file +
-                         ": distortion_coefficients: only the 5-coefficient model "
-                         "(k1 k2 p1 p2 k3) is supported; coefficient " +
+                         ": distortion_coefficients: only the models with 5 (k1 k2 p1 p2 k3) "
+                         "or 8 (+ k4 k5 k6) coefficients are supported; coefficient " +
                          std::to_string(i) + " is non-zero");
     }
   } catch (const cv::Exception& e) {
@@ -117,6 +125,81 @@ Calibration load_calibration_opencv(const fs::path& path) {
     // made of nothing but a colon).
     throw InputError(file + ": cannot parse calibration: " + e.what());
   }
+  validate(c, file);
+  return c;
+}
+
+namespace {
+
+// A ROS camera_info matrix {rows, cols, data}: the declared size must be the expected one and
+// match the data, and every entry must be finite.
+std::vector<double> ros_matrix(MapReader& parent, const std::string& key, int rows, int cols) {
+  MapReader m = parent.get(key).map();
+  const Value r = m.get("rows"), c = m.get("cols"), d = m.get("data");
+  const int nr = r.integer(), nc = c.integer();
+  if (nr != rows || nc != cols)
+    m.fail("expected a " + std::to_string(rows) + "x" + std::to_string(cols) +
+           " matrix, got rows " + std::to_string(nr) + " x cols " + std::to_string(nc));
+  const std::vector<double> v = d.numbers();
+  if (static_cast<long long>(v.size()) != static_cast<long long>(rows) * cols)
+    d.fail("expected " + std::to_string(rows * cols) + " numbers (rows x cols), got " +
+           std::to_string(v.size()));
+  for (size_t i = 0; i < v.size(); ++i)
+    if (!std::isfinite(v[i]))
+      Value(d.node()[i], d.file(), d.path() + "[" + std::to_string(i) + "]").fail("not finite");
+  m.finish();
+  return v;
+}
+
+}  // namespace
+
+bool looks_like_ros_camera_info(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("distortion_model", 0) != 0) continue;
+    const size_t colon = line.find_first_not_of(" \t", 16);
+    if (colon != std::string::npos && line[colon] == ':') return true;
+  }
+  return false;
+}
+
+Calibration load_calibration_ros(const fs::path& path) {
+  const std::string file = path.string();
+  if (!fs::is_regular_file(path)) throw InputError(file + ": calibration file not found");
+  MapReader root = MapReader::from_file(path);
+  Calibration c;
+  c.source = file;
+  c.width = root.get("image_width").integer();
+  c.height = root.get("image_height").integer();
+  if (auto name = root.find("camera_name")) (void)name->string();
+  const std::vector<double> K = ros_matrix(root, "camera_matrix", 3, 3);
+  c.K = cv::Matx33d(K.data());
+  const Value model_value = root.get("distortion_model");
+  const std::string model = model_value.string();
+  int n = 0;
+  if (model == "plumb_bob")
+    n = 5;
+  else if (model == "rational_polynomial")
+    n = 8;
+  else
+    model_value.fail("'" + model +
+                     "' is not supported (supported: plumb_bob, rational_polynomial; the "
+                     "images are undistorted with OpenCV's pinhole model)");
+  const std::vector<double> D = ros_matrix(root, "distortion_coefficients", 1, n);
+  for (int i = 0; i < 5; ++i) c.dist[i] = D[static_cast<size_t>(i)];
+  for (int i = 5; i < n; ++i) c.rational[i - 5] = D[static_cast<size_t>(i)];
+  if (root.has("rectification_matrix")) {
+    const std::vector<double> R = ros_matrix(root, "rectification_matrix", 3, 3);
+    for (int i = 0; i < 9; ++i)
+      if (R[static_cast<size_t>(i)] != (i % 4 == 0 ? 1.0 : 0.0))
+        throw InputError(file +
+                         ": rectification_matrix: not the identity (a stereo camera's "
+                         "rectification); netvmo uses raw images with camera_matrix and "
+                         "distortion_coefficients, which a monocular camera_info describes");
+  }
+  if (root.has("projection_matrix")) (void)ros_matrix(root, "projection_matrix", 3, 4);
+  root.finish();
   validate(c, file);
   return c;
 }
@@ -153,7 +236,7 @@ void save_calibration_opencv(const fs::path& path, const Calibration& c) {
     cv::FileStorage fsw(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY);
     fsw << "image_width" << c.width << "image_height" << c.height;
     fsw << "camera_matrix" << cv::Mat(c.K);
-    fsw << "distortion_coefficients" << cv::Mat(cv::Matx<double, 1, 5>(c.dist.val));
+    fsw << "distortion_coefficients" << c.distortion();
     text = fsw.releaseAndGetString();
   } catch (const cv::Exception& e) {
     throw InputError(path.string() + ": cannot write calibration: " + e.err);
@@ -161,12 +244,47 @@ void save_calibration_opencv(const fs::path& path, const Calibration& c) {
   write_file_atomic(path, text);  // appears only when complete
 }
 
+void save_calibration_ros(const fs::path& path, const Calibration& c,
+                          const std::string& camera_name) {
+  const auto num = [](double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.17g", v);
+    return std::string(b);
+  };
+  const auto matrix = [&](const char* key, int rows, int cols, const std::vector<double>& v) {
+    std::string s = std::string(key) + ":\n  rows: " + std::to_string(rows) +
+                    "\n  cols: " + std::to_string(cols) + "\n  data: [";
+    for (size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + num(v[i]);
+    return s + "]\n";
+  };
+  const cv::Matx33d& K = c.K;
+  const cv::Mat D = c.distortion();
+  std::string text = "image_width: " + std::to_string(c.width) +
+                     "\nimage_height: " + std::to_string(c.height) +
+                     "\ncamera_name: " + camera_name + "\n";
+  text += matrix("camera_matrix", 3, 3, std::vector<double>(K.val, K.val + 9));
+  text += std::string("distortion_model: ") +
+          (c.is_rational() ? "rational_polynomial" : "plumb_bob") + "\n";
+  text += matrix("distortion_coefficients", 1, D.cols,
+                 std::vector<double>(D.begin<double>(), D.end<double>()));
+  text += matrix("rectification_matrix", 3, 3, {1, 0, 0, 0, 1, 0, 0, 0, 1});
+  text += matrix("projection_matrix", 3, 4,
+                 {K(0, 0), K(0, 1), K(0, 2), 0, K(1, 0), K(1, 1), K(1, 2), 0, 0, 0, 1, 0});
+  write_file_atomic(path, text);
+}
+
+cv::Mat Calibration::distortion() const {
+  if (!is_rational()) return cv::Mat(cv::Matx<double, 1, 5>(dist.val)).clone();
+  return (cv::Mat_<double>(1, 8) << dist[0], dist[1], dist[2], dist[3], dist[4], rational[0],
+          rational[1], rational[2]);
+}
+
 std::vector<cv::Point2d> normalize_points(const std::vector<cv::Point2d>& px,
                                           const Calibration& calib) {
   std::vector<cv::Point2d> out;
   if (px.empty()) return out;
   cv::undistortPoints(
-      px, out, cv::Mat(calib.K), cv::Mat(calib.dist), cv::noArray(), cv::noArray(),
+      px, out, cv::Mat(calib.K), calib.distortion(), cv::noArray(), cv::noArray(),
       cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12));
   return out;
 }
@@ -179,7 +297,7 @@ std::vector<cv::Point2d> denormalize_points(const std::vector<cv::Point2d>& xy,
   rays.reserve(xy.size());
   for (const auto& p : xy) rays.emplace_back(p.x, p.y, 1.0);
   cv::projectPoints(rays, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(calib.K),
-                    cv::Mat(calib.dist), out);
+                    calib.distortion(), out);
   return out;
 }
 

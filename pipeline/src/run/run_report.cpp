@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "netvmo/pipeline/run/flips.hpp"
+
 #include "netvmo/pipeline/io/atomic_file.hpp"
 
 namespace netvmo::run {
@@ -77,6 +79,10 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
       cmp_true = cmp_star;
   ErrorStats central_star, central_true;
   std::vector<int> seen(n, 0), failed(n, 0);
+  // Pose sequences for the flip counts (flips.hpp): each camera's PnP (frames it detects) and
+  // its networked estimate (frames it has one), and the true target pose.
+  std::vector<std::vector<std::optional<obs::SE3>>> pnp_seq(n), net_seq(n);
+  std::vector<std::optional<obs::SE3>> true_seq;
   for (size_t k = 0; k < h.size(); ++k) {
     const auto& r = h[k];
     for (size_t i = 0; i < n; ++i) {
@@ -85,6 +91,8 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
       failed[i] += result.frames[k][i].read_failed;
       const std::optional<obs::SE3> est =
           c.initialized ? std::optional<obs::SE3>(c.est_w) : std::nullopt;
+      pnp_seq[i].push_back(c.pnp_w);
+      net_seq[i].push_back(est);
       net_star[i].add(est, r.g_star);
       net_true[i].add(est, r.g_wo_true);
       ind_star[i].add(c.indep_w, r.g_star);
@@ -97,6 +105,7 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
         cmp_true[i][e].add(c.compare_w[e], r.g_wo_true);
       }
     }
+    true_seq.push_back(r.g_wo_true);
     central_star.add(r.central_w, r.g_star);
     central_true.add(r.central_w, r.g_wo_true);
   }
@@ -114,6 +123,12 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
     for (size_t e = 0; e < compared.size(); ++e)  // further networked estimators, same gains
       c["compared"][compared[e]] = {{"vs_g_star", cmp_star[i][e].to_json()},
                                     {"vs_true", cmp_true[i][e].to_json()}};
+    const double thr = options.flips.threshold_deg;
+    const auto flips = [](const FlipCount& f) {
+      return json{{"flips", f.flips}, {"pairs", f.pairs}, {"rate", f.rate()}};
+    };
+    c["flips"] = {{"pnp", flips(count_flips(pnp_seq[i], thr))},
+                  {"networked", flips(count_flips(net_seq[i], thr))}};
     if (!h.empty()) {
       const auto& last = h.back().cameras[i];
       c["final_estimate"] = {{"p", vec3(last.est_w.translation())},
@@ -122,6 +137,11 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
     cams.push_back(c);
   }
   s["cameras"] = cams;
+  s["flip_threshold_deg"] = options.flips.threshold_deg;
+  // The target's largest true rotation per frame (null without ground truth), to check that the
+  // flip threshold exceeds it.
+  s["target_max_step_deg"] =
+      count_flips(true_seq, 0.0).pairs ? json(max_step_deg(true_seq)) : json(nullptr);
   s["centralized_pnp_average"] = {{"vs_g_star", central_star.to_json()},
                                   {"vs_true", central_true.to_json()}};
   // Energies and epsilon-levels at the last frame with ground truth, and the sup of the

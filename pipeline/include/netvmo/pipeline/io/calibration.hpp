@@ -1,11 +1,19 @@
 // Camera intrinsics for the tag front end: OpenCV's pinhole model with the 5-coefficient
-// Brown-Conrady distortion (k1, k2, p1, p2, k3), pixel (col,row) centred at continuous (col,row).
+// Brown-Conrady distortion (k1, k2, p1, p2, k3), optionally OpenCV's rational model (k4, k5, k6
+// in the denominator), pixel (col,row) centred at continuous (col,row). Every use of the
+// distortion goes through OpenCV (distortion()).
 //
-// Two file formats are read:
+// Three file formats are read:
 //  - OpenCV FileStorage (YAML/XML/JSON as written by cv::FileStorage, e.g. by OpenCV's own
 //    calibration tools or by `netvmo render`): `image_width`, `image_height`, `camera_matrix`
-//    (3x3), `distortion_coefficients` (4 or 5 numbers; 8/12/14 accepted when the extra
-//    coefficients are all zero).
+//    (3x3), `distortion_coefficients` (4, 5 or 8 numbers; 12/14 accepted when the coefficients
+//    past the 8th are all zero).
+//  - ROS camera_info YAML (as written by ROS's camera_calibration, read with yaml-cpp), detected
+//    by its top-level `distortion_model` key: `image_width`, `image_height`, `camera_name`,
+//    `camera_matrix`, `distortion_model` (plumb_bob: 5 coefficients, rational_polynomial: 8),
+//    `distortion_coefficients`, `rectification_matrix` (must be the identity: a monocular
+//    camera's; the images are used raw), `projection_matrix` (3x4, checked, not used: it
+//    describes rectified images), each matrix as {rows, cols, data}.
 //  - ViSP XML (vpXmlParserCamera), camera name `cam_<id>`: the projection with distortion if
 //    the file has one, otherwise without. ViSP's distortion model is a single radial term:
 //    u = u0 + px x (1 + kud r^2), which is OpenCV's model with k1 = kud and the others zero;
@@ -26,9 +34,13 @@ struct Calibration {
   int width = 0, height = 0;                  ///< image size in pixels
   cv::Matx33d K = cv::Matx33d::eye();         ///< [fx 0 cx; 0 fy cy; 0 0 1]
   cv::Vec<double, 5> dist = {0, 0, 0, 0, 0};  ///< k1, k2, p1, p2, k3
+  cv::Vec3d rational = {0, 0, 0};             ///< k4, k5, k6 (OpenCV's rational model)
   std::string source;                         ///< file it was read from (for messages)
 
-  bool has_distortion() const { return cv::norm(dist) != 0.0; }
+  bool has_distortion() const { return cv::norm(dist) != 0.0 || cv::norm(rational) != 0.0; }
+  bool is_rational() const { return cv::norm(rational) != 0.0; }
+  /// The coefficients as OpenCV takes them: 1x5 (k1 k2 p1 p2 k3), or 1x8 with k4 k5 k6.
+  cv::Mat distortion() const;
 };
 
 /// Reads an OpenCV FileStorage calibration file (.yaml/.yml/.xml/.json).
@@ -36,8 +48,17 @@ Calibration load_calibration_opencv(const std::filesystem::path& file);
 /// Reads a ViSP XML calibration file (vpXmlParserCamera) for the named camera.
 Calibration load_calibration_visp_xml(const std::filesystem::path& file,
                                       const std::string& camera_name);
+/// Reads a ROS camera_info YAML calibration file (see the top of this header).
+Calibration load_calibration_ros(const std::filesystem::path& file);
+/// True when a .yaml/.yml file is a ROS camera_info (a top-level `distortion_model` key).
+bool looks_like_ros_camera_info(const std::filesystem::path& file);
 /// Writes an OpenCV FileStorage YAML calibration (the format `netvmo render` writes).
 void save_calibration_opencv(const std::filesystem::path& file, const Calibration& calib);
+
+/// Writes a ROS camera_info YAML (as ROS's camera_calibration does for a monocular camera:
+/// identity rectification, projection_matrix = [K | 0]), e.g. to hand a calibration to ROS.
+void save_calibration_ros(const std::filesystem::path& file, const Calibration& calib,
+                          const std::string& camera_name);
 
 /// Pixel points (OpenCV convention) to undistorted normalized image coordinates
 /// ((u - cx)/fx, (v - cy)/fy after removing distortion), with cv::undistortPoints iterated to

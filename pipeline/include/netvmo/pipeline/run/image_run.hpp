@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "netvmo/pipeline/frontend/front_end.hpp"
+#include "netvmo/pipeline/run/flips.hpp"
 #include "netvmo/pipeline/run/runner.hpp"
 #include "netvmo/pipeline/run/transports.hpp"
 #include "netvmo/pipeline/sources/network_source.hpp"
@@ -26,6 +27,7 @@ struct ImageRunOptions {
   int workers = 2;          ///< threads detecting cameras in parallel (one detector each)
   std::optional<int> max_frames;  ///< stop after this many frames
   bool progress = true;           ///< progress bar on stderr
+  FlipSettings flips;             ///< what summary.json counts as a pose flip (flips.hpp)
 };
 
 /// What one camera made of one frame.

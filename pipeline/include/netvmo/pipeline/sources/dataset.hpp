@@ -2,7 +2,8 @@
 //
 // A dataset folder (rendered by `netvmo render` or recorded) holds
 //   network.yaml                        (see network_config.hpp)
-//   calib/cam_<id>.yaml                 OpenCV FileStorage (also .yml), or
+//   calib/cam_<id>.yaml                 OpenCV FileStorage (also .yml), or a ROS camera_info
+//                                       YAML (detected by its `distortion_model` key), or
 //   calib/cam_<id>.xml                  ViSP XML (vpXmlParserCamera, camera name cam_<id>)
 //   cam_<id>/ or cam_<id>.<ext>         the camera's frames: one entry of a registered stream
 //                                       kind (camera_stream.hpp): an image folder (png, jpg,
