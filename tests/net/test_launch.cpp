@@ -2,10 +2,14 @@
 // dataset rendered at test time: the merged outputs must be those of the in-process run.
 #include <yaml-cpp/yaml.h>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <csignal>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <thread>
 
 #include "net_test_util.hpp"
 #include "netvmo/pipeline/run/image_run.hpp"
@@ -308,4 +312,50 @@ TEST_F(Launch, NodesWhoseGraphsDifferStopNamingBothCameras) {
   }
   // The first to stop may leave before its message reaches the other (which then times out).
   EXPECT_GE(named, 1);
+}
+
+namespace {
+// Processes (other than `except`) whose command line mentions `text`.
+std::vector<pid_t> processes_mentioning(const std::string& text, pid_t except) {
+  std::vector<pid_t> found;
+  for (const auto& e : fs::directory_iterator("/proc")) {
+    const std::string name = e.path().filename().string();
+    if (name.empty() || !std::all_of(name.begin(), name.end(), ::isdigit)) continue;
+    std::ifstream in(e.path() / "cmdline", std::ios::binary);
+    const std::string cmdline((std::istreambuf_iterator<char>(in)), {});
+    const pid_t pid = static_cast<pid_t>(std::stol(name));
+    if (pid != except && cmdline.find(text) != std::string::npos) found.push_back(pid);
+  }
+  return found;
+}
+}  // namespace
+
+TEST_F(Launch, AKilledLaunchLeavesNoNodeRunning) {
+  // launch is killed with SIGKILL while its five nodes run (async, paced at 1/20 of real time:
+  // 8 frames last ~5 s): every node must be gone within 2 s, long before its own end.
+  const int domain = net_test::loopback_domain(*dir_);
+  const fs::path out = *dir_ / "killed_launch";
+  const pid_t launch =
+      net::spawn({std::string(NETVMO_BINARY_DIR) + "/netvmo", "launch", (*dir_ / "ds").string(),
+                  "--out", out.string(), "--mode", "async", "--speed", "0.05", "--domain",
+                  std::to_string(domain), "--timeout", "60", "--no-overlays", "--no-plots"},
+                 *dir_ / "killed_launch.log");
+  using clock = std::chrono::steady_clock;
+  const auto t0 = clock::now();
+  const auto seconds = [&] { return std::chrono::duration<double>(clock::now() - t0).count(); };
+  size_t nodes = 0;
+  while (seconds() < 30 && (nodes = processes_mentioning(out.string(), launch).size()) < 5)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ASSERT_EQ(nodes, 5u) << "the nodes did not start in 30 s";
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // running, not starting
+  ASSERT_EQ(processes_mentioning(out.string(), launch).size(), 5u) << "a node ended early";
+  ::kill(launch, SIGKILL);
+  int status = 0;
+  ::waitpid(launch, &status, 0);
+  const double killed = seconds();
+  std::vector<pid_t> left;
+  while ((left = processes_mentioning(out.string(), launch)).size() > 0 && seconds() < killed + 2)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_TRUE(left.empty()) << left.size() << " node(s) still running 2 s after launch was killed";
+  for (pid_t p : left) ::kill(p, SIGKILL);  // bounded either way
 }

@@ -15,7 +15,9 @@ namespace netvmo::net {
 std::filesystem::path self_exe();
 
 /// Starts `argv` (argv[0] = the executable's path) with this process's environment, stdout and
-/// stderr appended to `log`. Throws std::runtime_error when fork fails.
+/// stderr appended to `log`. The child is killed (SIGKILL) when the calling thread ends, so a
+/// supervisor killed mid-run leaves no child running (Linux PR_SET_PDEATHSIG): call it from a
+/// thread that outlives the child, e.g. the main thread. Throws std::runtime_error when fork fails.
 pid_t spawn(const std::vector<std::string>& argv, const std::filesystem::path& log);
 
 /// True when the child has ended (it is not reaped: supervise() still sees it).
