@@ -22,8 +22,9 @@ void add_render(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<Options>();
   CLI::App* cmd = add_command(
       app, "render", "Render a scenario into a dataset folder (Embree)",
-      "Writes DATASET/cam_<id>/<frame>.png, calib/cam_<id>.yaml, network.yaml, truth.csv,\n"
-      "target.csv and truth_cameras.csv (layout: datasets/README.md).");
+      "Writes DATASET/cam_<id>/<frame>.png, calib/cam_<id>.yaml, network.yaml, cameras.csv\n"
+      "(believed camera poses per image), truth.csv, target.csv and truth_cameras.csv (true\n"
+      "camera poses per image); layout: datasets/README.md. Cameras may move (`motion:`).");
   cmd->add_option("SCENARIO", o->scenario, "render scenario YAML, e.g. datasets/paper5_render.yaml")
       ->required();
   cmd->add_option("--out", o->out, "dataset folder to write (created if needed)")->required();
