@@ -15,9 +15,10 @@ using netvmo::render::Light;
 using netvmo::render::Renderer;
 using netvmo::render::SceneDescription;
 
-SceneDescription moving_target_quarter() {
+// A shipped scenario at a quarter of its resolution.
+SceneDescription quarter(const char* name) {
   auto scene = netvmo::io::load_render_scenario(std::filesystem::path(NETVMO_SOURCE_DIR) /
-                                                "datasets" / "moving_target.yaml");
+                                                "datasets" / name);
   for (auto& cam : scene.cameras) {
     auto& K = cam.intrinsics;
     K.width /= 4;
@@ -28,6 +29,10 @@ SceneDescription moving_target_quarter() {
     K.cy = (K.cy + 0.5) / 4 - 0.5;
   }
   return scene;
+}
+
+SceneDescription moving_target_quarter() {
+  return quarter("moving_target.yaml");
 }
 
 bool identical(const cv::Mat& a, const cv::Mat& b) {
@@ -89,17 +94,7 @@ namespace {
 // same renderer keep reusing theirs: moving_cameras.yaml at a quarter of its resolution, every
 // frame byte-identical to a full trace.
 TEST(MovingReuse, MovingCameraRetracesItsWholeImage) {
-  auto scene = netvmo::io::load_render_scenario(std::filesystem::path(NETVMO_SOURCE_DIR) /
-                                                "datasets" / "moving_cameras.yaml");
-  for (auto& cam : scene.cameras) {
-    auto& K = cam.intrinsics;
-    K.width /= 4;
-    K.height /= 4;
-    K.fx /= 4;
-    K.fy /= 4;
-    K.cx = (K.cx + 0.5) / 4 - 0.5;
-    K.cy = (K.cy + 0.5) / 4 - 0.5;
-  }
+  auto scene = quarter("moving_cameras.yaml");
   scene.imaging.spp = 1;
   scene.cameras[2].motion.reset();  // camera 3 stands still at its first pose
   ASSERT_FALSE(scene.cameras[2].moving());

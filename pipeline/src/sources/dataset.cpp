@@ -30,6 +30,17 @@ std::string list_frames(const std::vector<int>& v) {
   return s;
 }
 
+// The index in network.yaml of the camera of a per-image row of `file` (timestamps.csv,
+// cameras.csv), or an error naming the row.
+template <class Row>
+size_t listed_camera(const Dataset& ds, const fs::path& file, const Row& r) {
+  const int i = ds.index_of(r.camera);
+  if (i < 0)
+    throw InputError(file.string() + ":" + std::to_string(r.line) + ": camera: camera " +
+                     std::to_string(r.camera) + " is not in network.yaml");
+  return static_cast<size_t>(i);
+}
+
 // timestamps.csv (io::read_timestamps_csv checks the file itself): every listed camera is in
 // network.yaml, and an opened camera it lists has a row for each of its images and none past
 // its last.
@@ -43,13 +54,9 @@ void read_timestamps(Dataset& ds) {
   const auto rows = io::read_timestamps_csv(file);
   std::set<int> listed;
   for (const auto& r : rows) {
-    const int i = ds.index_of(r.camera);
+    auto& cam = ds.cameras[listed_camera(ds, file, r)];
     const std::string where = file.string() + ":" + std::to_string(r.line);
-    if (i < 0)
-      throw InputError(where + ": camera: camera " + std::to_string(r.camera) +
-                       " is not in network.yaml");
     listed.insert(r.camera);
-    auto& cam = ds.cameras[static_cast<size_t>(i)];
     // A camera that was not opened (another camera's process) keeps its times unchecked.
     const int n = cam.source ? cam.source->frame_count() : r.frame + 1;
     if (!cam.source && cam.times.size() < static_cast<size_t>(n))
@@ -84,12 +91,8 @@ void read_camera_poses(Dataset& ds) {
   if (!fs::exists(file)) return;
   const auto rows = io::read_camera_poses_csv(file);
   for (const auto& r : rows) {
-    const int i = ds.index_of(r.camera);
+    auto& cam = ds.cameras[listed_camera(ds, file, r)];
     const std::string where = file.string() + ":" + std::to_string(r.line);
-    if (i < 0)
-      throw InputError(where + ": camera: camera " + std::to_string(r.camera) +
-                       " is not in network.yaml");
-    auto& cam = ds.cameras[static_cast<size_t>(i)];
     if (cam.source && r.frame >= cam.source->frame_count())
       throw InputError(where + ": frame: " + std::to_string(r.frame) +
                        " is past the last image of camera " + std::to_string(r.camera) +
