@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 
 #include "netvmo/pipeline/io/dataset_writer.hpp"
 #include "netvmo/pipeline/io/render_scenario.hpp"
@@ -96,5 +97,30 @@ TEST(EndToEnd, MovingCamerasConvergeToGStarAndNeedTheirVelocity) {
   EXPECT_GT(w0.position, 5.0 * w.position);
   EXPECT_GT(w0.orientation_deg, 5.0 * w.orientation_deg);
   EXPECT_GT(w0.position, 0.01);
+
+  // Bad input on the command line: a cameras.csv without camera 2's frame 17 stops `run` with one
+  // line naming the file, the camera and the frame, and writes no results; `launch` refuses
+  // moving cameras.
+  const std::string poses = test::slurp(dir / "cameras.csv");
+  std::string cut = poses;
+  const auto at = cut.find("\n2,17,");
+  ASSERT_NE(at, std::string::npos);
+  cut.erase(at + 1, cut.find('\n', at + 1) - at);
+  { std::ofstream(dir / "cameras.csv") << cut; }
+  const auto bad = test::run_netvmo(
+      "run " + dir.string() + " --out " + (dir / "out").string() + " --no-overlays --no-plots", dir,
+      120);
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.err.find("cameras.csv: camera 2: no row for frame 17"), std::string::npos)
+      << bad.err;
+  EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+  EXPECT_FALSE(fs::exists(dir / "out" / "summary.json"));
+  { std::ofstream(dir / "cameras.csv") << poses; }
+  const auto launch = test::run_netvmo(
+      "launch " + dir.string() + " --out " + (dir / "launch").string() + " --no-overlays", dir,
+      120);
+  EXPECT_NE(launch.code, 0);
+  EXPECT_NE(launch.err.find("netvmo launch handles static cameras only"), std::string::npos)
+      << launch.err;
   fs::remove_all(dir);
 }

@@ -319,6 +319,34 @@ TEST(Sources, CameraPosesGiveTheBelievedPosePerFrame) {
                      {"cameras.csv", "netvmo launch", "static cameras only"});
 }
 
+// truth_cameras.csv: per frame (what `render` writes now) or, in older datasets, one static pose
+// per camera, still read.
+TEST(Sources, CameraTruthPerFrameOrStatic) {
+  const auto dir = testing::fresh_dir("src_cam_truth");
+  testing::write_synth_dataset(dir, testing::simple_dataset_spec(2, 3));
+  { std::ofstream(dir / "target.csv") << kTargetHeader << "\n0,0,0,0,2,0,0,0\n"; }
+  {
+    std::ofstream(dir / "truth_cameras.csv") << kTruthCamerasHeader << "\n1,0,0,0,0,0,0\n"
+                                             << "2,1,0,0,0,0,0.5\n";
+  }
+  const auto old = open_dataset_source(dir);
+  ASSERT_TRUE(old->camera_truth(1, 2));
+  EXPECT_TRUE(old->camera_truth(1, 2)->isApprox(obs::make_pose({1, 0, 0}, {0, 0, 0.5})));
+  EXPECT_TRUE(old->camera_truth(1, 0)->isApprox(*old->camera_truth(1, 2), 0.0));
+  {
+    std::ofstream(dir / "truth_cameras.csv") << kCameraPosesHeader << "\n"
+                                             << "1,0,0,0,0,0,0,0,0\n1,1,0.1,0.1,0,0,0,0,0\n"
+                                             << "2,0,0,1,0,0,0,0,0\n2,1,0.1,1,0,0,0,0,0.1\n";
+  }
+  const auto moving = open_dataset_source(dir);
+  EXPECT_TRUE(moving->camera_truth(0, 1)->isApprox(obs::make_pose({0.1, 0, 0}, {0, 0, 0})));
+  EXPECT_TRUE(moving->camera_truth(1, 1)->isApprox(obs::make_pose({1, 0, 0}, {0, 0, 0.1})));
+  EXPECT_FALSE(moving->camera_truth(1, 2));  // no true pose: no evaluation there
+  { std::ofstream(dir / "truth_cameras.csv") << kCameraPosesHeader << "\n1,0,0,0,0,0,0,0,0\n"; }
+  expect_input_error([&] { open_dataset_source(dir); },
+                     {"truth_cameras.csv", "no row for camera 2"});
+}
+
 // Bad cameras.csv: one line naming the file, the line and the column, or the camera and the
 // frame that has no row.
 TEST(Sources, CameraPoseErrorsNameFileLineAndColumn) {
