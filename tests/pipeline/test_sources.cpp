@@ -301,6 +301,17 @@ TEST(Sources, CameraPosesGiveTheBelievedPosePerFrame) {
   testing::write_synth_dataset(dir, testing::simple_dataset_spec(2, 3));
   EXPECT_FALSE(open_dataset_source(dir)->cameras_move());
   {
+    // Rows that repeat network.yaml's poses (what `render` writes for static cameras) read back
+    // to exactly those poses: the cameras are static.
+    const auto net = load_network_config(dir / "network.yaml");
+    std::ofstream f(dir / "cameras.csv");
+    f << kCameraPosesHeader << "\n";
+    for (int k = 0; k < 3; ++k)
+      for (const auto& c : net.cameras)
+        f << format_camera_pose_row(c.id, k, k / net.fps, c.g_wi) << "\n";
+  }
+  EXPECT_FALSE(open_dataset_source(dir)->cameras_move());
+  {
     std::ofstream(dir / "cameras.csv") << kCameraPosesHeader << "\n"
                                        << "1,2,0.2,0.3,0,1,0,0,0.1\n"
                                        << "1,0,0,0.1,0,1,0,0,0\n"
@@ -316,7 +327,7 @@ TEST(Sources, CameraPosesGiveTheBelievedPosePerFrame) {
   EXPECT_TRUE(noted);
   // Netvmo sweep, launch and node refuse moving cameras with one line.
   expect_input_error([&] { require_static_cameras(*src, "netvmo launch"); },
-                     {"cameras.csv", "netvmo launch", "static cameras only"});
+                     {"cameras.csv", "netvmo launch", "static cameras at their network.yaml"});
 }
 
 // truth_cameras.csv: per frame (what `render` writes now) or, in older datasets, one static pose

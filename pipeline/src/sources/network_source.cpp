@@ -40,11 +40,11 @@ class DatasetProvider final : public NetworkSource {
         camera_truth_.push_back({it->second, fixed[c.id]});
       }
     }
-    for (size_t i = 0; i < ds_.cameras.size() && !moving_; ++i) {
-      const auto& poses = ds_.cameras[i].poses;
-      for (size_t k = 1; k < poses.size() && !moving_; ++k)
-        moving_ = !poses[k].isApprox(poses[0], 0.0);
-    }
+    // cameras.csv says something network.yaml does not: a pose other than network.yaml's
+    // (a rendered static camera's rows hold network.yaml's numbers, written the same way).
+    for (size_t i = 0; i < ds_.cameras.size() && !moving_; ++i)
+      for (const auto& g : ds_.cameras[i].poses)
+        moving_ = moving_ || !g.isApprox(ds_.network.cameras[i].g_wi, 0.0);
   }
   const io::NetworkConfig& network() const override { return ds_.network; }
   const io::Calibration& calibration(size_t i) const override { return ds_.cameras.at(i).calib; }
@@ -120,8 +120,9 @@ std::optional<std::string> clock_mismatch(const NetworkSource& source) {
 
 void require_static_cameras(const NetworkSource& source, const std::string& what) {
   if (source.cameras_move())
-    throw InputError(source.name() + ": cameras.csv: the cameras move, and " + what +
-                     " handles static cameras only (use netvmo run)");
+    throw InputError(source.name() + ": cameras.csv: the camera poses change over time (or " +
+                     "differ from network.yaml's), and " + what +
+                     " handles static cameras at their network.yaml poses only (use netvmo run)");
 }
 
 std::unique_ptr<NetworkSource> open_dataset_source(const fs::path& dir,

@@ -36,7 +36,8 @@ class NetworkSource {
     (void)frame;
     return network().cameras.at(camera_index).g_wi;
   }
-  /// Whether some camera's believed pose changes from frame to frame (moving cameras).
+  /// Whether some camera's believed pose differs from network()'s at some frame (moving
+  /// cameras, or a cameras.csv that overrides network.yaml).
   virtual bool cameras_move() const { return false; }
   /// Warnings found when opening (missing frames, short cameras, ...), one line each.
   virtual std::vector<std::string> warnings() const { return {}; }
