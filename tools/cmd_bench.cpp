@@ -52,7 +52,13 @@ class LoopSource final : public sources::NetworkSource {
   std::optional<obs::SE3> target_truth(int frame) const override {
     return inner_->target_truth(frame % n_);
   }
-  std::optional<obs::SE3> camera_truth(size_t i) const override { return inner_->camera_truth(i); }
+  std::optional<obs::SE3> camera_truth(size_t i, int frame) const override {
+    return inner_->camera_truth(i, frame % n_);
+  }
+  obs::SE3 camera_believed(size_t i, int frame) const override {
+    return inner_->camera_believed(i, frame % n_);
+  }
+  bool cameras_move() const override { return inner_->cameras_move(); }
   std::string name() const override { return inner_->name() + " (looped)"; }
 
  private:

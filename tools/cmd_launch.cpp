@@ -201,6 +201,7 @@ void add_launch(CLI::App& app, int& exit_code) {
       const auto options = to_image_run_options(o->run);
       require_paper_observer(options);
       auto provider = sources::open_dataset_source(o->dataset, {}, options.keep_going);
+      sources::require_static_cameras(*provider, "netvmo launch");
       const auto& netcfg = provider->network();
       for (const auto& w : provider->warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
       run::checked_rounds(1.0 / netcfg.fps, options.runner.k_e, options.runner.k_s,
@@ -386,6 +387,7 @@ void add_merge(CLI::App& app, int& exit_code) {
   cmd->callback([o, &exit_code] {
     exit_code = guarded("merge", [&] {
       auto provider = sources::open_dataset_source(o->dataset);
+      sources::require_static_cameras(*provider, "netvmo merge");
       const auto& netcfg = provider->network();
       for (const auto& w : provider->warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
       const fs::path nodes = o->nodes;

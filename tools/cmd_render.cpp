@@ -23,11 +23,13 @@ void add_render(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<Options>();
   CLI::App* cmd = add_command(
       app, "render", "Render a scenario into a dataset folder (Embree)",
-      "Writes DATASET/cam_<id>/<frame>.png, calib/cam_<id>.yaml, network.yaml, truth.csv,\n"
-      "target.csv and truth_cameras.csv (layout: datasets/README.md). DATASET is built in\n"
-      "DATASET.partial-<pid> and swapped into place at the end (a killed render leaves the\n"
-      "previous DATASET intact); DATASET.lock keeps a second command from writing it at the same\n"
-      "time. An existing DATASET is replaced only if netvmo render wrote it (or it is empty).");
+      "Writes DATASET/cam_<id>/<frame>.png, calib/cam_<id>.yaml, network.yaml, cameras.csv\n"
+      "(believed camera poses per image), truth.csv, target.csv and truth_cameras.csv (true\n"
+      "camera poses per image); layout: datasets/README.md. Cameras may move (`motion:`).\n"
+      "DATASET is built in DATASET.partial-<pid> and swapped into place at the end (a killed\n"
+      "render leaves the previous DATASET intact); DATASET.lock keeps a second command from\n"
+      "writing it at the same time. An existing DATASET is replaced only if netvmo render wrote\n"
+      "it (or it is empty).");
   cmd->add_option("SCENARIO", o->scenario, "render scenario YAML, e.g. datasets/paper5_render.yaml")
       ->required();
   cmd->add_option("--out", o->out, "dataset folder to write (created if needed)")->required();

@@ -24,7 +24,9 @@ void add_run(CLI::App& app, int& exit_code) {
       app, "run", "Run the networked observer on a dataset's images",
       "Writes OUT/estimates.csv, OUT/energies.csv, OUT/errors.csv, OUT/summary.json,\n"
       "OUT/energies.png, OUT/errors.png and OUT/overlays/ (per-camera MP4s, mosaic.mp4,\n"
-      "mosaic.png). delta_i(t) is the front end's detection success.\n"
+      "mosaic.png). delta_i(t) is the front end's detection success. Moving cameras\n"
+      "(cameras.csv): each frame's believed poses g_wi(t_k) and body velocities\n"
+      "V_wi = log(g_wi(t_k)^-1 g_wi(t_k+1)) / dt feed the observer's -hat(V_wi) g_bar term.\n"
       "OUT is built in the temporary sibling OUT.partial-<pid> and swapped into place at the end\n"
       "(a killed run leaves the previous OUT intact); OUT.lock keeps a second command from\n"
       "writing OUT at the same time. OUT must not be the dataset folder or lie inside it.");

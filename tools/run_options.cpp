@@ -55,7 +55,12 @@ void add_run_options(CLI::App& cmd, RunCliOptions& o, bool in_process_transport)
       ->capture_default_str()
       ->check(CLI::Range(1.0, 8.0));
   add_search_options(cmd, o.tracking);
-  if (in_process_transport) add_transport_options(cmd, o.transport);
+  if (in_process_transport) {
+    add_transport_options(cmd, o.transport);
+    cmd.add_flag("--ignore-camera-velocity", o.ignore_camera_velocity,
+                 "Diagnostic for moving cameras (cameras.csv): keep each frame's believed poses "
+                 "but set every camera body velocity V_wi of (eq:EsRRBM) to zero");
+  }
   cmd.add_option("--refine", o.refine, "Corner refinement: none, subpix or edges")
       ->check(CLI::IsMember({"none", "subpix", "edges"}))
       ->capture_default_str();
@@ -73,6 +78,7 @@ run::ImageRunOptions to_image_run_options(const RunCliOptions& o) {
   r.runner.init = run::parse_init_mode(o.init);
   r.runner.rounds = o.rounds;
   r.keep_going = o.keep_going;
+  r.ignore_camera_velocity = o.ignore_camera_velocity;
   if (o.max_frames > 0) r.max_frames = o.max_frames;
   r.detector.quad_decimate = o.decimate;
   r.detector.refinement = frontend::parse_refinement(o.refine);

@@ -21,6 +21,7 @@ struct RunCliOptions {
   std::string init = run::to_string(run::RunnerSettings{}.init);
   int rounds = run::RunnerSettings{}.rounds;
   bool keep_going = run::ImageRunOptions{}.keep_going;
+  bool ignore_camera_velocity = run::ImageRunOptions{}.ignore_camera_velocity;
   bool no_overlays = false;
   bool no_plots = false;
   int max_frames = 0;

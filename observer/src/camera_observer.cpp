@@ -147,6 +147,12 @@ void CameraObserver::set_measurement(const Measurement& z) {
 
 void CameraObserver::step(double h) {
   estimator_->step(view(), st_, h);
+  // The camera moves on with its body velocity over the sub-step, d/dt g_wi = g_wi hat(V_wi):
+  // the next message g_wi g_bar_i pairs the estimate with the pose it now refers to.
+  if (!V_wi_.isZero(0.0)) {
+    g_wi_ = g_wi_ * exp_se3(h * V_wi_);
+    g_wi_.linear() = Eigen::Quaterniond(g_wi_.linear()).normalized().toRotationMatrix();
+  }
 }
 
 }  // namespace netvmo::obs

@@ -58,3 +58,20 @@ void Intrinsics::validate() const {
 }
 
 }  // namespace netvmo::render
+
+namespace netvmo::render {
+
+Pose CameraSpec::believed_pose(double t) const {
+  if (!moving()) return g_wi_believed;
+  const Pose delta0 = g_wi_believed * true_pose(0.0).inverse();  // Delta(0)
+  Pose drift = Pose::Identity();
+  drift.linear() = exp_so3(t * believed_drift.tail<3>());
+  drift.translation() = t * believed_drift.head<3>();
+  return drift * delta0 * true_pose(t);
+}
+
+bool CameraSpec::moving() const {
+  return (motion && motion->kind != Trajectory::Kind::Static) || !believed_drift.isZero(0.0);
+}
+
+}  // namespace netvmo::render

@@ -62,8 +62,8 @@ bool line_of_sight(RTCScene top, RTCIntersectContext* ctx, const Vec3& cam_w, co
 // white quiet zone, which the detector needs too), each sample front-facing, in view and with
 // an unobstructed line of sight from the camera centre.
 double visible_fraction(RTCScene top, const CameraSpec& cam, const CameraCache& cc,
-                        const FrameTruth& t, double hp, int n) {
-  const Vec3 cam_w = cam.g_wi_true.translation();
+                        const FrameTruth& t, const Pose& g_wi, double hp, int n) {
+  const Vec3 cam_w = g_wi.translation();
   const Vec3 normal_w = t.g_wo.linear().col(2);
   int seen = 0;
   RTCIntersectContext ctx;
@@ -93,10 +93,12 @@ FrameTruth Renderer::truth(int ci, int frame) {
   t.t = time_of(frame);
   t.camera_id = cam.id;
   t.g_wo = I.instances[size_t(I.target_instance)].g_wb;
-  t.g_io = cam.g_wi_true.inverse() * t.g_wo;
+  const Pose g_wi = cam.true_pose(t.t);
+  t.g_io = g_wi.inverse() * t.g_wo;
   project_corners(cam.intrinsics, cc, scene_.target.tag.size / 2, t);
   const double hp = 0.5 * I.tags.front()->printed_side();
-  t.visible_fraction = visible_fraction(I.top, cam, cc, t, hp, scene_.imaging.visibility_grid);
+  t.visible_fraction =
+      visible_fraction(I.top, cam, cc, t, g_wi, hp, scene_.imaging.visibility_grid);
   return t;
 }
 

@@ -30,12 +30,12 @@ bool hits(RTCScene top, RTCIntersectContext* ctx, const Eigen::Vector3f& O,
 }
 
 // The hits of every sample of one image row.
-std::uint64_t row_hits(const Renderer::Impl& I, const CameraSpec& cam, const CameraCache& cc,
-                       int row, RTCIntersectContext* ctx) {
+std::uint64_t row_hits(const Renderer::Impl& I, const CameraSpec& cam, const Pose& g_wc,
+                       const CameraCache& cc, int row, RTCIntersectContext* ctx) {
   const Intrinsics& Kc = cam.intrinsics;
   const int W = Kc.width, spp = int(I.offsets.size());
-  const Eigen::Matrix3f R = cam.g_wi_true.linear().cast<float>();
-  const Eigen::Vector3f O = cam.g_wi_true.translation().cast<float>();
+  const Eigen::Matrix3f R = g_wc.linear().cast<float>();
+  const Eigen::Vector3f O = g_wc.translation().cast<float>();
   std::uint64_t n = 0;
   for (int col = 0; col < W; ++col)
     for (int s = 0; s < spp; ++s) {
@@ -60,6 +60,7 @@ std::uint64_t Renderer::intersect_bare(int ci, int frame, int threads) {
   const Impl& I = *impl_;
   const CameraSpec& cam = scene_.cameras[size_t(ci)];
   const CameraCache& cc = I.cams[size_t(ci)];
+  const Pose g_wc = camera_pose(ci, frame);
   std::atomic<int> next_row{0};
   std::atomic<std::uint64_t> total{0};
   run_threads(std::max(1, threads), [&]() {
@@ -67,7 +68,7 @@ std::uint64_t Renderer::intersect_bare(int ci, int frame, int threads) {
     rtcInitIntersectContext(&ctx);
     std::uint64_t local = 0;
     for (int row = next_row++; row < cam.intrinsics.height; row = next_row++)
-      local += row_hits(I, cam, cc, row, &ctx);
+      local += row_hits(I, cam, g_wc, cc, row, &ctx);
     total += local;
   });
   return total;

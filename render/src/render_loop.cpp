@@ -3,7 +3,8 @@
 // primary and shadow rays), each packet shaded by the kernel (shading.cpp), and the tile's
 // radiance goes through the sensor (sensor.cpp). A camera reuses its last image's radiance
 // wherever no moved body or its shadow can have changed it (reuse_bounds.cpp) and re-traces the
-// rest; in either case the frame draws new noise.
+// rest; in either case the frame draws new noise. A camera whose pose changed since its last
+// image (a moving camera) traces it in full.
 #include <atomic>
 #include <cmath>
 #include <numeric>
@@ -39,9 +40,9 @@ struct FrameJob {
         cache(*I.radiance[size_t(ci)]),
         out(out) {
     const CameraSpec& cam = scene.cameras[size_t(ci)];
-    g_wc = cam.g_wi_true;
-    R = cam.g_wi_true.linear().cast<float>();
-    O = cam.g_wi_true.translation().cast<float>();
+    g_wc = cam.true_pose(frame / scene.fps);  // the camera's true pose at this frame
+    R = g_wc.linear().cast<float>();
+    O = g_wc.translation().cast<float>();
     const Intrinsics& Kc = cam.intrinsics;
     fx = float(Kc.fx), fy = float(Kc.fy), cx = float(Kc.cx), cy = float(Kc.cy);
   }
@@ -289,7 +290,8 @@ cv::Mat Renderer::render(int ci, int frame) {
   std::unique_lock<std::mutex> cache_lock(f.cache.mutex);
   std::vector<Eigen::Matrix4d> key;
   for (const auto& in : I.instances) key.push_back(in.g_wb.matrix());
-  if (!f.im.reuse_radiance || !f.cache.valid) {
+  // A camera that moved sees every ray change: its whole image is traced again.
+  if (!f.im.reuse_radiance || !f.cache.valid || f.cache.camera != f.g_wc.matrix()) {
     f.source = Radiance::Trace;
     f.cache.acc.assign(size_t(f.width) * size_t(f.height), 0.0f);
     f.cache.packets.assign(size_t(packets), PacketBounds());
@@ -305,6 +307,7 @@ cv::Mat Renderer::render(int ci, int frame) {
   std::atomic<int> next{0};
   run_threads(nthreads, [&]() { render_tiles(f, next); });
   f.cache.key = std::move(key);
+  f.cache.camera = f.g_wc.matrix();
   f.cache.traced_fraction = double(f.traced) / double(std::max(1, packets));
   f.cache.valid = true;
   return out;

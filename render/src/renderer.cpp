@@ -35,6 +35,14 @@ Pose Renderer::target_pose(int frame) const {
   return scene_.target.motion.at(time_of(frame));
 }
 
+Pose Renderer::camera_pose(int ci, int frame) const {
+  return scene_.cameras.at(size_t(ci)).true_pose(time_of(frame));
+}
+
+Pose Renderer::believed_camera_pose(int ci, int frame) const {
+  return scene_.cameras.at(size_t(ci)).believed_pose(time_of(frame));
+}
+
 void Renderer::set_frame(int frame) {
   std::unique_lock<std::shared_mutex> lock(impl_->mutex);
   Impl& I = *impl_;

@@ -70,13 +70,14 @@ struct PacketBounds {
   bool no_ray() const { return !(xmin <= xmax); }
 };
 
-// The noise-free radiance of a camera's last image, the poses of every instance it was rendered
-// with and where each packet's primary rays hit: the next frame reuses the radiance of every
-// packet that no moved body or its shadow can touch (all of them when nothing has moved) and
-// draws new noise.
+// The noise-free radiance of a camera's last image, the poses of every instance and of the
+// camera it was rendered with and where each packet's primary rays hit: the next frame reuses
+// the radiance of every packet that no moved body or its shadow can touch (all of them when
+// nothing has moved) and draws new noise. A camera that moved re-traces its whole image.
 struct RadianceCache {
   std::mutex mutex;
-  std::vector<Eigen::Matrix4d> key;   // g_wb of every instance
+  std::vector<Eigen::Matrix4d> key;                      // g_wb of every instance
+  Eigen::Matrix4d camera = Eigen::Matrix4d::Identity();  // g_wc the image was rendered from
   std::vector<float> acc;             // per pixel, summed over samples (before the sensor)
   std::vector<PacketBounds> packets;  // per packet, in tile order
   double traced_fraction = 1;         // of the packets, in the last image

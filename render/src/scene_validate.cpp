@@ -23,9 +23,12 @@ void validate_cameras(const std::vector<CameraSpec>& cameras) {
         fail("duplicate camera id " + std::to_string(cameras[i].id));
     try {
       cameras[i].intrinsics.validate();
+      if (cameras[i].motion) cameras[i].motion->validate();
     } catch (const std::invalid_argument& e) {
       fail("camera " + std::to_string(cameras[i].id) + ": " + e.what());
     }
+    if (!cameras[i].believed_drift.allFinite())
+      fail("camera " + std::to_string(cameras[i].id) + ": believed_drift must be finite");
   }
 }
 

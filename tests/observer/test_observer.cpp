@@ -149,6 +149,25 @@ TEST(Observer, CameraMotionTermTracksAStaticTargetFromAMovingCamera) {
   EXPECT_GT(err_without, 0.05);
 }
 
+TEST(Observer, BelievedPoseMovesWithTheCameraVelocityOverTheSubSteps) {
+  // The believed pose follows V over the frame's sub-steps and lands on g_wi exp(dt V); an
+  // estimate without input (blind, alone) then stays put in the world while its camera moves.
+  const Vec6 V = (Vec6() << 0.3, -0.1, 0.2, 0.05, 0.2, -0.1).finished();
+  const SE3 g_wi = make_pose({1.0, -2.0, 1.5}, {1.2, -0.3, 0.4});
+  ObserverSettings s;
+  s.k_s = 0.0;
+  s.substeps = 7;
+  NetworkedObserver obs(Graph(1, {}), s);
+  obs.reset({make_pose({0.1, 0.0, 2.0}, {3.0, 0.1, 0.0})});
+  obs.set_camera_poses({g_wi});
+  obs.set_camera_velocities({V});
+  const SE3 before = obs.estimates_world()[0], local_before = obs.estimates()[0];
+  obs.step(0.1, {Measurement{}});
+  EXPECT_TRUE(obs.camera(0).camera_pose().isApprox(g_wi * exp_se3(0.1 * V), 1e-12));
+  EXPECT_TRUE(obs.estimates_world()[0].isApprox(before, 1e-12));
+  EXPECT_FALSE(obs.estimates()[0].isApprox(local_before, 1e-3));  // in its camera's frame it moved
+}
+
 TEST(Observer, BlindCamerasFollowTheirNeighbours) {
   const auto obs = run_paper(50.0, 30.0);
   const auto est = obs.estimates_world();

@@ -15,9 +15,10 @@ using netvmo::render::Light;
 using netvmo::render::Renderer;
 using netvmo::render::SceneDescription;
 
-SceneDescription moving_target_quarter() {
+// A shipped scenario at a quarter of its resolution.
+SceneDescription quarter(const char* name) {
   auto scene = netvmo::io::load_render_scenario(std::filesystem::path(NETVMO_SOURCE_DIR) /
-                                                "datasets" / "moving_target.yaml");
+                                                "datasets" / name);
   for (auto& cam : scene.cameras) {
     auto& K = cam.intrinsics;
     K.width /= 4;
@@ -28,6 +29,10 @@ SceneDescription moving_target_quarter() {
     K.cy = (K.cy + 0.5) / 4 - 0.5;
   }
   return scene;
+}
+
+SceneDescription moving_target_quarter() {
+  return quarter("moving_target.yaml");
 }
 
 bool identical(const cv::Mat& a, const cv::Mat& b) {
@@ -79,6 +84,35 @@ TEST(MovingReuse, PointLightAndTwoSamplesMatchAFullTrace) {
   point.intensity = 4.0;
   scene.lights.push_back(point);
   expect_reuse_exact(scene, 40, "moving_target, 2 spp, point light");
+}
+
+}  // namespace
+
+namespace {
+
+// A moving camera re-traces its whole image (every ray changed) while the static cameras of the
+// same renderer keep reusing theirs: moving_cameras.yaml at a quarter of its resolution, every
+// frame byte-identical to a full trace.
+TEST(MovingReuse, MovingCameraRetracesItsWholeImage) {
+  auto scene = quarter("moving_cameras.yaml");
+  scene.imaging.spp = 1;
+  scene.cameras[2].motion.reset();  // camera 3 stands still at its first pose
+  ASSERT_FALSE(scene.cameras[2].moving());
+  ASSERT_TRUE(scene.cameras[0].moving());
+  auto full_scene = scene;
+  full_scene.imaging.reuse_radiance = false;
+  Renderer reused(scene), full(full_scene);
+  for (int frame = 0; frame < 12; ++frame)
+    for (int c = 0; c < reused.camera_count(); ++c) {
+      const cv::Mat a = reused.render(c, frame), b = full.render(c, frame);
+      EXPECT_GT(cv::mean(b)[0], 20.0) << "camera " << c << " frame " << frame;  // lit, not blank
+      EXPECT_TRUE(identical(a, b)) << "camera " << c << " frame " << frame;
+      if (frame == 0) continue;
+      if (scene.cameras[size_t(c)].moving())
+        EXPECT_DOUBLE_EQ(reused.traced_fraction(c), 1.0) << "camera " << c << " frame " << frame;
+      else
+        EXPECT_DOUBLE_EQ(reused.traced_fraction(c), 0.0) << "camera " << c << " frame " << frame;
+    }
 }
 
 }  // namespace

@@ -114,6 +114,49 @@ TEST(RenderScenario, ObjShapeIsReadRelativeToTheScenario) {
   (void)dir;
 }
 
+// A camera's `motion` (the body motion syntax) drives its true pose; its believed pose keeps the
+// t = 0 mis-registration and drifts with `believed_drift`.
+TEST(RenderScenario, MovingCameras) {
+  const auto f = write_scenario(
+      "moving_cam.yaml",
+      replaced(kMinimal, "pose: {eye: [0, -1.5, 1.0], look_at: [0, 0, 1.0]}",
+               "motion: {type: twist, pose: {eye: [0, -1.5, 1.0], look_at: [0, 0, 1.0]}, "
+               "v: [0.2, 0, 0], w: [0, 0.1, 0]}\n    believed_drift: {dp: [0.01, 0, 0]}"));
+  const auto s = netvmo::io::load_render_scenario(f);
+  const auto& c = s.cameras[0];
+  ASSERT_TRUE(c.motion.has_value());
+  EXPECT_TRUE(c.moving());
+  EXPECT_FALSE(s.cameras[1].moving());
+  const auto V = (netvmo::render::Vec6() << 0.2, 0, 0, 0, 0.1, 0).finished();
+  EXPECT_TRUE(c.true_pose(2.0).isApprox(c.g_wi_true * netvmo::render::exp_se3(2.0 * V), 1e-12));
+  // Believed = Delta(t) true(t), Delta(t) = [I, t dp] Delta(0), Delta(0) = believed(0) true(0)^-1.
+  const auto delta0 = c.g_wi_believed * c.g_wi_true.inverse();
+  auto drift = netvmo::render::Pose::Identity();
+  drift.translation() = netvmo::render::Vec3(0.02, 0, 0);
+  EXPECT_TRUE(c.believed_pose(2.0).isApprox(drift * delta0 * c.true_pose(2.0), 1e-12));
+  EXPECT_TRUE(c.believed_pose(0.0).isApprox(c.g_wi_believed, 1e-12));
+
+  const auto moving = netvmo::io::load_render_scenario(fs::path(NETVMO_SOURCE_DIR) / "datasets" /
+                                                       "moving_cameras.yaml");
+  EXPECT_EQ(moving.cameras.size(), 4u);
+  for (const auto& cam : moving.cameras) EXPECT_TRUE(cam.moving()) << cam.id;
+
+  const std::string both = load_error(write_scenario(
+      "pose_and_motion.yaml",
+      replaced(kMinimal, "look_at: [0, 0, 1.0]}\n",
+               "look_at: [0, 0, 1.0]}\n    motion: {type: static, pose: {p: [0, 0, 0]}}\n")));
+  EXPECT_NE(both.find("cameras[0].motion: give either pose or motion"), std::string::npos) << both;
+  const std::string drift_key = load_error(write_scenario(
+      "drift_key.yaml", replaced(kMinimal, "look_at: [0, 0, 1.0]}\n",
+                                 "look_at: [0, 0, 1.0]}\n    believed_drift: {dv: [0, 0, 1]}\n")));
+  EXPECT_NE(drift_key.find("cameras[0].believed_drift.dv"), std::string::npos) << drift_key;
+  const std::string keys = load_error(write_scenario(
+      "cam_keys.yaml", replaced(kMinimal, "pose: {eye: [0, -1.5, 1.0], look_at: [0, 0, 1.0]}",
+                                "motion: {type: keyframes, keyframes: [{t: 1, pose: {p: [0, 0, "
+                                "0]}}, {t: 0.5, pose: {p: [1, 0, 0]}}]}")));
+  EXPECT_NE(keys.find("cameras[0].motion.keyframes[1].t"), std::string::npos) << keys;
+}
+
 TEST(RenderScenario, BadValuesAreRejected) {
   EXPECT_NE(load_error(write_scenario("edge.yaml", replaced(kMinimal, "[[4, 9]]", "[[4, 5]]")))
                 .find("edges[0]"),

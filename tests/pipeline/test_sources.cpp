@@ -10,6 +10,7 @@
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/frontend/front_end.hpp"
+#include "netvmo/pipeline/io/truth_io.hpp"
 #include "netvmo/pipeline/sources/dataset.hpp"
 #include "netvmo/pipeline/sources/network_source.hpp"
 #include "synth.hpp"
@@ -299,6 +300,105 @@ TEST(Sources, TimestampErrorsNameFileLineAndColumn) {
   net.cameras[0].fps = -2;
   { std::ofstream(dir / "network.yaml") << network_yaml(net); }
   expect_input_error([&] { open_dataset(dir); }, {"network.yaml", "cameras[0].fps", "positive"});
+}
+
+// cameras.csv gives each camera image its believed pose; a camera it does not list is static at
+// its network.yaml pose (a note); rows that move make the source a moving-camera one.
+TEST(Sources, CameraPosesGiveTheBelievedPosePerFrame) {
+  const auto dir = testing::fresh_dir("src_poses");
+  testing::write_synth_dataset(dir, testing::simple_dataset_spec(2, 3));
+  EXPECT_FALSE(open_dataset_source(dir)->cameras_move());
+  {
+    // Rows that repeat network.yaml's poses (what `render` writes for static cameras) read back
+    // to exactly those poses: the cameras are static.
+    const auto net = load_network_config(dir / "network.yaml");
+    std::ofstream f(dir / "cameras.csv");
+    f << kCameraPosesHeader << "\n";
+    for (int k = 0; k < 3; ++k)
+      for (const auto& c : net.cameras)
+        f << format_camera_pose_row(c.id, k, k / net.fps, c.g_wi) << "\n";
+  }
+  EXPECT_FALSE(open_dataset_source(dir)->cameras_move());
+  {
+    std::ofstream(dir / "cameras.csv") << kCameraPosesHeader << "\n"
+                                       << "1,2,0.2,0.3,0,1,0,0,0.1\n"
+                                       << "1,0,0,0.1,0,1,0,0,0\n"
+                                       << "1,1,0.1,0.2,0,1,0,0,0.05\n";
+  }
+  const auto src = open_dataset_source(dir);
+  EXPECT_TRUE(src->cameras_move());
+  EXPECT_TRUE(src->camera_believed(0, 2).isApprox(obs::make_pose({0.3, 0, 1}, {0, 0, 0.1})));
+  EXPECT_TRUE(src->camera_believed(0, 1).isApprox(obs::make_pose({0.2, 0, 1}, {0, 0, 0.05})));
+  EXPECT_TRUE(src->camera_believed(1, 1).isApprox(src->network().cameras[1].g_wi, 0.0));
+  bool noted = false;
+  for (const auto& n : src->notes()) noted |= n.find("lists no pose of camera 2") != n.npos;
+  EXPECT_TRUE(noted);
+  // Netvmo sweep, launch and node refuse moving cameras with one line.
+  expect_input_error([&] { require_static_cameras(*src, "netvmo launch"); },
+                     {"cameras.csv", "netvmo launch", "static cameras at their network.yaml"});
+}
+
+// truth_cameras.csv: per frame (what `render` writes now) or, in older datasets, one static pose
+// per camera, still read.
+TEST(Sources, CameraTruthPerFrameOrStatic) {
+  const auto dir = testing::fresh_dir("src_cam_truth");
+  testing::write_synth_dataset(dir, testing::simple_dataset_spec(2, 3));
+  { std::ofstream(dir / "target.csv") << kTargetHeader << "\n0,0,0,0,2,0,0,0\n"; }
+  {
+    std::ofstream(dir / "truth_cameras.csv") << kTruthCamerasHeader << "\n1,0,0,0,0,0,0\n"
+                                             << "2,1,0,0,0,0,0.5\n";
+  }
+  const auto old = open_dataset_source(dir);
+  ASSERT_TRUE(old->camera_truth(1, 2));
+  EXPECT_TRUE(old->camera_truth(1, 2)->isApprox(obs::make_pose({1, 0, 0}, {0, 0, 0.5})));
+  EXPECT_TRUE(old->camera_truth(1, 0)->isApprox(*old->camera_truth(1, 2), 0.0));
+  {
+    std::ofstream(dir / "truth_cameras.csv") << kCameraPosesHeader << "\n"
+                                             << "1,0,0,0,0,0,0,0,0\n1,1,0.1,0.1,0,0,0,0,0\n"
+                                             << "2,0,0,1,0,0,0,0,0\n2,1,0.1,1,0,0,0,0,0.1\n";
+  }
+  const auto moving = open_dataset_source(dir);
+  EXPECT_TRUE(moving->camera_truth(0, 1)->isApprox(obs::make_pose({0.1, 0, 0}, {0, 0, 0})));
+  EXPECT_TRUE(moving->camera_truth(1, 1)->isApprox(obs::make_pose({1, 0, 0}, {0, 0, 0.1})));
+  EXPECT_FALSE(moving->camera_truth(1, 2));  // no true pose: no evaluation there
+  { std::ofstream(dir / "truth_cameras.csv") << kCameraPosesHeader << "\n1,0,0,0,0,0,0,0,0\n"; }
+  expect_input_error([&] { open_dataset_source(dir); },
+                     {"truth_cameras.csv", "no row for camera 2"});
+}
+
+// Bad cameras.csv: one line naming the file, the line and the column, or the camera and the
+// frame that has no row.
+TEST(Sources, CameraPoseErrorsNameFileLineAndColumn) {
+  const auto dir = testing::fresh_dir("src_poses_bad");
+  testing::write_synth_dataset(dir, testing::simple_dataset_spec(2, 3));
+  const auto file = (dir / "cameras.csv").string();
+  const auto with = [&](const std::string& rows) {
+    std::ofstream(dir / "cameras.csv") << kCameraPosesHeader << "\n" << rows;
+  };
+  const std::string cam2 = "2,0,0,0,0,1,0,0,0\n2,1,0.1,0,0,1,0,0,0\n2,2,0.2,0,0,1,0,0,0\n";
+  with("1,0,0,0,0,1,0,0,0\n1,1,0.1,0,0,1,0,0,0\n1,2,0.2,0,0,1,0,0,0\n" + cam2);
+  EXPECT_NO_THROW(open_dataset(dir));
+  with("1,0,0,0,0,1,0,0,0\n1,2,0.2,0,0,1,0,0,0\n" + cam2);  // a frame missing in between
+  expect_input_error([&] { open_dataset(dir); }, {file, "camera 1", "no row for frame 1"});
+  with("1,0,0,0,0,1,0,0,0\n1,1,0.1,0,0,1,0,0,0\n" + cam2);  // the last frame missing
+  expect_input_error([&] { open_dataset(dir); }, {file, "camera 1", "no row for frame 2"});
+  with("1,0,0,0,0,1,0,0,0\n1,1,0.1,0,nan,1,0,0,0\n1,2,0.2,0,0,1,0,0,0\n" + cam2);
+  expect_input_error([&] { open_dataset(dir); }, {file + ":3", "py:", "expected a number"});
+  with("1,0,0,0,0,1,0,0,0\n1,1,0.1,0,0,1,0,inf,0\n1,2,0.2,0,0,1,0,0,0\n" + cam2);
+  expect_input_error([&] { open_dataset(dir); }, {file + ":3", "ry:", "expected a number"});
+  with("1,0,0,0,0,1,0,0,0\n1,1,0.1,0,0,1,0,0,0\n1,1,0.1,0,0,1,0,0,0\n1,2,0.2,0,0,1,0,0,0\n" +
+       cam2);  // a repeated row
+  expect_input_error([&] { open_dataset(dir); }, {file + ":4", "frame:", "second row"});
+  with(cam2 + "7,0,0,0,0,1,0,0,0\n");  // unknown camera
+  expect_input_error([&] { open_dataset(dir); }, {file + ":5", "camera:", "not in network.yaml"});
+  with(cam2 + "2,3,0.3,0,0,1,0,0,0\n");  // past the last image
+  expect_input_error([&] { open_dataset(dir); }, {file + ":5", "frame:", "past the last image"});
+  with("0,0,0,0,0,1,0,0,0\n");
+  expect_input_error([&] { open_dataset(dir); }, {file + ":2", "camera:", "positive"});
+  with("1,0,0,0,0,1,0,0\n");
+  expect_input_error([&] { open_dataset(dir); }, {file + ":2", "expected 9 fields"});
+  { std::ofstream(dir / "cameras.csv") << "camera,px,py,pz,rx,ry,rz\n"; }
+  expect_input_error([&] { open_dataset(dir); }, {file + ":1", "header"});
 }
 
 TEST(Sources, XmlCalibrationsInDataset) {

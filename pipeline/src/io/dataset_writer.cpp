@@ -27,11 +27,20 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
   }
   io::write_file_atomic(out / "network.yaml", network_yaml(scene_network_config(scene, frames)));
   {
-    // The true (rendering) camera poses, for evaluation: g_io,true = g_wi,true^-1 g_wo.
-    io::AtomicFile cams(out / "truth_cameras.csv");
-    cams << kTruthCamerasHeader << "\n";
-    for (const auto& c : scene.cameras) cams << format_truth_camera_row(c.id, c.g_wi_true) << "\n";
-    cams.commit();
+    // Per camera image: the believed pose (cameras.csv, what the camera thinks it is) and the
+    // true (rendering) pose, for evaluation: g_io,true = g_wi,true^-1 g_wo.
+    io::AtomicFile believed(out / "cameras.csv"), truth(out / "truth_cameras.csv");
+    believed << kCameraPosesHeader << "\n";
+    truth << kCameraPosesHeader << "\n";
+    for (int ci = 0; ci < r.camera_count(); ++ci)
+      for (int f = 0; f < frames; ++f) {
+        const int id = scene.cameras[size_t(ci)].id;
+        believed << format_camera_pose_row(id, f, r.time_of(f), r.believed_camera_pose(ci, f))
+                 << "\n";
+        truth << format_camera_pose_row(id, f, r.time_of(f), r.camera_pose(ci, f)) << "\n";
+      }
+    believed.commit();
+    truth.commit();
   }
 
   DatasetSummary summary;

@@ -318,7 +318,16 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
     render::CameraSpec cam;
     cam.id = read_camera_id(cm.get("id"), ids);
     cam.intrinsics = read_intrinsics(cm.get("intrinsics"));
-    cam.g_wi_true = read_pose(cm.get("pose"));
+    // The true pose: static at `pose`, or following `motion` (then g_wi_true is its t = 0 pose).
+    const auto pose = cm.find("pose");
+    const auto motion = cm.find("motion");
+    if (pose && motion) motion->fail("give either pose or motion, not both");
+    if (motion) {
+      cam.motion = read_motion(*motion);
+      cam.g_wi_true = cam.motion->at(0.0);
+    } else {
+      cam.g_wi_true = read_pose(cm.get("pose"));
+    }
     const auto believed = cm.find("believed");
     const auto offset = cm.find("believed_offset");
     if (believed && offset) offset->fail("give either believed or believed_offset, not both");
@@ -332,6 +341,13 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
       if (dp) cam.g_wi_believed.translation() += dp->vec<3>();
       if (dr) cam.g_wi_believed.linear() = obs::exp_so3(dr->vec<3>()) * cam.g_wi_true.linear();
       om.finish();
+    }
+    if (const auto drift = cm.find("believed_drift")) {
+      // The believed world frame drifts: dp [m/s] and dr [rad/s] (CameraSpec::believed_pose).
+      MapReader dm = drift->map();
+      if (const auto dp = dm.find("dp")) cam.believed_drift.head<3>() = dp->vec<3>();
+      if (const auto dr = dm.find("dr")) cam.believed_drift.tail<3>() = dr->vec<3>();
+      dm.finish();
     }
     cm.finish();
     s.cameras.push_back(cam);

@@ -82,6 +82,37 @@ bool flag(const std::vector<std::string>& f, const std::vector<std::string>& nam
   throw InputError(where + ": " + names[i] + ": expected 0 or 1, got '" + f[i] + "'");
 }
 
+// Per-image rows (timestamps.csv, cameras.csv): columns 0 and 1 are the camera (> 0) and the
+// frame (>= 0); `line` is the row's line in the file.
+template <class Row>
+void camera_and_frame(Row& r, const std::vector<std::string>& f,
+                      const std::vector<std::string>& names, const std::string& where) {
+  r.camera = integer(f, names, 0, where);
+  if (r.camera <= 0)
+    throw InputError(where + ": camera: expected a positive camera id, got '" + f[0] + "'");
+  r.frame = integer(f, names, 1, where);
+  if (r.frame < 0)
+    throw InputError(where + ": frame: expected a frame index >= 0, got '" + f[1] + "'");
+  r.line = std::stoi(where.substr(where.rfind(':') + 1));
+}
+
+// Sorts per-image rows (each with its place in the file) by camera, then frame; a frame given
+// twice for a camera is an error naming both rows.
+template <class Row>
+void sort_by_camera_and_frame(std::vector<std::pair<Row, std::string>>& rows) {
+  std::stable_sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) {
+    return std::make_pair(a.first.camera, a.first.frame) <
+           std::make_pair(b.first.camera, b.first.frame);
+  });
+  for (size_t k = 1; k < rows.size(); ++k) {
+    const auto& [r, where] = rows[k];
+    if (rows[k - 1].first.camera == r.camera && rows[k - 1].first.frame == r.frame)
+      throw InputError(where + ": frame: camera " + std::to_string(r.camera) + " frame " +
+                       std::to_string(r.frame) + " has a second row (first at " +
+                       rows[k - 1].second + ")");
+  }
+}
+
 std::string fmt_time(double t) {
   char b[40];
   std::snprintf(b, sizeof b, "%.9g", t);
@@ -134,32 +165,19 @@ std::vector<TargetTruthRow> read_target_csv(const fs::path& file) {
 
 std::vector<TimestampRow> read_timestamps_csv(const fs::path& file) {
   std::vector<std::pair<TimestampRow, std::string>> rows;  // with the line, for messages
-  read_csv(
-      file, kTimestampsHeader, [&](const auto& f, const auto& names, const std::string& where) {
-        TimestampRow r;
-        r.camera = integer(f, names, 0, where);
-        if (r.camera <= 0)
-          throw InputError(where + ": camera: expected a positive camera id, got '" + f[0] + "'");
-        r.frame = integer(f, names, 1, where);
-        if (r.frame < 0)
-          throw InputError(where + ": frame: expected a frame index >= 0, got '" + f[1] + "'");
-        r.t = num(f, names, 2, where);
-        r.line = std::stoi(where.substr(where.rfind(':') + 1));
-        rows.emplace_back(r, where);
-      });
-  std::stable_sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) {
-    return std::make_pair(a.first.camera, a.first.frame) <
-           std::make_pair(b.first.camera, b.first.frame);
-  });
+  read_csv(file, kTimestampsHeader,
+           [&](const auto& f, const auto& names, const std::string& where) {
+             TimestampRow r;
+             camera_and_frame(r, f, names, where);
+             r.t = num(f, names, 2, where);
+             rows.emplace_back(r, where);
+           });
+  sort_by_camera_and_frame(rows);
   std::vector<TimestampRow> out;
   for (size_t k = 0; k < rows.size(); ++k) {
     const auto& [r, where] = rows[k];
     if (k > 0 && rows[k - 1].first.camera == r.camera) {
       const auto& prev = rows[k - 1].first;
-      if (prev.frame == r.frame)
-        throw InputError(where + ": frame: camera " + std::to_string(r.camera) + " frame " +
-                         std::to_string(r.frame) + " has a second row (first at " +
-                         rows[k - 1].second + ")");
       if (!(r.t > prev.t))
         throw InputError(where + ": t: camera " + std::to_string(r.camera) + " frame " +
                          std::to_string(r.frame) + " at t = " + fmt_time(r.t) +
@@ -256,6 +274,59 @@ std::string format_detection_row(const DetectionRow& r) {
   s += ',';
   for (char ch : r.reason) s += ch == ',' ? ';' : (ch == '\n' || ch == '\r') ? ' ' : ch;
   return s;
+}
+
+std::string format_camera_pose_row(int camera, int frame, double t, const obs::SE3& g_wi) {
+  const obs::Vec3 p = g_wi.translation(), r = obs::log_so3(g_wi.linear());
+  std::string s = std::to_string(camera) + "," + std::to_string(frame) + "," + fmt("%.6f", t);
+  for (int i = 0; i < 3; ++i) s += "," + fmt("%.12g", p[i]);
+  for (int i = 0; i < 3; ++i) s += "," + fmt("%.12g", r[i]);
+  return s;
+}
+
+std::vector<CameraPoseRow> read_camera_poses_csv(const fs::path& file) {
+  std::vector<std::pair<CameraPoseRow, std::string>> rows;  // with the line, for messages
+  read_csv(file, kCameraPosesHeader,
+           [&](const auto& f, const auto& names, const std::string& where) {
+             CameraPoseRow r;
+             camera_and_frame(r, f, names, where);
+             r.t = num(f, names, 2, where);
+             const obs::Vec3 p(num(f, names, 3, where), num(f, names, 4, where),
+                               num(f, names, 5, where));
+             const obs::Vec3 w(num(f, names, 6, where), num(f, names, 7, where),
+                               num(f, names, 8, where));
+             r.g_wi = obs::make_pose(p, w);
+             rows.emplace_back(r, where);
+           });
+  sort_by_camera_and_frame(rows);
+  std::vector<CameraPoseRow> out;
+  for (size_t k = 0; k < rows.size(); ++k) {
+    const auto& r = rows[k].first;
+    const bool first = k == 0 || rows[k - 1].first.camera != r.camera;
+    const int expected = first ? 0 : rows[k - 1].first.frame + 1;
+    if (r.frame != expected)
+      throw InputError(file.string() + ": camera " + std::to_string(r.camera) +
+                       ": no row for frame " + std::to_string(expected) +
+                       " (a camera with rows needs one for every frame)");
+    out.push_back(r);
+  }
+  return out;
+}
+
+std::vector<CameraPoseRow> read_camera_truth_csv(const fs::path& file) {
+  std::ifstream in(file);
+  std::string header;
+  if (in && std::getline(in, header) && !header.empty() && header.back() == '\r') header.pop_back();
+  if (header != kTruthCamerasHeader) return read_camera_poses_csv(file);
+  std::vector<CameraPoseRow> out;
+  for (const auto& r : read_truth_cameras_csv(file)) {
+    CameraPoseRow p;
+    p.camera = r.camera;
+    p.frame = -1;
+    p.g_wi = r.g_wi;
+    out.push_back(p);
+  }
+  return out;
 }
 
 std::vector<CameraTruthRow> read_truth_cameras_csv(const fs::path& file) {

@@ -179,8 +179,6 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
     for (size_t i = 0; i < n; ++i) held[i] = by_frame(rows[i], files[i], frames, allow_gaps);
   }
 
-  std::vector<std::optional<SE3>> true_wi(n);
-  for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth(i);
   const Row none;  // blind and uninitialised
   for (int k = 0; k < frames; ++k) {
     run::FrameRecord r;
@@ -194,14 +192,15 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
       const Row& row = p ? *p : none;
       cams[i] = row.cam;
       auto& c = r.cameras[i];
-      const SE3& g_wi = net.cameras[i].g_wi;
+      const SE3& g_wi = net.cameras[i].g_wi;  // static cameras (moving ones: netvmo run)
+      const auto true_wi = provider.camera_truth(i, k);
       c.delta = row.cam.obs.delta;
       c.initialized = row.initialized;
       c.est_w = row.est_w;
       if (row.indep) c.indep_w = row.indep_w;
       if (c.delta && row.cam.g_io_pnp) c.pnp_w = g_wi * *row.cam.g_io_pnp;
-      if (c.delta && r.g_wo_true && true_wi[i])
-        c.fictitious_w = g_wi * (true_wi[i]->inverse() * *r.g_wo_true);  // g_wi g_io,true
+      if (c.delta && r.g_wo_true && true_wi)
+        c.fictitious_w = g_wi * (true_wi->inverse() * *r.g_wo_true);  // g_wi g_io,true
     }
     run::evaluate_frame(r);
     result.history.push_back(std::move(r));

@@ -135,6 +135,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   const auto t_start = Clock::now();
   auto provider = sources::open_dataset_source(dataset, o.camera_id, o.run.keep_going);
   const io::NetworkConfig& netcfg = provider->network();
+  sources::require_static_cameras(*provider, "a camera process (netvmo launch, node)");
   const int self = netcfg.index_of(o.camera_id);
   if (self < 0)
     throw InputError(netcfg.source + ": cameras: no camera " + std::to_string(o.camera_id));
@@ -191,7 +192,6 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   frontend::FrontEnd front_end(ds, o.run.tracking);
   frontend::TrackState track;
   const auto model = obs::FeatureModel::square(netcfg.target.size);
-  const auto true_wi = provider->camera_truth(si);
 
   int frames = o.frames ? *o.frames : provider->frame_count();
   if (o.run.max_frames) frames = std::min(frames, *o.run.max_frames);
@@ -268,6 +268,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
     z.f = cam.obs.f_normalized;
     z.g_io_pnp = cam.g_io_pnp;
     const auto target = provider->target_truth(k);
+    const auto true_wi = provider->camera_truth(si, k);
     if (target && true_wi) z.g_io_true = true_wi->inverse() * *target;
     if (net.error_model().input() == obs::MeasurementInput::true_pose && z.delta && !z.g_io_true)
       throw InputError("the " + std::string(net.error_model().name()) +

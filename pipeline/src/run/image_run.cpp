@@ -48,6 +48,11 @@ std::vector<CameraInput> camera_inputs(const std::vector<CameraFrame>& cams,
   return in;
 }
 
+obs::Vec6 camera_velocity(const obs::SE3& g_k, const obs::SE3& g_k1, double dt) {
+  if (g_k.isApprox(g_k1, 0.0)) return obs::Vec6::Zero();
+  return obs::log_se3(g_k.inverse() * g_k1) / dt;
+}
+
 std::optional<std::string> step_factor_warning(int substeps, double step_factor) {
   if (step_factor < 2.0) return std::nullopt;
   char b[200];
@@ -100,8 +105,9 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
 
   run::RunnerSettings rs = options.runner;
   rs.tag_size = net.target.size;
+  const bool moving = provider.cameras_move();
   std::vector<obs::SE3> g_wi;
-  for (const auto& c : net.cameras) g_wi.push_back(c.g_wi);
+  for (size_t i = 0; i < n; ++i) g_wi.push_back(provider.camera_believed(i, 0));
   run::NetworkRunner runner(graph, g_wi, rs);
   runner.set_transport(make_transport(options.transport, graph));
 
@@ -118,7 +124,7 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
   const auto model = obs::FeatureModel::square(net.target.size);
 
   std::vector<std::optional<obs::SE3>> true_wi(n);
-  for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth(i);
+  std::vector<obs::Vec6> V_wi(n, obs::Vec6::Zero());
 
   ImageRunResult result;
   result.warnings = provider.warnings();
@@ -179,6 +185,15 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
     result.seconds_front_end += seconds_since(t_fe);
 
     const auto t_obs = Clock::now();
+    for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth(i, k);
+    if (moving) {
+      for (size_t i = 0; i < n; ++i) {
+        g_wi[i] = provider.camera_believed(i, k);
+        if (!options.ignore_camera_velocity)
+          V_wi[i] = camera_velocity(g_wi[i], provider.camera_believed(i, k + 1), dt);
+      }
+      runner.set_camera_motion(g_wi, V_wi);
+    }
     const auto target = provider.target_truth(k);
     const auto in = camera_inputs(cams, target, true_wi);
     const auto& record = runner.process(k, k * dt, dt, in, target);

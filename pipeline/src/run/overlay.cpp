@@ -73,8 +73,9 @@ void OverlayWriter::operator()(int /*frame*/, const std::vector<cv::Mat>& images
   cv::Size tile;
   for (size_t i = 0; i < n; ++i) {
     const auto& calib = provider_.calibration(i);
-    const cv::Mat img = draw_overlay(images[i], net.cameras[i].id, calib, net.cameras[i].g_wi,
-                                     cams[i], record.cameras[i], net.target.size);
+    const cv::Mat img = draw_overlay(images[i], net.cameras[i].id, calib,
+                                     provider_.camera_believed(i, record.frame), cams[i],
+                                     record.cameras[i], net.target.size);
     if (settings_.video) {
       if (videos_.size() <= i) videos_.resize(n);
       if (!videos_[i].isOpened()) {

@@ -66,6 +66,10 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
     s["transport"] = {{"kind", options.transport.kind},
                       {"drop", options.transport.drop},
                       {"seed", options.transport.seed}};
+  if (provider.cameras_move())  // recorded for moving cameras (cameras.csv) only
+    s["camera_velocity"] = options.ignore_camera_velocity
+                               ? "ignored (--ignore-camera-velocity: V_wi = 0)"
+                               : "V_wi = log(g_wi(t_k)^-1 g_wi(t_k+1)) / dt, held over the frame";
   s["rounds_per_frame"] = result.substeps;
   s["step_factor"] = result.step_factor;  // h (k_e + 2 k_s d_max): < 2 stable
   s["reference"] =

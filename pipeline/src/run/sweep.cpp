@@ -15,10 +15,11 @@ namespace netvmo::run {
 namespace fs = std::filesystem;
 
 RecordedInputs record_inputs(sources::NetworkSource& provider, const ImageRunOptions& options) {
+  sources::require_static_cameras(provider, "netvmo sweep");
   const auto result = run_images(provider, options);
   const size_t n = provider.network().cameras.size();
   std::vector<std::optional<SE3>> true_wi(n);
-  for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth(i);
+  for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth(i, 0);
   RecordedInputs in;
   in.dt = 1.0 / provider.network().fps;
   for (size_t k = 0; k < result.frames.size(); ++k) {
@@ -90,8 +91,9 @@ std::optional<RecordedInputs> read_inputs_cache(const fs::path& file,
   RecordedInputs in;
   in.dt = 1.0 / provider.network().fps;
   in.frames.assign(frames, std::vector<CameraInput>(n));
+  sources::require_static_cameras(provider, "netvmo sweep");
   std::vector<std::optional<SE3>> true_wi(n);
-  for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth(i);
+  for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth(i, 0);
   size_t rows = 0;
   for (int lineno = 3; std::getline(f, line); ++lineno) {
     std::vector<double> v;

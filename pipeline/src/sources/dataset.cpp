@@ -1,5 +1,6 @@
 #include "netvmo/pipeline/sources/dataset.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <set>
@@ -50,6 +51,17 @@ bool readable(const DatasetCamera& cam) {
   return cam.source && !dynamic_cast<const UnreadableStream*>(cam.source.get());
 }
 
+// The index in network.yaml of the camera of a per-image row of `file` (timestamps.csv,
+// cameras.csv), or an error naming the row.
+template <class Row>
+size_t listed_camera(const Dataset& ds, const fs::path& file, const Row& r) {
+  const int i = ds.index_of(r.camera);
+  if (i < 0)
+    throw InputError(file.string() + ":" + std::to_string(r.line) + ": camera: camera " +
+                     std::to_string(r.camera) + " is not in network.yaml");
+  return static_cast<size_t>(i);
+}
+
 // timestamps.csv (io::read_timestamps_csv checks the file itself): every listed camera is in
 // network.yaml, and an opened camera it lists has a row for each of its images and none past
 // its last.
@@ -63,13 +75,9 @@ void read_timestamps(Dataset& ds) {
   const auto rows = io::read_timestamps_csv(file);
   std::set<int> listed;
   for (const auto& r : rows) {
-    const int i = ds.index_of(r.camera);
+    auto& cam = ds.cameras[listed_camera(ds, file, r)];
     const std::string where = file.string() + ":" + std::to_string(r.line);
-    if (i < 0)
-      throw InputError(where + ": camera: camera " + std::to_string(r.camera) +
-                       " is not in network.yaml");
     listed.insert(r.camera);
-    auto& cam = ds.cameras[static_cast<size_t>(i)];
     // A camera that was not opened (another camera's process) or cannot be read keeps its
     // times unchecked.
     const int n = readable(cam) ? cam.source->frame_count() : r.frame + 1;
@@ -97,7 +105,44 @@ void read_timestamps(Dataset& ds) {
                          ": its times are frame index / its fps");
 }
 
+// cameras.csv (io::read_camera_poses_csv checks the file itself): every listed camera is in
+// network.yaml, and an opened camera it lists has a row for each of its frames and none past
+// its last image.
+void read_camera_poses(Dataset& ds) {
+  const fs::path file = ds.dir / "cameras.csv";
+  if (!fs::exists(file)) return;
+  const auto rows = io::read_camera_poses_csv(file);
+  for (const auto& r : rows) {
+    auto& cam = ds.cameras[listed_camera(ds, file, r)];
+    const std::string where = file.string() + ":" + std::to_string(r.line);
+    if (readable(cam) && r.frame >= cam.source->frame_count())
+      throw InputError(where + ": frame: " + std::to_string(r.frame) +
+                       " is past the last image of camera " + std::to_string(r.camera) +
+                       ", which has " + std::to_string(cam.source->frame_count()) + " (" +
+                       cam.source->path().string() + ")");
+    cam.poses.push_back(r.g_wi);  // rows come by camera, then frame, from 0 without a gap
+  }
+  for (size_t i = 0; i < ds.cameras.size(); ++i) {
+    const auto& cam = ds.cameras[i];
+    const int need =
+        std::min(ds.camera_frame_count(i), readable(cam) ? cam.source->frame_count() : 0);
+    if (!cam.poses.empty() && static_cast<int>(cam.poses.size()) < need)
+      throw InputError(file.string() + ": camera " + std::to_string(cam.id) +
+                       ": no row for frame " + std::to_string(cam.poses.size()) +
+                       " (a camera with rows needs one for every frame)");
+    if (cam.poses.empty())
+      ds.notes.push_back(file.string() + " lists no pose of camera " + std::to_string(cam.id) +
+                         ": it is static at its network.yaml pose");
+  }
+}
+
 }  // namespace
+
+obs::SE3 Dataset::camera_pose(size_t camera_index, int frame) const {
+  const DatasetCamera& cam = cameras.at(camera_index);
+  if (cam.poses.empty()) return network.cameras.at(camera_index).g_wi;
+  return cam.poses[static_cast<size_t>(std::clamp(frame, 0, int(cam.poses.size()) - 1))];
+}
 
 int Dataset::camera_frame_count(size_t camera_index) const {
   const DatasetCamera& cam = cameras.at(camera_index);
@@ -234,6 +279,7 @@ Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera, bool k
                             std::to_string(ds.frame_count) + "; the extra frames are ignored");
   }
   read_timestamps(ds);
+  read_camera_poses(ds);
   return ds;
 }
 

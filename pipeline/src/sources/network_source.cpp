@@ -25,16 +25,26 @@ class DatasetProvider final : public NetworkSource {
     const fs::path target = dir / "target.csv", cams = dir / "truth_cameras.csv";
     if (fs::exists(target) && fs::exists(cams)) {
       for (const auto& r : io::read_target_csv(target)) target_[r.frame] = r.g_wo;
-      std::map<int, obs::SE3> by_id;
-      for (const auto& r : io::read_truth_cameras_csv(cams)) by_id[r.camera] = r.g_wi;
+      // Per frame, or one static pose per camera (frame -1, older datasets).
+      std::map<int, std::vector<obs::SE3>> by_id;
+      std::map<int, bool> fixed;
+      for (const auto& r : io::read_camera_truth_csv(cams)) {
+        by_id[r.camera].push_back(r.g_wi);
+        fixed[r.camera] = r.frame < 0;
+      }
       for (const auto& c : ds_.network.cameras) {
         const auto it = by_id.find(c.id);
         if (it == by_id.end())
           throw InputError(cams.string() + ": no row for camera " + std::to_string(c.id) +
                            " of network.yaml");
-        camera_truth_.push_back(it->second);
+        camera_truth_.push_back({it->second, fixed[c.id]});
       }
     }
+    // cameras.csv says something network.yaml does not: a pose other than network.yaml's
+    // (a rendered static camera's rows hold network.yaml's numbers, written the same way).
+    for (size_t i = 0; i < ds_.cameras.size() && !moving_; ++i)
+      for (const auto& g : ds_.cameras[i].poses)
+        moving_ = moving_ || !g.isApprox(ds_.network.cameras[i].g_wi, 0.0);
   }
   const io::NetworkConfig& network() const override { return ds_.network; }
   const io::Calibration& calibration(size_t i) const override { return ds_.cameras.at(i).calib; }
@@ -45,10 +55,15 @@ class DatasetProvider final : public NetworkSource {
     if (it == target_.end()) return std::nullopt;
     return it->second;
   }
-  std::optional<obs::SE3> camera_truth(size_t i) const override {
+  std::optional<obs::SE3> camera_truth(size_t i, int frame) const override {
     if (i >= camera_truth_.size()) return std::nullopt;
-    return camera_truth_[i];
+    const auto& [poses, fixed] = camera_truth_[i];
+    if (fixed) return poses.front();
+    if (frame < 0 || static_cast<size_t>(frame) >= poses.size()) return std::nullopt;
+    return poses[static_cast<size_t>(frame)];
   }
+  obs::SE3 camera_believed(size_t i, int frame) const override { return ds_.camera_pose(i, frame); }
+  bool cameras_move() const override { return moving_; }
   std::vector<std::string> warnings() const override { return ds_.warnings; }
   std::vector<std::string> notes() const override { return ds_.notes; }
   int camera_frame_count(size_t i) const override { return ds_.camera_frame_count(i); }
@@ -60,7 +75,9 @@ class DatasetProvider final : public NetworkSource {
  private:
   Dataset ds_;
   std::map<int, obs::SE3> target_;
-  std::vector<obs::SE3> camera_truth_;
+  /// Per camera: its true poses by frame, or (flag set) one static pose.
+  std::vector<std::pair<std::vector<obs::SE3>, bool>> camera_truth_;
+  bool moving_ = false;
 };
 
 }  // namespace
@@ -99,6 +116,13 @@ std::optional<std::string> clock_mismatch(const NetworkSource& source) {
     }
   }
   return std::nullopt;
+}
+
+void require_static_cameras(const NetworkSource& source, const std::string& what) {
+  if (source.cameras_move())
+    throw InputError(source.name() + ": cameras.csv: the camera poses change over time (or " +
+                     "differ from network.yaml's), and " + what +
+                     " handles static cameras at their network.yaml poses only (use netvmo run)");
 }
 
 std::unique_ptr<NetworkSource> open_dataset_source(const fs::path& dir,

@@ -1,5 +1,7 @@
 #include "netvmo/pipeline/sources/render_source.hpp"
 
+#include <algorithm>
+
 #include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/render/renderer.hpp"
 
@@ -24,8 +26,15 @@ class RenderProvider final : public NetworkSource {
   std::optional<obs::SE3> target_truth(int frame) const override {
     return renderer_.target_pose(frame);
   }
-  std::optional<obs::SE3> camera_truth(size_t i) const override {
-    return renderer_.scene().cameras.at(i).g_wi_true;
+  std::optional<obs::SE3> camera_truth(size_t i, int frame) const override {
+    return renderer_.camera_pose(static_cast<int>(i), frame);
+  }
+  obs::SE3 camera_believed(size_t i, int frame) const override {
+    return renderer_.believed_camera_pose(static_cast<int>(i), frame);
+  }
+  bool cameras_move() const override {
+    const auto& cams = renderer_.scene().cameras;
+    return std::any_of(cams.begin(), cams.end(), [](const auto& c) { return c.moving(); });
   }
   std::string name() const override { return "live rendering"; }
 

@@ -130,7 +130,9 @@ class CameraObserver {
   /// Believed camera pose g_wi (the source of g_ij = g_wi^-1 g_wj). Default: identity.
   void set_camera_pose(const SE3& g_wi) { g_wi_ = g_wi; }
   const SE3& camera_pose() const { return g_wi_; }
-  /// Camera body velocity V_wi = [v; w]. Default: zero.
+  /// Camera body velocity V_wi = [v; w]. Default: zero. step(h) also moves the believed pose
+  /// on, g_wi <- g_wi exp(h hat(V_wi)), so that set_camera_pose(g_k) with
+  /// V_wi = log(g_k^-1 g_k+1) / (t_k+1 - t_k) lands exactly on g_k+1 at the end of the frame.
   void set_camera_velocity(const Vec6& V_wi) { V_wi_ = V_wi; }
   /// The measurement used by step() until the next call (zero-order hold); with
   /// init_from_measurement it may (re-)initialise the estimate from the PnP pose.

@@ -4,6 +4,7 @@
 // Discretisation. Frames arrive every dt; the measurement is held over the frame (zero-order
 // hold) and the ODE is integrated with N sub-steps of the Lie-group Euler scheme
 //     g_bar_i <- exp(-h hat(V_wi)) g_bar_i exp(h hat(u_ei)),   h = dt / N,
+// and each moving camera's believed pose with it, g_wi <- g_wi exp(h hat(V_wi)),
 // all cameras using the estimates of the previous sub-step (one exchange round per sub-step).
 // Stability: with the exact error model the world-frame positions obey the linear system
 //     d/dt p = -(k_e Delta + k_s L) p + k_e Delta p_o
@@ -52,7 +53,8 @@ class NetworkedObserver {
   void reset(const std::vector<SE3>& g_bar);
   /// Believed camera poses g_wi (the source of g_ij = g_wi^-1 g_wj). Default: identity.
   void set_camera_poses(const std::vector<SE3>& g_wi);
-  /// Camera body velocities V_wi = [v; w] (the -hat(V_wi) g_bar term). Default: zero.
+  /// Camera body velocities V_wi = [v; w] (the -hat(V_wi) g_bar term; step() also moves the
+  /// believed poses on with them). Default: zero.
   void set_camera_velocities(const std::vector<Vec6>& V_wi);
   /// Cameras that take part (CameraObserver::set_initialized). Default: all.
   void set_active(const std::vector<bool>& active);

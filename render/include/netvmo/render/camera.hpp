@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "netvmo/render/geometry.hpp"
+#include "netvmo/render/trajectory.hpp"
 
 namespace netvmo::render {
 
@@ -30,11 +31,27 @@ struct Intrinsics {
 };
 
 /// One camera of the network. id is the positive integer of the scenario.
+///
+/// A moving camera's true pose follows `motion`; its believed pose is the true one seen
+/// through a mis-registered world frame, Delta(t) g_wi,true(t), with
+///   Delta(0) = g_wi_believed g_wi,true(0)^-1   (the localisation error at t = 0) and
+///   Delta(t) = [exp(t hat(drift_w)), t drift_v] Delta(0)   (a drift of the mis-registration),
+/// so a static target's fictitious pose Delta(t) g_wo stays put while only the camera moves.
+/// A static camera without drift believes g_wi_believed at every frame.
 struct CameraSpec {
   int id = 1;
   Intrinsics intrinsics;
-  Pose g_wi_true = Pose::Identity();      ///< used to render
-  Pose g_wi_believed = Pose::Identity();  ///< what the camera believes (its localization error)
+  Pose g_wi_true = Pose::Identity();      ///< true pose at t = 0 (motion->at(0) when moving)
+  Pose g_wi_believed = Pose::Identity();  ///< believed pose at t = 0 (its localization error)
+  std::optional<Trajectory> motion;       ///< true g_wi(t); none: static at g_wi_true
+  Vec6 believed_drift = Vec6::Zero();     ///< [drift_v (m/s); drift_w (rad/s)], world frame
+
+  /// True pose at time t [s] (used to render and for the ground truth).
+  Pose true_pose(double t) const { return motion ? motion->at(t) : g_wi_true; }
+  /// Believed pose at time t [s].
+  Pose believed_pose(double t) const;
+  /// Whether the true or the believed pose changes over time.
+  bool moving() const;
 };
 
 }  // namespace netvmo::render

@@ -1,7 +1,7 @@
 // The Embree renderer: scene in, images and ground truth out, in memory.
 //
 //   render::Renderer r(scene);              // builds and commits the static BVH once
-//   cv::Mat img = r.render(cam_index, k);   // CV_8UC1, camera's true pose, frame k
+//   cv::Mat img = r.render(cam_index, k);   // CV_8UC1, camera's true pose at frame k
 //   render::FrameTruth gt = r.truth(cam_index, k);
 //
 // Static geometry lives in one Embree scene committed once and instanced with the identity;
@@ -69,6 +69,11 @@ class Renderer {
   FrameTruth truth(int camera_index, int frame);
   /// True target pose at frame k.
   Pose target_pose(int frame) const;
+  /// True pose of camera `camera_index` at frame k (it renders from there; static cameras:
+  /// CameraSpec::g_wi_true).
+  Pose camera_pose(int camera_index, int frame) const;
+  /// Believed pose of camera `camera_index` at frame k (CameraSpec::believed_pose).
+  Pose believed_camera_pose(int camera_index, int frame) const;
 
   /// Benchmark baseline: the same primary rays as render() (imaging.spp per pixel), traced one
   /// at a time with rtcIntersect1 and no shading, over `threads` threads. Returns the number of

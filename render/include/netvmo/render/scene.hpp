@@ -84,7 +84,8 @@ struct Imaging {
   int visibility_grid = 16;  ///< samples per side over the printed tag for visible_fraction
   /// Reuse a camera's previous noise-free radiance wherever no body that moved since (nor its
   /// shadow) can have changed it, re-trace the rest, and draw new sensor noise over the whole
-  /// image; the image is byte-identical to tracing everything again.
+  /// image; the image is byte-identical to tracing everything again. A camera whose own pose
+  /// changed (CameraSpec::motion) re-traces its whole image.
   bool reuse_radiance = true;
 };
 

@@ -6,7 +6,9 @@
 //                              cameras [{id, p_wi, r_wi}] (believed poses), edges
 //   truth.csv                  frame,t,camera,in_fov,visible_fraction,u0,v0,...,u3,v3
 //   target.csv                 frame,t,px,py,pz,rx,ry,rz (true target pose in the world)
-//   truth_cameras.csv          camera,px,py,pz,rx,ry,rz (true camera poses in the world)
+//   cameras.csv                camera,frame,t,px,py,pz,rx,ry,rz (believed camera poses g_wi
+//                              per camera image; frame 0 is network.yaml's)
+//   truth_cameras.csv          camera,frame,t,px,py,pz,rx,ry,rz (true camera poses per image)
 // Every file is written to a temporary sibling and renamed into place.
 #pragma once
 

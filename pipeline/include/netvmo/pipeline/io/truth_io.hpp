@@ -7,6 +7,9 @@
 //   target.csv  frame,t,px,py,pz,rx,ry,rz         (g_wo: target position, rotation vector)
 //   timestamps.csv  camera,frame,t       (recorded folders, optional: each image's time [s];
 //               frame = the image's index in its camera's folder or video)
+//   cameras.csv camera,frame,t,px,py,pz,rx,ry,rz   (optional: believed g_wi per camera image)
+//   truth_cameras.csv  the same columns (true g_wi per camera image), or, in older datasets,
+//               camera,px,py,pz,rx,ry,rz (one static true pose per camera)
 //   detections.csv  frame,camera,tag_id,detected,status,margin,u0,v0,u1,v1,u2,v2,u3,v3,reason
 //               one row per camera and frame; status is to_string(TargetStatus) (detected, or
 //               the reason the target was not used), reason the same in words (empty when
@@ -67,7 +70,7 @@ std::vector<TruthRow> read_truth_csv(const std::filesystem::path& file);
 std::vector<TargetTruthRow> read_target_csv(const std::filesystem::path& file);
 std::vector<DetectionRow> read_detections_csv(const std::filesystem::path& file);
 
-/// truth_cameras.csv: the true (rendering) pose of every camera, header
+/// truth_cameras.csv of older datasets: one true (rendering) pose per camera, header
 /// camera,px,py,pz,rx,ry,rz (position, rotation vector of R_wi).
 inline constexpr const char* kTruthCamerasHeader = "camera,px,py,pz,rx,ry,rz";
 struct CameraTruthRow {
@@ -75,6 +78,31 @@ struct CameraTruthRow {
   obs::SE3 g_wi = obs::SE3::Identity();
 };
 std::vector<CameraTruthRow> read_truth_cameras_csv(const std::filesystem::path& file);
+
+/// cameras.csv (believed poses) and truth_cameras.csv (true poses): a camera's pose g_wi at
+/// each of its images, header camera,frame,t,px,py,pz,rx,ry,rz (world frame, position and
+/// rotation vector of R_wi; t in seconds, for reading only: the run's times come from the
+/// images).
+inline constexpr const char* kCameraPosesHeader = "camera,frame,t,px,py,pz,rx,ry,rz";
+struct CameraPoseRow {
+  int camera = 0;
+  int frame = 0;  ///< -1: a static pose (truth_cameras.csv of older datasets)
+  double t = 0.0;
+  obs::SE3 g_wi = obs::SE3::Identity();
+  int line = 0;  ///< in the file, for messages
+};
+/// Reads a camera-pose file and checks what the file alone can tell: camera > 0, frame >= 0,
+/// every number finite, no (camera, frame) twice, and every camera with rows has one for each
+/// frame from 0 to its last (a missing frame is an error naming the camera and the frame).
+/// Rows are returned by camera, then frame. Errors name the file, line and column.
+std::vector<CameraPoseRow> read_camera_poses_csv(const std::filesystem::path& file);
+/// truth_cameras.csv in either form: per frame (kCameraPosesHeader, read_camera_poses_csv) or
+/// one static pose per camera (kTruthCamerasHeader, returned with frame = -1).
+std::vector<CameraPoseRow> read_camera_truth_csv(const std::filesystem::path& file);
+/// One cameras.csv / truth_cameras.csv line (without newline): t with 6 decimals, the pose with
+/// 12 significant digits (as network.yaml, so a static camera's rows read back to the same
+/// pose).
+std::string format_camera_pose_row(int camera, int frame, double t, const obs::SE3& g_wi);
 
 /// timestamps.csv: the time of every image of a recorded folder, one row per image, header
 /// camera,frame,t (seconds; frame = the image's index in its camera's folder or video).

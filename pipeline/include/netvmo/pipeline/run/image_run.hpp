@@ -28,6 +28,10 @@ struct ImageRunOptions {
   std::optional<int> max_frames;  ///< stop after this many frames
   bool progress = true;           ///< progress bar on stderr
   FlipSettings flips;             ///< what summary.json counts as a pose flip (flips.hpp)
+  /// Moving cameras (NetworkSource::cameras_move): still feed each frame's believed poses but
+  /// set every V_wi to zero (a diagnostic: how much the -hat(V_wi) g_bar term of (eq:EsRRBM)
+  /// matters).
+  bool ignore_camera_velocity = false;
 };
 
 /// What one camera made of one frame.
@@ -102,8 +106,16 @@ inline constexpr int kMaxRoundsPerFrame = 10000;
 /// count exceeds kMaxRoundsPerFrame or the gains are not finite.
 int checked_rounds(double dt, double k_e, double k_s, int max_degree, int rounds);
 
-/// Runs the whole network over the provider's frames. Throws InputError for bad input (an
-/// unreadable image without keep_going, a disconnected graph, an unknown camera id).
+/// Body velocity that carries a camera from g_k to g_k1 in dt along the geodesic:
+/// V = log(g_k^-1 g_k1) / dt, so g_k exp(dt hat(V)) = g_k1 (zero when the poses are equal).
+obs::Vec6 camera_velocity(const obs::SE3& g_k, const obs::SE3& g_k1, double dt);
+
+/// Runs the whole network over the provider's frames. Moving cameras: before frame k the
+/// runner gets every camera's believed pose g_wi(t_k) and the body velocity
+/// camera_velocity(g_wi(t_k), g_wi(t_k+1), dt), held over the frame's sub-steps
+/// (NetworkRunner::set_camera_motion); the ground truth is each frame's. Throws InputError for
+/// bad input (an unreadable image without keep_going, a disconnected graph, an unknown camera
+/// id).
 ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOptions& options,
                           const FrameHook& hook = {});
 

@@ -9,6 +9,9 @@
 //                                       kind (camera_stream.hpp): an image folder (png, jpg,
 //                                       jpeg, pgm) or a video file cv::VideoCapture reads
 //   truth.csv, target.csv               optional ground truth (truth_io.hpp)
+//   cameras.csv                         optional: every camera image's believed pose g_wi
+//                                       (truth_io.hpp); a camera without rows is static at its
+//                                       network.yaml pose
 //   timestamps.csv                      optional: every image's time (truth_io.hpp); without
 //                                       it, time = frame index / the camera's fps (a note)
 //
@@ -50,6 +53,8 @@ struct DatasetCamera {
   /// Image times from timestamps.csv, by frame (NaN where a missing frame has no row); empty:
   /// frame / fps.
   std::vector<double> times;
+  /// Believed poses g_wi from cameras.csv, by frame; empty: static at network.yaml's pose.
+  std::vector<obs::SE3> poses;
 };
 
 struct Dataset {
@@ -74,6 +79,9 @@ struct Dataset {
   double frame_time(size_t camera_index, int frame) const;
   /// timestamps.csv's time of that image, when the file gives one.
   std::optional<double> listed_time(size_t camera_index, int frame) const;
+  /// Believed pose of camera `camera_index` at `frame`: cameras.csv's (its last row past its
+  /// last image), else network.yaml's.
+  obs::SE3 camera_pose(size_t camera_index, int frame) const;
 };
 
 /// Opens a dataset folder: network.yaml, then for every camera its calibration and its image

@@ -28,8 +28,17 @@ class NetworkSource {
   virtual cv::Mat read(size_t camera_index, int frame) = 0;
   /// True target pose in the world at a frame, when known.
   virtual std::optional<obs::SE3> target_truth(int frame) const = 0;
-  /// True pose of a camera in the world, when known (the believed one is in network()).
-  virtual std::optional<obs::SE3> camera_truth(size_t camera_index) const = 0;
+  /// True pose of a camera in the world at a frame, when known.
+  virtual std::optional<obs::SE3> camera_truth(size_t camera_index, int frame) const = 0;
+  /// Believed pose g_wi of a camera at a frame (cameras.csv, the live renderer); by default
+  /// network()'s, the camera being static.
+  virtual obs::SE3 camera_believed(size_t camera_index, int frame) const {
+    (void)frame;
+    return network().cameras.at(camera_index).g_wi;
+  }
+  /// Whether some camera's believed pose differs from network()'s at some frame (moving
+  /// cameras, or a cameras.csv that overrides network.yaml).
+  virtual bool cameras_move() const { return false; }
   /// Warnings found when opening (missing frames, short cameras, ...), one line each.
   virtual std::vector<std::string> warnings() const { return {}; }
   /// Information for the log (e.g. where the image times come from), one line each.
@@ -60,9 +69,14 @@ class NetworkSource {
 /// lock-step processes need a common clock.
 std::optional<std::string> clock_mismatch(const NetworkSource& source);
 
+/// Refuses (InputError, one line naming `what`) a source whose cameras move: `what` handles
+/// static cameras only.
+void require_static_cameras(const NetworkSource& source, const std::string& what);
+
 /// A dataset folder (sources/dataset.hpp documents the layout). Ground truth is read from
-/// target.csv (true target poses) and truth_cameras.csv (true camera poses,
-/// header camera,px,py,pz,rx,ry,rz) when both are present. `only_camera`, `keep_going`: see
+/// target.csv (true target poses) and truth_cameras.csv (true camera poses per frame, or one
+/// per camera in older datasets) when both are present; believed camera poses per frame from
+/// cameras.csv when present. `only_camera`, `keep_going`: see
 /// open_dataset.
 std::unique_ptr<NetworkSource> open_dataset_source(const std::filesystem::path& dir,
                                                    std::optional<int> only_camera = {},
