@@ -54,23 +54,37 @@ Mat4 hat_se3(const Vec6& V) {
 }
 
 SE3 exp_se3(const Vec6& V) {
+  SE3 g = SE3::Identity();
+  Mat3 R;
+  Vec3 p;
+  exp_se3(V, R, p);
+  g.linear() = R;
+  g.translation() = p;
+  return g;
+}
+
+void exp_se3(const Vec6& V, Mat3& R, Vec3& p) {
   const Vec3 v = V.head<3>();
   const Vec3 w = V.tail<3>();
   const double t2 = w.squaredNorm();
   const double t = std::sqrt(t2);
-  double b, c;  // left Jacobian J = I + b hat(w) + c hat(w)^2
+  double a, a2;  // R = I + a hat(w) + a2 hat(w)^2, as exp_so3
+  double b, c;   // left Jacobian J = I + b hat(w) + c hat(w)^2
   if (t < kSmallAngle) {
+    a = 1.0 - t2 / 6.0 + t2 * t2 / 120.0;
+    a2 = 0.5 - t2 / 24.0 + t2 * t2 / 720.0;
     b = 0.5 - t2 / 24.0;
     c = 1.0 / 6.0 - t2 / 120.0;
   } else {
-    b = (1.0 - std::cos(t)) / t2;
-    c = (t - std::sin(t)) / (t2 * t);
+    const double s = std::sin(t), co = std::cos(t);
+    a = s / t;
+    a2 = (1.0 - co) / t2;
+    b = (1.0 - co) / t2;
+    c = (t - s) / (t2 * t);
   }
   const Mat3 W = hat(w);
-  SE3 g = SE3::Identity();
-  g.linear() = exp_so3(w);
-  g.translation() = (Mat3::Identity() + b * W + c * W * W) * v;
-  return g;
+  R = Mat3::Identity() + a * W + a2 * W * W;
+  p = (Mat3::Identity() + b * W + c * W * W) * v;
 }
 
 Vec6 log_se3(const SE3& g) {

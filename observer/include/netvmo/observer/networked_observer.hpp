@@ -32,6 +32,8 @@
 
 namespace netvmo::obs {
 
+class InProcessVmo;
+
 class NetworkedObserver {
  public:
   /// Throws std::invalid_argument if the graph is disconnected (Assumption 1), a gain is
@@ -44,8 +46,12 @@ class NetworkedObserver {
   int size() const { return graph_.size(); }
   const Graph& graph() const { return graph_; }
   const ObserverSettings& settings() const { return settings_; }
-  /// Camera i's observer.
-  CameraObserver& camera(int i) { return cameras_[static_cast<size_t>(i)]; }
+  /// Camera i's observer. (Mutable access makes the next frame re-check the cameras' stored
+  /// messages before it takes the in-process fast path.)
+  CameraObserver& camera(int i) {
+    stored_known_ = false;
+    return cameras_[static_cast<size_t>(i)];
+  }
   const CameraObserver& camera(int i) const { return cameras_[static_cast<size_t>(i)]; }
 
   /// Initial estimates g_bar_i(0), each in its camera's frame.
@@ -87,6 +93,10 @@ class NetworkedObserver {
   std::vector<EstimateMessage> outbox_;   ///< in process: each camera's message of the round
   std::vector<EstimateMessage> inbox_;
   std::unique_ptr<WorkerPool> pool_;  ///< null: every step on the calling thread
+  /// The in-process exchange of the vmo estimator on compact arrays (null: another estimator).
+  std::unique_ptr<InProcessVmo> fast_;
+  /// The cameras' stored messages are the fast path's own (none can make a new one out of order).
+  bool stored_known_ = false;
 };
 
 }  // namespace netvmo::obs
