@@ -13,12 +13,15 @@
 // non-oscillating. By default N is the smallest count with h (k_e + 2 k_s d_max) <= step_factor
 // (= 1): k_e = 1, k_s = 50, d_max = 3 at 30 frames/s gives N = 11.
 //
-// Cost and threads. A sub-step is O(n + |E|): with the in-process exchange every camera publishes
-// into its slot of an outbox, then every camera reads its neighbours' slots and steps. Both
-// phases run over ObserverSettings::threads threads (contiguous blocks of cameras, each camera
-// writing only its own state), so the results are bit-identical for any thread count. Another
-// transport (set_transport) is called from the calling thread only; the steps still run on the
-// threads.
+// Cost and threads. A sub-step is O(n + |E|). With the in-process exchange and the vmo
+// estimator the rounds run on compact arrays (observer/src/in_process_vmo.hpp): every camera
+// reads its neighbours' estimates of the previous round from a double buffer, steps and writes its
+// next one, the same arithmetic as CameraObserver::step, and the cameras' state is written back at
+// the end of the frame. Otherwise every camera publishes into its slot of an outbox, then every
+// camera reads its neighbours' slots and steps. Either way the rounds run over
+// ObserverSettings::threads threads (contiguous blocks of cameras, each camera writing only its
+// own state), so the results are bit-identical for any thread count. Another transport
+// (set_transport) is called from the calling thread only; the steps still run on the threads.
 #pragma once
 
 #include <functional>
