@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "pose_kernel.hpp"
+
 namespace netvmo::obs {
 
 const char* to_string(MessageVerdict v) {
@@ -24,20 +26,11 @@ const char* to_string(MessageVerdict v) {
 }
 
 Vec6 mutual_error(const SE3& g_bar_w_i, const SE3& g_bar_w_j) {
-  // E_R(A^-1 B) = [R_A^T (p_B - p_A); e_R(R_A^T R_B)] without forming the product.
-  const Mat3 Rt = g_bar_w_i.linear().transpose();
-  Vec6 e;
-  e.head<3>() = Rt * (g_bar_w_j.translation() - g_bar_w_i.translation());
-  e.tail<3>() = e_R(Rt * g_bar_w_j.linear());
-  return e;
+  return kernel::mutual_error(kernel::pose_of(g_bar_w_i), kernel::pose_of(g_bar_w_j));
 }
 
 SE3 integrate(const SE3& g_bar, const Vec6& V_wi, const Vec6& u, double h) {
-  SE3 g = g_bar * exp_se3(h * u);
-  if (!V_wi.isZero(0.0)) g = exp_se3(-h * V_wi) * g;
-  // Re-orthonormalise against round-off drift over long runs (cheap: unit quaternion).
-  g.linear() = Eigen::Quaterniond(g.linear()).normalized().toRotationMatrix();
-  return g;
+  return kernel::to_se3(kernel::integrate(kernel::pose_of(g_bar), V_wi, u, h));
 }
 
 int frame_substeps(double dt, const ObserverSettings& s, int max_degree) {
@@ -92,17 +85,7 @@ void CameraObserver::publish(EstimateMessage& m, double stamp) {
 }
 
 MessageVerdict check_pose(const SE3& g) {
-  if (!g.matrix().allFinite()) return MessageVerdict::not_finite;
-  // |R^T R - I| <= 1e-6 entrywise (the Gram matrix is symmetric: six entries) and det R > 0.
-  const auto& R = g.linear();
-  double worst = 0.0;
-  for (int a = 0; a < 3; ++a)
-    for (int b = a; b < 3; ++b) {
-      const double gram = R(0, a) * R(0, b) + R(1, a) * R(1, b) + R(2, a) * R(2, b);
-      worst = std::max(worst, std::abs(gram - (a == b ? 1.0 : 0.0)));
-    }
-  if (!(worst <= 1e-6) || !(R.determinant() > 0.0)) return MessageVerdict::not_a_rotation;
-  return MessageVerdict::accepted;
+  return kernel::check_pose(kernel::pose_of(g));
 }
 
 MessageVerdict CameraObserver::receive(const EstimateMessage& m) {

@@ -11,6 +11,25 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kSmallAngle = 1e-4;
 // Within this distance of pi, sin(theta) is too small to recover the axis from sk(R).
 constexpr double kNearPi = 1e-3;
+// (s W) W for W = hat(w) with w finite, to the last bit as Eigen evaluates that product: every
+// entry is a sum of three terms, ((x0 + x1) + x2) in rows 0 and 1 and (x0 + (x1 + x2)) in row 2,
+// and the terms through the zero diagonal of W are signed zeros. Adding a zero to a non-zero sum
+// leaves it unchanged, so they are left out; where the whole entry is zero its sign may differ,
+// but I + a W + (s W) W adds it to an entry of I + a W that is +0 or 1, which is then the same.
+Mat3 scaled_hat_squared(double s, const Mat3& W) {
+  const Mat3 S = s * W;
+  Mat3 P;
+  P(0, 0) = S(0, 1) * W(1, 0) + S(0, 2) * W(2, 0);
+  P(1, 1) = S(1, 0) * W(0, 1) + S(1, 2) * W(2, 1);
+  P(2, 2) = S(2, 0) * W(0, 2) + S(2, 1) * W(1, 2);
+  P(0, 1) = S(0, 2) * W(2, 1);
+  P(0, 2) = S(0, 1) * W(1, 2);
+  P(1, 0) = S(1, 2) * W(2, 0);
+  P(1, 2) = S(1, 0) * W(0, 2);
+  P(2, 0) = S(2, 1) * W(1, 0);
+  P(2, 1) = S(2, 0) * W(0, 1);
+  return P;
+}
 }  // namespace
 
 Mat3 exp_so3(const Vec3& w) {
@@ -54,23 +73,43 @@ Mat4 hat_se3(const Vec6& V) {
 }
 
 SE3 exp_se3(const Vec6& V) {
+  SE3 g = SE3::Identity();
+  Mat3 R;
+  Vec3 p;
+  exp_se3(V, R, p);
+  g.linear() = R;
+  g.translation() = p;
+  return g;
+}
+
+void exp_se3(const Vec6& V, Mat3& R, Vec3& p) {
   const Vec3 v = V.head<3>();
   const Vec3 w = V.tail<3>();
   const double t2 = w.squaredNorm();
   const double t = std::sqrt(t2);
-  double b, c;  // left Jacobian J = I + b hat(w) + c hat(w)^2
+  double a, a2;  // R = I + a hat(w) + a2 hat(w)^2, as exp_so3
+  double b, c;   // left Jacobian J = I + b hat(w) + c hat(w)^2
   if (t < kSmallAngle) {
+    a = 1.0 - t2 / 6.0 + t2 * t2 / 120.0;
+    a2 = 0.5 - t2 / 24.0 + t2 * t2 / 720.0;
     b = 0.5 - t2 / 24.0;
     c = 1.0 / 6.0 - t2 / 120.0;
   } else {
-    b = (1.0 - std::cos(t)) / t2;
-    c = (t - std::sin(t)) / (t2 * t);
+    const double s = std::sin(t), co = std::cos(t);
+    a = s / t;
+    a2 = (1.0 - co) / t2;
+    b = (1.0 - co) / t2;
+    c = (t - s) / (t2 * t);
   }
   const Mat3 W = hat(w);
-  SE3 g = SE3::Identity();
-  g.linear() = exp_so3(w);
-  g.translation() = (Mat3::Identity() + b * W + c * W * W) * v;
-  return g;
+  if (!std::isfinite(t2)) {  // the plain expressions (their NaN and infinities)
+    R = Mat3::Identity() + a * W + a2 * W * W;
+    p = (Mat3::Identity() + b * W + c * W * W) * v;
+    return;
+  }
+  R = Mat3::Identity() + a * W + scaled_hat_squared(a2, W);
+  const Mat3 J = Mat3::Identity() + b * W + scaled_hat_squared(c, W);
+  p = J * v;
 }
 
 Vec6 log_se3(const SE3& g) {

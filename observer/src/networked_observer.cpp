@@ -5,6 +5,8 @@
 #include <string>
 #include <thread>
 
+#include "in_process_vmo.hpp"
+
 namespace netvmo::obs {
 
 NetworkedObserver::NetworkedObserver(Graph graph, ObserverSettings settings)
@@ -24,6 +26,8 @@ NetworkedObserver::NetworkedObserver(Graph graph, ObserverSettings settings)
                         : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   const int threads = std::min(cores, std::max(1, graph_.size() / kCamerasPerThread));
   if (threads > 1) pool_ = std::make_unique<WorkerPool>(threads);
+  if (!cameras_.empty() && InProcessVmo::supports(cameras_.front()))
+    fast_ = std::make_unique<InProcessVmo>(graph_);
 }
 
 NetworkedObserver::~NetworkedObserver() = default;
@@ -83,10 +87,12 @@ void NetworkedObserver::set_transport(std::unique_ptr<Transport> transport) {
       same = direct->graph().neighbors(i) == graph_.neighbors(i);
     if (same) {
       transport_.reset();
+      stored_known_ = false;
       return;
     }
   }
   transport_ = std::move(transport);
+  stored_known_ = false;
 }
 
 int NetworkedObserver::substeps(double dt) const {
@@ -95,16 +101,28 @@ int NetworkedObserver::substeps(double dt) const {
 
 void NetworkedObserver::step(double dt, const std::vector<Measurement>& z) {
   check_count(z.size(), "step: measurements");
-  for_each_camera([&](int i) { camera(i).set_measurement(z[static_cast<size_t>(i)]); });
+  for_each_camera(
+      [&](int i) { cameras_[static_cast<size_t>(i)].set_measurement(z[static_cast<size_t>(i)]); });
   const int N = substeps(dt);
   const double h = dt / N;
-  for (int k = 0; k < N; ++k) {
+  int k = 0;
+  if (!transport_ && fast_) {
+    // The same rounds on compact arrays; it hands over to the loop below when a message would be
+    // refused (then the rest of the frame is exchanged camera by camera).
+    const bool known = stored_known_;
+    stored_known_ = false;  // until the frame is done (a throw leaves it false)
+    k = fast_->run(cameras_, z, N, h, pool_.get(), !known);
+    stored_known_ = k == N;
+  }
+  for (; k < N; ++k) {
     // One exchange round: every camera publishes g_wi g_bar_i, then every camera takes in its
     // neighbours' messages and steps (all on the estimates of the previous sub-step).
     if (!transport_) {
-      for_each_camera([&](int i) { camera(i).publish(outbox_[static_cast<size_t>(i)]); });
       for_each_camera([&](int i) {
-        auto& c = camera(i);
+        cameras_[static_cast<size_t>(i)].publish(outbox_[static_cast<size_t>(i)]);
+      });
+      for_each_camera([&](int i) {
+        auto& c = cameras_[static_cast<size_t>(i)];
         // In neighbour order, as InProcessTransport delivers them.
         for (int j : graph_.neighbors(i)) c.receive(outbox_[static_cast<size_t>(j)]);
         c.step(h);  // (eq:EsRRBM) with (eq:input_f-)
@@ -116,7 +134,9 @@ void NetworkedObserver::step(double dt, const std::vector<Measurement>& z) {
       transport_->receive(c.index(), inbox_);
       for (const auto& m : inbox_) c.receive(m);
     }
-    for_each_camera([&](int i) { camera(i).step(h); });  // (eq:EsRRBM) with (eq:input_f-)
+    for_each_camera([&](int i) {
+      cameras_[static_cast<size_t>(i)].step(h);
+    });  // (eq:EsRRBM) with (eq:input_f-)
   }
 }
 

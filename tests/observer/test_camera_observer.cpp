@@ -4,8 +4,11 @@
 // one table everything reads.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstring>
 #include <deque>
 #include <limits>
+#include <random>
 
 #include "netvmo/observer/camera_observer.hpp"
 #include "netvmo/observer/error_model.hpp"
@@ -136,6 +139,58 @@ TEST(CameraObserver, StepIsTheLieGroupEulerStepOfTheModel) {
   const SE3 expected = exp_se3(-h * V) * g_bar * exp_se3(h * u);
   EXPECT_LT((c.input() - u).norm(), 1e-12);
   EXPECT_LT((c.estimate().matrix() - expected.matrix()).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+// The step's arithmetic is written out on 3x3 rotations and translations for speed; it must give
+// the bits of the plain Eigen expressions on SE3 it replaced (the outputs of every run depend on
+// them). References: the Isometry expressions, exp_se3 from exp_so3 and the left Jacobian.
+TEST(CameraObserver, StepArithmeticIsTheEigenExpressionsToTheLastBit) {
+  std::mt19937 rng(12);  // fixed seed
+  std::uniform_real_distribution<double> U(-2.0, 2.0);
+  const auto vec3 = [&](double scale) -> Vec3 { return Vec3(U(rng), U(rng), U(rng)) * scale; };
+  const auto vec6 = [&](double scale) {
+    Vec6 v;
+    for (int c = 0; c < 6; ++c) v(c) = U(rng) * scale;
+    return v;
+  };
+  const auto same = [](const auto& a, const auto& b) {  // bit for bit (0.0 and -0.0 differ)
+    using Plain = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic>;
+    const Plain x = a, y = b;
+    return std::memcmp(x.data(), y.data(), sizeof(double) * static_cast<size_t>(x.size())) == 0;
+  };
+  int mutual_differs = 0, exp_differs = 0, step_differs = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const double scale = k % 4 == 0 ? 1e-5 : 1.0;  // also the small-angle branches
+    const SE3 a = make_pose(vec3(1.0), vec3(1.0)), b = make_pose(vec3(1.0), vec3(1.0));
+    const Mat3 Rt = a.linear().transpose();
+    Vec6 e;
+    e.head<3>() = Rt * (b.translation() - a.translation());
+    e.tail<3>() = e_R(Rt * b.linear());
+    mutual_differs += !same(mutual_error(a, b), e);
+
+    Vec6 V = vec6(scale);
+    for (int c = 0; c < 6; ++c)  // exact zeros in every pattern (signed zeros in the products)
+      if ((k >> c) % 3 == 1) V(c) = (k >> c) % 2 ? 0.0 : -0.0;
+    const Vec3 w = V.tail<3>();
+    const double t2 = w.squaredNorm(), t = std::sqrt(t2);
+    const double c1 = t < 1e-4 ? 0.5 - t2 / 24.0 : (1.0 - std::cos(t)) / t2;
+    const double c2 = t < 1e-4 ? 1.0 / 6.0 - t2 / 120.0 : (t - std::sin(t)) / (t2 * t);
+    const Mat3 W = hat(w);
+    SE3 x = SE3::Identity();
+    x.linear() = exp_so3(w);
+    x.translation() = (Mat3::Identity() + c1 * W + c2 * W * W) * V.head<3>();
+    exp_differs += !same(exp_se3(V).matrix(), x.matrix());
+
+    const Vec6 u = vec6(1.0);
+    const Vec6 Vw = k % 2 ? Vec6::Zero() : V;
+    SE3 g = a * exp_se3(0.01 * u);
+    if (!Vw.isZero(0.0)) g = exp_se3(-0.01 * Vw) * g;
+    g.linear() = Eigen::Quaterniond(g.linear()).normalized().toRotationMatrix();
+    step_differs += !same(integrate(a, Vw, u, 0.01).matrix(), g.matrix());
+  }
+  EXPECT_EQ(mutual_differs, 0);
+  EXPECT_EQ(exp_differs, 0);
+  EXPECT_EQ(step_differs, 0);
 }
 
 TEST(CameraObserver, UninitialisedNeighboursAndCamerasTakeNoPart) {

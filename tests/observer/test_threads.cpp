@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include "netvmo/observer/networked_observer.hpp"
 #include "netvmo/observer/worker_pool.hpp"
@@ -109,6 +110,74 @@ TEST(Threads, ResultsAreBitIdenticalForAnyThreadCountAndExchange) {
       expect_bit_identical(one, run(net, s, 1, Exchange::forwarding), "forwarding, 1 thread");
       expect_bit_identical(one, run(net, s, 2, Exchange::forwarding), "forwarding, 2 threads");
     }
+}
+
+// The in-process exchange of the vmo runs on compact arrays and writes the cameras' state back
+// after each frame; it must leave every camera exactly as the per-camera exchange through a
+// Transport does: estimate, input, round, every stored neighbour message and the refusal counts.
+// Also when messages are refused (a believed pose that is not a rotation from the start; an
+// estimate that diverges to infinity in the middle of a frame) and when cameras start from their
+// neighbours.
+TEST(Threads, InProcessFastPathLeavesEveryCameraAsTheTransportExchangeDoes) {
+  const int n = 2 * kCamerasPerThread;  // two threads
+  enum class Case { plain, bad_camera_pose, divergence, start_from_neighbours };
+  for (Case c :
+       {Case::plain, Case::bad_camera_pose, Case::divergence, Case::start_from_neighbours}) {
+    SCOPED_TRACE(static_cast<int>(c));
+    ObserverSettings s;
+    s.threads = 2;
+    Network net = network(n, s.features);
+    if (c == Case::bad_camera_pose) net.g_wi[7].linear() *= 1.5;  // refused by its neighbours
+    if (c == Case::divergence) {  // far beyond the stable step: overflows within 20 frames
+      s.k_s = 1e12;
+      s.substeps = 3;
+    }
+    if (c == Case::start_from_neighbours) s.init_from_neighbours = true;
+    std::vector<NetworkedObserver> obs;
+    for (Exchange e : {Exchange::direct, Exchange::forwarding}) {
+      obs.emplace_back(net.graph, s);
+      if (e == Exchange::forwarding)
+        obs.back().set_transport(std::make_unique<Forwarding>(net.graph));
+      obs.back().set_camera_poses(net.g_wi);
+      obs.back().reset(net.g_bar);
+      if (c == Case::start_from_neighbours) {
+        std::vector<bool> active(static_cast<size_t>(n), true);
+        for (int i = 0; i < n; i += 5) active[static_cast<size_t>(i)] = false;
+        obs.back().set_active(active);
+      }
+    }
+    const int frames = c == Case::divergence ? 20 : 4;
+    for (int frame = 0; frame < frames; ++frame) {
+      for (auto& o : obs) o.step(1.0 / 30.0, net.z);
+      size_t differing = 0, refused = 0;
+      for (int i = 0; i < n; ++i) {
+        const CameraObserver &a = std::as_const(obs[0]).camera(i),
+                             &b = std::as_const(obs[1]).camera(i);
+        const auto same = [](const auto& x, const auto& y) {
+          return ((x.array() == y.array()) || (x.array().isNaN() && y.array().isNaN())).all();
+        };
+        bool ok = same(a.estimate().matrix(), b.estimate().matrix()) &&
+                  same(a.input(), b.input()) && a.initialized() == b.initialized() &&
+                  a.refused() == b.refused();
+        for (size_t k = 0; ok && k < a.latest().size(); ++k) {
+          const auto &x = a.latest()[k], &y = b.latest()[k];
+          ok = x.has_value() == y.has_value() &&
+               (!x || (x->sender == y->sender && x->round == y->round &&
+                       x->initialized == y->initialized && x->stamp == y->stamp &&
+                       same(x->g_w.matrix(), y->g_w.matrix())));
+        }
+        differing += !ok;
+        for (auto r : a.refused()) refused += r;
+      }
+      EXPECT_EQ(differing, 0u) << "frame " << frame;
+      if (c == Case::bad_camera_pose || (c == Case::divergence && frame == frames - 1)) {
+        EXPECT_GT(refused, 0u) << "frame " << frame;
+      }
+      if (c == Case::plain) {
+        EXPECT_EQ(refused, 0u);
+      }
+    }
+  }
 }
 
 TEST(Threads, SmallNetworksStayOnTheCallingThread) {

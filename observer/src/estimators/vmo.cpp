@@ -4,9 +4,9 @@
 // with the camera's self-initialisation (ObserverSettings::init_from_*).
 #include <algorithm>
 
+#include "../pose_kernel.hpp"
 #include "netvmo/observer/camera_observer.hpp"
 #include "netvmo/observer/estimator.hpp"
-#include "netvmo/observer/metrics.hpp"
 
 namespace netvmo::obs::estimator_kinds {
 namespace {
@@ -49,19 +49,21 @@ class Vmo final : public Estimator {
       for (const auto& m : cv.latest)
         if (m && m->initialized) nb.push_back(m->g_w);
       if (!nb.empty()) {
-        st.g_bar = cv.g_wi.inverse() * average_pose(nb);
+        st.g_bar = kernel::start_from_neighbours(cv.g_wi, nb);
         st.initialized = true;
       }
     }
     if (!st.initialized) return;
-    const SE3 own_w = cv.g_wi * st.g_bar;
+    // The same arithmetic as NetworkedObserver's in-process fast path (pose_kernel.hpp).
+    const kernel::Pose own_w = kernel::compose(kernel::pose_of(cv.g_wi), kernel::pose_of(st.g_bar));
     Vec6 mutual = Vec6::Zero();
     for (const auto& m : cv.latest)
-      if (m && m->initialized) mutual += mutual_error(own_w, m->g_w);
-    Vec6 u = s.k_s * mutual;  // (eq:input_f-)
-    if (cv.model.usable(cv.z)) u += s.k_e * cv.model.error(st.g_bar, cv.z, s.features);
-    st.u = u;
-    st.g_bar = integrate(st.g_bar, cv.V_wi, u, h);  // (eq:EsRRBM)
+      if (m && m->initialized) mutual += kernel::mutual_error(own_w, kernel::pose_of(m->g_w));
+    Vec6 visual;
+    const bool sees = cv.model.usable(cv.z);
+    if (sees) visual = cv.model.error(st.g_bar, cv.z, s.features);
+    st.u = kernel::vmo_input(s, mutual, sees ? &visual : nullptr);  // (eq:input_f-)
+    st.g_bar = kernel::to_se3(kernel::integrate(kernel::pose_of(st.g_bar), cv.V_wi, st.u, h));
   }
 };
 

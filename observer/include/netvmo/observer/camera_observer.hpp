@@ -103,6 +103,8 @@ int stable_substeps(double dt, const ObserverSettings& s, int max_degree);
 /// stable_substeps(dt, s, max_degree).
 int frame_substeps(double dt, const ObserverSettings& s, int max_degree);
 
+class InProcessVmo;
+
 class CameraObserver {
  public:
   /// `index`: this camera's index in the network (the sender of its messages); `neighbours`:
@@ -184,6 +186,9 @@ class CameraObserver {
   std::uint64_t incarnation_ = 0;
   std::vector<std::optional<EstimateMessage>> latest_;
   std::vector<std::uint64_t> refused_;
+
+  /// NetworkedObserver's in-process fast path reads and writes back this state directly.
+  friend class InProcessVmo;
 
   CameraView view() const { return {settings_, *model_, g_wi_, V_wi_, z_, latest_, network_size_}; }
 };

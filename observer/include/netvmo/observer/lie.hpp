@@ -48,6 +48,8 @@ inline Vec3 rotvec(const SE3& g) {
 Mat4 hat_se3(const Vec6& V);
 /// e^{hat(V)} for V = [v; w] (closed form with the left Jacobian of SO(3)).
 SE3 exp_se3(const Vec6& V);
+/// The same, as its rotation R and translation p (no 4x4 matrix; one sine and cosine).
+void exp_se3(const Vec6& V, Mat3& R, Vec3& p);
 /// Inverse of exp_se3 for rotation angles in [0, pi].
 Vec6 log_se3(const SE3& g);
 

@@ -14,12 +14,15 @@
 // non-oscillating. By default N is the smallest count with h (k_e + 2 k_s d_max) <= step_factor
 // (= 1): k_e = 1, k_s = 50, d_max = 3 at 30 frames/s gives N = 11.
 //
-// Cost and threads. A sub-step is O(n + |E|): with the in-process exchange every camera publishes
-// into its slot of an outbox, then every camera reads its neighbours' slots and steps. Both
-// phases run over ObserverSettings::threads threads (contiguous blocks of cameras, each camera
-// writing only its own state), so the results are bit-identical for any thread count. Another
-// transport (set_transport) is called from the calling thread only; the steps still run on the
-// threads.
+// Cost and threads. A sub-step is O(n + |E|). With the in-process exchange and the vmo
+// estimator the rounds run on compact arrays (observer/src/in_process_vmo.hpp): every camera
+// reads its neighbours' estimates of the previous round from a double buffer, steps and writes its
+// next one, the same arithmetic as CameraObserver::step, and the cameras' state is written back at
+// the end of the frame. Otherwise every camera publishes into its slot of an outbox, then every
+// camera reads its neighbours' slots and steps. Either way the rounds run over
+// ObserverSettings::threads threads (contiguous blocks of cameras, each camera writing only its
+// own state), so the results are bit-identical for any thread count. Another transport
+// (set_transport) is called from the calling thread only; the steps still run on the threads.
 #pragma once
 
 #include <functional>
@@ -33,6 +36,8 @@
 
 namespace netvmo::obs {
 
+class InProcessVmo;
+
 class NetworkedObserver {
  public:
   /// Throws std::invalid_argument if the graph is disconnected (Assumption 1), a gain is
@@ -45,8 +50,12 @@ class NetworkedObserver {
   int size() const { return graph_.size(); }
   const Graph& graph() const { return graph_; }
   const ObserverSettings& settings() const { return settings_; }
-  /// Camera i's observer.
-  CameraObserver& camera(int i) { return cameras_[static_cast<size_t>(i)]; }
+  /// Camera i's observer. (Mutable access makes the next frame re-check the cameras' stored
+  /// messages before it takes the in-process fast path.)
+  CameraObserver& camera(int i) {
+    stored_known_ = false;
+    return cameras_[static_cast<size_t>(i)];
+  }
   const CameraObserver& camera(int i) const { return cameras_[static_cast<size_t>(i)]; }
 
   /// Initial estimates g_bar_i(0), each in its camera's frame.
@@ -89,6 +98,10 @@ class NetworkedObserver {
   std::vector<EstimateMessage> outbox_;   ///< in process: each camera's message of the round
   std::vector<EstimateMessage> inbox_;
   std::unique_ptr<WorkerPool> pool_;  ///< null: every step on the calling thread
+  /// The in-process exchange of the vmo estimator on compact arrays (null: another estimator).
+  std::unique_ptr<InProcessVmo> fast_;
+  /// The cameras' stored messages are the fast path's own (none can make a new one out of order).
+  bool stored_known_ = false;
 };
 
 }  // namespace netvmo::obs

@@ -1,0 +1,68 @@
+// The in-process fast path of NetworkedObserver for the paper's estimator (vmo): the same
+// exchange rounds and the same arithmetic as n CameraObservers publishing and receiving each
+// round (pose_kernel.hpp), on a compact structure-of-arrays copy of their state.
+//
+// Per frame: the cameras' state is gathered once (estimate, believed pose, velocity, flags); each
+// round every camera reads its neighbours' estimates of the previous round directly from a
+// contiguous array of world-frame poses (12 doubles each; CSR adjacency, no message copies), steps,
+// and writes its own next estimate into the other half of a double buffer, so a round is one pass
+// over the cameras and one barrier. Every published pose is checked once (CameraObserver's check,
+// which each of its receivers would apply alike). At the end of the frame the cameras' state,
+// round counters and latest neighbour messages are written back exactly as the per-camera
+// exchange leaves them, so CameraObserver's API (latest(), input(), estimate()) is unchanged.
+//
+// The fast path runs a frame only when the result is provably the per-camera exchange's: every
+// published pose passes the check (a refused message makes the rest of the frame run the
+// per-camera way, see run()) and no stored neighbour message could make a new one out of order.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "netvmo/observer/camera_observer.hpp"
+#include "netvmo/observer/graph.hpp"
+#include "netvmo/observer/worker_pool.hpp"
+#include "pose_kernel.hpp"
+
+namespace netvmo::obs {
+
+class InProcessVmo {
+ public:
+  explicit InProcessVmo(const Graph& graph);
+
+  /// Whether the fast path can run the estimator these cameras use (vmo).
+  static bool supports(const CameraObserver& camera);
+
+  /// Runs up to `rounds` exchange rounds of length h on the cameras (their measurements already
+  /// set), on the pool's threads when there is one, and writes the state back. Returns the rounds
+  /// done: fewer when a camera published a pose that its neighbours refuse, or when a stored
+  /// message would make one out of order (`check_stored`: look; otherwise known not to); the
+  /// caller then runs the remaining rounds the per-camera way. Rethrows the error model's
+  /// exception of the smallest camera index after writing back.
+  int run(std::vector<CameraObserver>& cams, const std::vector<Measurement>& z, int rounds,
+          double h, WorkerPool* pool, bool check_stored);
+
+ private:
+  void for_each(WorkerPool* pool, const std::function<void(int)>& f) const;
+  /// Loads camera i and publishes its first estimate; false when the pose would be refused.
+  bool gather(const CameraObserver& c, int i);
+  /// One round of camera i: reads buffer `cur`, writes buffer 1 - cur (when `publish`); false
+  /// when the published pose would be refused.
+  bool step(int i, int cur, const Measurement& z, double h, bool publish);
+  /// Writes camera i's state back after `done` rounds (the neighbours' messages of buffer cur).
+  void write_back(std::vector<CameraObserver>& cams, int i, int done, int cur) const;
+
+  int n_;
+  const ObserverSettings* s_ = nullptr;  ///< the cameras' settings (the network's: all alike)
+  const ErrorModel* model_ = nullptr;
+  std::vector<int> offset_, nbr_;  ///< CSR: N_i = nbr_[offset_[i], offset_[i + 1])
+  std::vector<kernel::Pose> g_bar_, g_wi_;
+  std::vector<kernel::Pose> pub_[2];        ///< g_wi g_bar_i of the round, double-buffered
+  std::vector<unsigned char> pub_init_[2];  ///< the published `initialized` flag
+  std::vector<unsigned char> init_, moving_, sees_, refused_;
+  std::vector<Vec6> V_, u_;
+  std::vector<std::uint64_t> round0_, incarnation_;
+};
+
+}  // namespace netvmo::obs
