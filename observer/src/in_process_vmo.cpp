@@ -1,5 +1,6 @@
 #include "in_process_vmo.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <exception>
 
@@ -132,6 +133,9 @@ int InProcessVmo::run(std::vector<CameraObserver>& cams, const std::vector<Measu
       }
     });
   if (refused) return 0;
+  // A moving camera's believed pose moves on over the sub-steps (CameraObserver::step); those
+  // frames take the camera-by-camera loop.
+  if (std::any_of(moving_.begin(), moving_.end(), [](unsigned char m) { return m != 0; })) return 0;
 
   int done = 0, cur = 0;
   try {

@@ -13,7 +13,8 @@
 //
 // The fast path runs a frame only when the result is provably the per-camera exchange's: every
 // published pose passes the check (a refused message makes the rest of the frame run the
-// per-camera way, see run()) and no stored neighbour message could make a new one out of order.
+// per-camera way, see run()), no stored neighbour message could make a new one out of order, and
+// no camera moves (CameraObserver::step moves a moving camera's believed pose every sub-step).
 #pragma once
 
 #include <cstdint>
@@ -37,7 +38,8 @@ class InProcessVmo {
   /// Runs up to `rounds` exchange rounds of length h on the cameras (their measurements already
   /// set), on the pool's threads when there is one, and writes the state back. Returns the rounds
   /// done: fewer when a camera published a pose that its neighbours refuse, or when a stored
-  /// message would make one out of order (`check_stored`: look; otherwise known not to); the
+  /// message would make one out of order (`check_stored`: look; otherwise known not to), and none
+  /// when a camera moves (V_wi != 0: its believed pose moves over the sub-steps); the
   /// caller then runs the remaining rounds the per-camera way. Rethrows the error model's
   /// exception of the smallest camera index after writing back.
   int run(std::vector<CameraObserver>& cams, const std::vector<Measurement>& z, int rounds,
