@@ -81,7 +81,7 @@ TEST(Calibration, OpenCvMatrixSizeCheckedBeforeReading) {
   // std::length_error (not a cv::Exception) on this line.
   write(dir / "c.yaml", head + K +
                             "distortion_coefficients: !!opencv-matrix\n  rows: 1\n"
-                            "  cols: 5\n   :t: d\n * data: [0, 0, 0, 0, 0]\n");
+                            "  cols: 5\n   :t: d\n  * data: [0, 0, 0, 0, 0]\n");
   expect_input_error([&] { load_calibration_opencv(dir / "c.yaml"); },
                      {"c.yaml", "cannot parse calibration"});
   // corpus calibration_opencv/nul_byte_hang: OpenCV's parser did not return on this file.
@@ -97,6 +97,21 @@ TEST(Calibration, OpenCvMatrixSizeCheckedBeforeReading) {
   write(dir / "f.yaml", "%YAML:1.0\n--- a: v\nb---\n");
   expect_input_error([&] { load_calibration_opencv(dir / "f.yaml"); },
                      {"f.yaml:2", "'---' must stand alone"});
+  // corpus calibration_opencv/dedent_hang: OpenCV's parser did not return on a line dedented to
+  // a column no enclosing line starts at (2 spaces under 3), followed by a line "-".
+  write(dir / "g.yaml", "%YAML:1.0\n   rows: 6\n  1.0\n-\n");
+  expect_input_error([&] { load_calibration_opencv(dir / "g.yaml"); },
+                     {"g.yaml:3", "indentation of 2 spaces matches no enclosing line"});
+  // What OpenCV writes still loads: a `data:` list continued on a line indented deeper than any
+  // key, then a key back at column 0 (flow lines are not checked).
+  write(dir / "h.yaml", head +
+                            "camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"
+                            "   data: [ 600., 0., 320., 0., 600., 240., 0., 0.,\n       1. ]\n"
+                            "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n"
+                            "   dt: d\n   data: [ 0., 0., 0., 0., 0. ]\n");
+  const Calibration h = load_calibration_opencv(dir / "h.yaml");
+  EXPECT_EQ(h.K(0, 0), 600.0);
+  EXPECT_EQ(h.K(2, 2), 1.0);
 }
 
 // A ROS camera_info file as ROS's camera_calibration writes it (monocular: identity

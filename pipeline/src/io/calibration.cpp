@@ -9,6 +9,8 @@
 #include <fstream>
 #include <iterator>
 #include <opencv2/calib3d.hpp>
+#include <string>
+#include <vector>
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
@@ -52,6 +54,51 @@ cv::Mat read_matrix(const cv::FileNode& n, const std::string& file, const char* 
   return m;
 }
 
+// OpenCV's YAML parser also loops for ever on a block line dedented to a column that no
+// enclosing line starts at ("   rows: 6", "  1.0", then a line "-"; found by fuzzing). YAML
+// requires a dedent to return to an enclosing indentation (and OpenCV writes its files so), so such
+// a file is refused with its line. Lines that continue a flow collection ([ ] or { }, e.g. a long
+// `data:` list) are not checked; blank, comment and directive lines neither.
+void check_yaml_indentation(const std::string& text, const std::string& file) {
+  std::vector<size_t> levels{0};
+  int depth = 0;  // open [ and { at the start of the line
+  size_t line_no = 1;
+  for (size_t at = 0; at < text.size(); ++line_no) {
+    const size_t end = std::min(text.find('\n', at), text.size());
+    const std::string line = text.substr(at, end - at);
+    at = end + 1;
+    const size_t first = line.find_first_not_of(' ');
+    if (first == std::string::npos || line[first] == '#' || line[first] == '\r' || line[0] == '%')
+      continue;
+    if (depth == 0) {
+      if (first > levels.back()) {
+        levels.push_back(first);
+      } else {
+        while (levels.back() > first) levels.pop_back();
+        if (levels.back() != first)
+          throw InputError(file + ":" + std::to_string(line_no) + ": indentation of " +
+                           std::to_string(first) +
+                           " spaces matches no enclosing line (YAML block structure)");
+      }
+    }
+    char quote = 0;
+    for (size_t k = first; k < line.size(); ++k) {
+      const char ch = line[k];
+      if (quote) {
+        if (ch == quote) quote = 0;
+      } else if (ch == '"' || ch == '\'') {
+        quote = ch;
+      } else if (ch == '#' && (k == 0 || line[k - 1] == ' ')) {
+        break;
+      } else if (ch == '[' || ch == '{') {
+        ++depth;
+      } else if ((ch == ']' || ch == '}') && depth > 0) {
+        --depth;
+      }
+    }
+  }
+}
+
 }  // namespace
 
 Calibration load_calibration_opencv(const fs::path& path) {
@@ -75,6 +122,9 @@ Calibration load_calibration_opencv(const fs::path& path) {
                          ": a YAML document marker '---' must stand alone on its line");
       at = end + 1;
     }
+    const std::string ext = path.extension().string();
+    if (ext != ".xml" && ext != ".XML" && ext != ".json" && ext != ".JSON")
+      check_yaml_indentation(text, file);
   }
   Calibration c;
   c.source = file;
