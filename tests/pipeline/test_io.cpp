@@ -102,6 +102,15 @@ TEST(Calibration, OpenCvMatrixSizeCheckedBeforeReading) {
   write(dir / "g.yaml", "%YAML:1.0\n   rows: 6\n  1.0\n-\n");
   expect_input_error([&] { load_calibration_opencv(dir / "g.yaml"); },
                      {"g.yaml:3", "indentation of 2 spaces matches no enclosing line"});
+  // corpus calibration_opencv/indented_root_hang: nor on an indented first key followed by a line
+  // at column 0; and corpus dedent_hang_xml: the dedent in a file named .xml (OpenCV goes by the
+  // "%YAML" content).
+  write(dir / "i.yaml", "%YAML:1.0\n   cols: 3\n, %\n--)\n");
+  expect_input_error([&] { load_calibration_opencv(dir / "i.yaml"); },
+                     {"i.yaml:3", "indentation of 0 spaces matches no enclosing line"});
+  write(dir / "j.xml", "%YAML:1.0\n   rows: 6\n  1.0\n-\n");
+  expect_input_error([&] { load_calibration_opencv(dir / "j.xml"); },
+                     {"j.xml:3", "indentation of 2 spaces matches no enclosing line"});
   // What OpenCV writes still loads: a `data:` list continued on a line indented deeper than any
   // key, then a key back at column 0 (flow lines are not checked).
   write(dir / "h.yaml", head +

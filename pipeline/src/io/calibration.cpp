@@ -55,13 +55,15 @@ cv::Mat read_matrix(const cv::FileNode& n, const std::string& file, const char* 
 }
 
 // OpenCV's YAML parser also loops for ever on a block line dedented to a column that no
-// enclosing line starts at ("   rows: 6", "  1.0", then a line "-"; found by fuzzing). YAML
-// requires a dedent to return to an enclosing indentation (and OpenCV writes its files so), so such
-// a file is refused with its line. Lines that continue a flow collection ([ ] or { }, e.g. a long
-// `data:` list) are not checked; blank, comment and directive lines neither.
+// enclosing line starts at ("   rows: 6", "  1.0", then a line "-"), and on an indented first key
+// followed by a line at column 0 ("   cols: 3", then ", %"; both found by fuzzing). YAML requires
+// a dedent to return to an enclosing indentation, and nothing of a document's root may stand left
+// of its first line (OpenCV writes its files so), so such a file is refused with its line. Lines
+// that continue a flow collection ([ ] or { }, e.g. a long `data:` list) are not checked; blank,
+// comment and directive lines neither.
 void check_yaml_indentation(const std::string& text, const std::string& file) {
-  std::vector<size_t> levels{0};
-  int depth = 0;  // open [ and { at the start of the line
+  std::vector<size_t> levels;  // the first content line's column, then every open block's
+  int depth = 0;               // open [ and { at the start of the line
   size_t line_no = 1;
   for (size_t at = 0; at < text.size(); ++line_no) {
     const size_t end = std::min(text.find('\n', at), text.size());
@@ -71,11 +73,11 @@ void check_yaml_indentation(const std::string& text, const std::string& file) {
     if (first == std::string::npos || line[first] == '#' || line[first] == '\r' || line[0] == '%')
       continue;
     if (depth == 0) {
-      if (first > levels.back()) {
+      if (levels.empty() || first > levels.back()) {
         levels.push_back(first);
       } else {
-        while (levels.back() > first) levels.pop_back();
-        if (levels.back() != first)
+        while (!levels.empty() && levels.back() > first) levels.pop_back();
+        if (levels.empty() || levels.back() != first)
           throw InputError(file + ":" + std::to_string(line_no) + ": indentation of " +
                            std::to_string(first) +
                            " spaces matches no enclosing line (YAML block structure)");
@@ -122,8 +124,10 @@ Calibration load_calibration_opencv(const fs::path& path) {
                          ": a YAML document marker '---' must stand alone on its line");
       at = end + 1;
     }
-    const std::string ext = path.extension().string();
-    if (ext != ".xml" && ext != ".XML" && ext != ".json" && ext != ".JSON")
+    // OpenCV reads a file as YAML by its content whatever its name (a "cam_1.xml" starting with
+    // "%YAML" is parsed as YAML), so the check goes by the content: not XML ('<'), not JSON ('{').
+    const size_t lead = text.find_first_not_of(" \t\r\n");
+    if (lead != std::string::npos && text[lead] != '<' && text[lead] != '{')
       check_yaml_indentation(text, file);
   }
   Calibration c;
