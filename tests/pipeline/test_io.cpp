@@ -111,6 +111,11 @@ TEST(Calibration, OpenCvMatrixSizeCheckedBeforeReading) {
   write(dir / "j.xml", "%YAML:1.0\n   rows: 6\n  1.0\n-\n");
   expect_input_error([&] { load_calibration_opencv(dir / "j.xml"); },
                      {"j.xml:3", "indentation of 2 spaces matches no enclosing line"});
+  // corpus calibration_opencv/bracket_in_key_hang: a '[' inside a key opens no flow collection,
+  // so the dedent after it is still found (OpenCV's parser did not return on this file).
+  write(dir / "k.yaml", "%YAML:1.0 !!%opex\n   rows: 6\n   cols\xdb[\xdb: 3\n  1.0\n--\n-\nim");
+  expect_input_error([&] { load_calibration_opencv(dir / "k.yaml"); },
+                     {"k.yaml:4", "indentation of 2 spaces matches no enclosing line"});
   // What OpenCV writes still loads: a `data:` list continued on a line indented deeper than any
   // key, then a key back at column 0 (flow lines are not checked).
   write(dir / "h.yaml", head +

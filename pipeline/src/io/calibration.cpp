@@ -83,20 +83,31 @@ void check_yaml_indentation(const std::string& text, const std::string& file) {
                            " spaces matches no enclosing line (YAML block structure)");
       }
     }
+    // Outside a flow collection a '[' or '{' opens one only where a value starts (the line's
+    // first character, after "- " or after ": "); inside a key or a plain scalar it is text (a
+    // key "cols[" followed by a dedent hung OpenCV's parser; found by fuzzing).
     char quote = 0;
+    bool value_start = true;
     for (size_t k = first; k < line.size(); ++k) {
       const char ch = line[k];
+      const bool blank_next = k + 1 == line.size() || line[k + 1] == ' ';
       if (quote) {
         if (ch == quote) quote = 0;
+      } else if (ch == ' ') {
+        continue;
       } else if (ch == '"' || ch == '\'') {
         quote = ch;
       } else if (ch == '#' && (k == 0 || line[k - 1] == ' ')) {
         break;
       } else if (ch == '[' || ch == '{') {
-        ++depth;
+        if (depth > 0 || value_start) ++depth;
       } else if ((ch == ']' || ch == '}') && depth > 0) {
         --depth;
+      } else if (depth == 0 && (ch == '-' || ch == ':') && blank_next) {
+        value_start = true;
+        continue;
       }
+      value_start = false;
     }
   }
 }
