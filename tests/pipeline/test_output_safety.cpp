@@ -466,24 +466,56 @@ void run_campaign(const KillCampaign& c, std::mt19937& rng, const fs::path& logs
     a.push_back(c.out.string());
     return a;
   };
-  // The previous result: one complete run.
+  // The previous result: one complete run, watched for when its temporary folder exists.
   const auto t0 = Clock::now();
   pid_t pid = start(argv_of(1), logs / (c.name + "_base.log"));
-  int status = wait_bounded(pid, 120);
+  const fs::path partial = c.out.string() + ".partial-" + std::to_string(pid);
+  double seen_from = -1.0, seen_to = -1.0;
+  int status = 0;
+  for (const auto end = t0 + std::chrono::seconds(120);;) {
+    const double t = std::chrono::duration<double>(Clock::now() - t0).count();
+    if (::waitpid(pid, &status, WNOHANG) == pid) break;
+    if (Clock::now() > end) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+      break;
+    }
+    if (fs::exists(partial)) {
+      if (seen_from < 0) seen_from = t;
+      seen_to = t;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
   const double duration = std::chrono::duration<double>(Clock::now() - t0).count();
   ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0)
       << test::slurp(logs / (c.name + "_base.log"));
   auto before = snapshot(c.out);
-  std::uniform_real_distribution<double> when(0.0, 1.1 * duration);
+  // Every other kill at a random time anywhere in the run (and a little after it); the others at
+  // a random time within the base run's writing span after this run's temporary folder appears,
+  // so that kills land while the command writes however long its start-up takes on a loaded
+  // machine (a node's varies from 0.3 to 1.2 s, with 0.1 s of writing).
+  std::uniform_real_distribution<double> anywhere(0.0, 1.1 * duration);
+  std::uniform_real_distribution<double> writing(0.0, std::max(1e-3, seen_to - seen_from));
   int mid_run = 0, finished = 0, replaced = 0;
   std::set<std::string> stale;  // temporary folders killed runs may have left (until the next)
   for (int k = 0; k < c.kills; ++k) {
-    const double at = when(rng);
+    const bool while_writing = k % 2 == 1;
+    const double at = while_writing ? writing(rng) : anywhere(rng);
     const auto log = logs / (c.name + "_" + std::to_string(k) + ".log");
     pid = start(argv_of(k), log);
-    std::this_thread::sleep_for(std::chrono::duration<double>(at));
-    ::kill(pid, SIGKILL);  // harmless if it has already exited (not yet reaped)
-    ::waitpid(pid, &status, 0);
+    bool reaped = false;
+    if (while_writing) {
+      const fs::path mine = c.out.string() + ".partial-" + std::to_string(pid);
+      const auto until = Clock::now() + std::chrono::seconds(60);
+      while (!fs::exists(mine) && Clock::now() < until &&
+             !(reaped = ::waitpid(pid, &status, WNOHANG) == pid))
+        std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+    if (!reaped) {
+      std::this_thread::sleep_for(std::chrono::duration<double>(at));
+      ::kill(pid, SIGKILL);  // harmless if it has already exited (not yet reaped)
+      ::waitpid(pid, &status, 0);
+    }
     const bool killed = WIFSIGNALED(status);
     if (killed) stale.insert(c.out.filename().string() + ".partial-" + std::to_string(pid));
     if (!killed) {
@@ -520,9 +552,9 @@ void run_campaign(const KillCampaign& c, std::mt19937& rng, const fs::path& logs
     }
   }
   std::printf(
-      "%s: %d kills over %.2f s runs: %d left a temporary folder, %d found a new result in "
-      "place, %d had finished\n",
-      c.name.c_str(), c.kills, duration, mid_run, replaced, finished);
+      "%s: %d kills over %.2f s runs (temporary folder seen %.2f-%.2f s): %d left a temporary "
+      "folder, %d found a new result in place, %d had finished\n",
+      c.name.c_str(), c.kills, duration, seen_from, seen_to, mid_run, replaced, finished);
   EXPECT_GT(mid_run, 0) << "no kill landed while the command was writing";
   // The next run cleans what killed runs left.
   pid = start(argv_of(0), logs / (c.name + "_last.log"));
