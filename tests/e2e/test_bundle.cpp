@@ -3,6 +3,7 @@
 // not, a bundle stays detected with its primary tag hidden, and `netvmo run` converges to g*.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -175,5 +176,21 @@ TEST(BundleOnRenderedImages, RunOnABundleDatasetConvergesToGStar) {
     if (row.camera == 3) (row.tag_id == 0 ? cam3_primary : cam3_second) += row.detected;
   EXPECT_EQ(cam3_primary, 0);
   EXPECT_EQ(cam3_second, 30);
+
+  // The bundle's id made the primary's: one line naming network.yaml and the field, exit 1,
+  // the earlier results left as they were.
+  std::string yaml = test::slurp(fs::path(ds) / "network.yaml");
+  const auto at = yaml.find("{id: 1,");
+  ASSERT_NE(at, std::string::npos) << yaml;
+  yaml.replace(at, 7, "{id: 0,");
+  std::ofstream(fs::path(ds) / "network.yaml") << yaml;
+  const std::string before = test::slurp(fs::path(out) / "summary.json");
+  c = test::run_netvmo("run " + ds + " --out " + out + " --no-overlays --no-plots", dir, 60);
+  EXPECT_EQ(c.code, 1);
+  EXPECT_NE(c.err.find("network.yaml: target.bundle[0].id: tag id 0 listed twice"),
+            std::string::npos)
+      << c.err;
+  EXPECT_EQ(std::count(c.err.begin(), c.err.end(), '\n'), 1) << c.err;
+  EXPECT_EQ(test::slurp(fs::path(out) / "summary.json"), before);
   fs::remove_all(dir);
 }
