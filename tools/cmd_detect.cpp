@@ -55,13 +55,15 @@ int column_width(TargetStatus s) {
 
 /// Against the dataset's truth.csv (rendered datasets): recall of fully visible tags by the
 /// narrowest side of their projected black square, and accepted corners more than 1 px off.
+/// truth.csv has the primary tag's corners: with a bundle, the primary's acceptance counts.
 struct TruthTally {
   static constexpr double kEdges[] = {18, 24, 30, 40};  ///< bins <18, 18-24, 24-30, 30-40, >=40
   std::array<int, 5> visible{}, detected{};
   int accepted = 0, off_1px = 0;
   double max_error = 0.0;
   void add(const TruthRow& t, const TagObservation& o) {
-    if (o.delta && t.corners) {
+    const bool primary = o.delta && o.slots.front() == 0;
+    if (primary && t.corners) {
       ++accepted;
       double e = 0.0;
       for (size_t k = 0; k < 4; ++k) e = std::max(e, cv::norm(o.corners_px[k] - (*t.corners)[k]));
@@ -73,7 +75,7 @@ struct TruthTally {
     size_t bin = 0;
     while (bin < std::size(kEdges) && side >= kEdges[bin]) ++bin;
     ++visible[bin];
-    detected[bin] += o.delta;
+    detected[bin] += primary;
   }
   void print() const {
     std::printf("against truth.csv: fully visible tags detected, by narrowest side [px]:");
@@ -92,8 +94,10 @@ int run_detect(DetectOptions o) {
   io::OutputDir out(o.out, "detect");
   Dataset ds = open_dataset(o.dataset, {}, o.keep_going);
   for (const auto& w : ds.warnings) std::fprintf(stderr, "netvmo detect: warning: %s\n", w.c_str());
-  o.det.family = ds.network.target.family;
-  o.det.target_id = ds.network.target.id;
+  set_target(o.det, ds.network.target);
+  const auto& target = ds.network.target;
+  std::set<int> body_ids;
+  for (size_t k = 0; k < target.tag_count(); ++k) body_ids.insert(target.tag_id(k));
   FrontEnd fe(o.det, o.tracking);
 
   const fs::path out_dir(o.out);
@@ -131,8 +135,37 @@ int run_detect(DetectOptions o) {
       if (const auto it = truth.find({f, ds.cameras[c].id}); it != truth.end())
         tally.add(it->second, obs);
       for (const auto& d : all.all)
-        if (d.id != o.det.target_id) st.other_ids.insert(d.id);
+        if (!body_ids.count(d.id)) st.other_ids.insert(d.id);
       ++st.by_status[obs.status];
+      if (obs.delta) {
+        ++st.detected;
+        st.margin_sum += obs.margin;
+      }
+      if (!target.bundle.empty()) {
+        // A bundle: one row per tag of the body (primary, then bundle order), each with that
+        // tag's own decision; the camera's delta is 1 when any of its rows has detected = 1.
+        for (size_t k = 0; k < target.tag_count(); ++k) {
+          DetectionRow row;
+          row.frame = f;
+          row.camera = ds.cameras[c].id;
+          row.tag_id = target.tag_id(k);
+          if (k < all.tags.size()) {
+            const TagDecision& d = all.tags[k];
+            row.detected = d.index >= 0;
+            row.status = d.status;
+            row.reason = d.reason;
+            if (row.detected) {
+              row.margin = all.all[static_cast<size_t>(d.index)].margin;
+              row.corners = all.all[static_cast<size_t>(d.index)].corners;
+            }
+          } else {
+            row.status = obs.status;  // not searched (no image)
+            row.reason = obs.reason;
+          }
+          csv << format_detection_row(row) << "\n";
+        }
+        continue;
+      }
       DetectionRow row;
       row.frame = f;
       row.camera = ds.cameras[c].id;
@@ -141,8 +174,6 @@ int run_detect(DetectOptions o) {
       row.status = obs.status;
       row.reason = obs.reason;
       if (obs.delta) {
-        ++st.detected;
-        st.margin_sum += obs.margin;
         row.margin = obs.margin;
         row.corners = obs.corners_px;
       }
@@ -202,7 +233,8 @@ void add_detect(CLI::App& app, int& exit_code) {
       "high_hamming, border_mismatch, no_image; reason says it in words) and prints a\n"
       "per-camera summary with the count of each reason. Each camera's frames are searched as\n"
       "in `netvmo run` (tracking window, acquisition pass; --no-track: every frame whole). The\n"
-      "tag family and target id come from network.yaml.");
+      "tag family and target id come from network.yaml; a target with a tag bundle has one\n"
+      "row per frame, camera and tag of the body, each with that tag's own decision.");
   cmd->add_option("dataset", o->dataset,
                   "Dataset folder (network.yaml, calib/, cam_<id>/ or cam_<id>.<ext>)")
       ->required();

@@ -1,7 +1,9 @@
 // The image Jacobian against finite differences of the projection, and the error
-// reconstruction (eq:eei) against the exact error E_R(g_bar^-1 g) for small errors.
+// reconstruction (eq:eei) against the exact error E_R(g_bar^-1 g) for small errors, also for a
+// tag bundle (points of several tags).
 #include <gtest/gtest.h>
 
+#include "netvmo/observer/error_model.hpp"
 #include "netvmo/observer/jacobian.hpp"
 
 using namespace netvmo::obs;
@@ -13,6 +15,18 @@ SE3 perturbation(const Vec6& d) {
 }
 
 const SE3 kGBar = make_pose(Vec3(0.25, -0.15, 1.9), Vec3(2.9, 0.3, -0.2));  // tag facing camera
+
+// Central finite differences of project() along E_R perturbations of g (step 1e-6), 2m x 6.
+Eigen::MatrixXd finite_difference_jacobian(const SE3& g, const FeatureModel& m) {
+  const double h = 1e-6;
+  Eigen::MatrixXd fd(2 * static_cast<Eigen::Index>(m.points_o.size()), 6);
+  for (int k = 0; k < 6; ++k) {
+    Vec6 d = Vec6::Zero();
+    d[k] = h;
+    fd.col(k) = (project(g * perturbation(d), m) - project(g * perturbation(-d), m)) / (2 * h);
+  }
+  return fd;
+}
 }  // namespace
 
 TEST(Jacobian, SquareCornersAreInDetectionOrder) {
@@ -41,14 +55,9 @@ TEST(Jacobian, MatchesCentralFiniteDifferences) {
     const Eigen::MatrixXd J = image_jacobian(kGBar, m);
     ASSERT_EQ(J.rows(), 8);
     ASSERT_EQ(J.cols(), 6);
-    const double h = 1e-6;
-    for (int k = 0; k < 6; ++k) {
-      Vec6 d = Vec6::Zero();
-      d[k] = h;
-      const Eigen::VectorXd fd =
-          (project(kGBar * perturbation(d), m) - project(kGBar * perturbation(-d), m)) / (2 * h);
-      EXPECT_LT((J.col(k) - fd).norm(), 1e-8 * lambda) << "column " << k;
-    }
+    const Eigen::MatrixXd fd = finite_difference_jacobian(kGBar, m);
+    for (int k = 0; k < 6; ++k)
+      EXPECT_LT((J.col(k) - fd.col(k)).norm(), 1e-8 * lambda) << "column " << k;
   }
 }
 
@@ -73,4 +82,39 @@ TEST(Jacobian, ReconstructionApproximatesExactErrorToSecondOrder) {
 TEST(Jacobian, ReconstructionIsZeroAtTheTruth) {
   const auto m = FeatureModel::square(0.15);
   EXPECT_LT(reconstruct_error(kGBar, project(kGBar, m), m).norm(), 1e-12);
+}
+
+// A tag bundle: two tags on faces 45 degrees apart (datasets/tag_bundle.yaml's wedge). J stacked
+// over the 8 corners against finite differences, and the jacobian error model with the
+// measurement's own points (Measurement::points_o) reconstructing the exact error.
+TEST(Jacobian, StackedOverATwoTagBundle) {
+  FeatureModel bundle = FeatureModel::square(0.2);
+  const SE3 g_ot = make_pose(Vec3(0.256066, 0, -0.106066), Vec3(0, 0.785398, 0));
+  for (const auto& p : FeatureModel::square(0.2).points_o) bundle.points_o.push_back(g_ot * p);
+  const SE3 g_bar = make_pose(Vec3(-0.1, 0.05, 2.0), Vec3(M_PI, 0, 0)) *
+                    make_pose(Vec3::Zero(), Vec3(0.05, 0.1, 0.02));  // head-on, slightly turned
+  const Eigen::MatrixXd J = image_jacobian(g_bar, bundle);
+  ASSERT_EQ(J.rows(), 16);
+  const Eigen::MatrixXd fd = finite_difference_jacobian(g_bar, bundle);
+  for (int k = 0; k < 6; ++k) EXPECT_LT((J.col(k) - fd.col(k)).norm(), 1e-8) << "column " << k;
+  // Rows 8..15 are the second tag's own Jacobian block (the stacking keeps the point order).
+  FeatureModel second;
+  second.points_o.assign(bundle.points_o.begin() + 4, bundle.points_o.end());
+  EXPECT_LT((J.bottomRows(8) - image_jacobian(g_bar, second)).norm(), 1e-15);
+
+  const Vec6 d = (Vec6() << 0.004, -0.003, 0.006, 0.003, -0.004, 0.002).finished();
+  const SE3 g_true = g_bar * perturbation(d);
+  Measurement z;
+  z.delta = true;
+  z.f = project(g_true, bundle);
+  z.points_o = bundle.points_o;
+  const ErrorModel& jac = find_error_model("jacobian");
+  const Vec6 e = jac.error(g_bar, z, FeatureModel::square(0.2));  // (eq:eei) on all 8 points
+  EXPECT_LT((e - E_R(g_bar.inverse() * g_true)).norm(), 0.05 * d.norm());
+  EXPECT_LT((e - reconstruct_error(g_bar, z.f, bundle)).norm(), 1e-15);
+  // Only the second tag seen: its 4 points.
+  z.f = project(g_true, second);
+  z.points_o = second.points_o;
+  EXPECT_LT((jac.error(g_bar, z, FeatureModel::square(0.2)) - E_R(g_bar.inverse() * g_true)).norm(),
+            0.05 * d.norm());
 }

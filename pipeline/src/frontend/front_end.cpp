@@ -20,13 +20,39 @@ Eigen::Matrix<double, 8, 1> normalized_features(const std::array<cv::Point2d, 4>
   return f;
 }
 
-namespace {
-cv::Rect tracking_window(const std::array<cv::Point2d, 4>& c, const TrackingSettings& t) {
-  double x0 = c[0].x, x1 = c[0].x, y0 = c[0].y, y1 = c[0].y;
-  for (const auto& p : c) {
-    x0 = std::min(x0, p.x), x1 = std::max(x1, p.x);
-    y0 = std::min(y0, p.y), y1 = std::max(y1, p.y);
+void set_target(DetectorSettings& s, const io::TargetConfig& target) {
+  s.family = target.family;
+  s.target_id = target.id;
+  s.bundle_ids.clear();
+  for (const auto& b : target.bundle) s.bundle_ids.push_back(b.id);
+}
+
+obs::FeatureModel tag_points(const io::TargetConfig& target, const std::vector<int>& slots) {
+  obs::FeatureModel m;
+  for (int k : slots) {
+    const auto sq = obs::FeatureModel::square(target.tag_size(static_cast<size_t>(k)));
+    const obs::SE3 g_ot = target.tag_pose(static_cast<size_t>(k));
+    for (const auto& p : sq.points_o) m.points_o.push_back(g_ot * p);
   }
+  return m;
+}
+
+obs::FeatureModel observation_model(const io::TargetConfig& target, const TagObservation& o) {
+  if (target.bundle.empty()) return obs::FeatureModel::square(target.size);
+  return tag_points(target, o.slots);
+}
+
+namespace {
+/// The search window around the last tags: their corners' bounding box grown by window_margin
+/// x the box's size plus window_pad.
+cv::Rect tracking_window(const std::vector<std::array<cv::Point2d, 4>>& tags,
+                         const TrackingSettings& t) {
+  double x0 = tags[0][0].x, x1 = x0, y0 = tags[0][0].y, y1 = y0;
+  for (const auto& c : tags)
+    for (const auto& p : c) {
+      x0 = std::min(x0, p.x), x1 = std::max(x1, p.x);
+      y0 = std::min(y0, p.y), y1 = std::max(y1, p.y);
+    }
   const double grow = t.window_margin * std::max(x1 - x0, y1 - y0) + t.window_pad;
   return cv::Rect(cv::Point(cvFloor(x0 - grow), cvFloor(y0 - grow)),
                   cv::Point(cvCeil(x1 + grow) + 1, cvCeil(y1 + grow) + 1));
@@ -86,9 +112,12 @@ TagObservation FrontEnd::observe(const cv::Mat& gray, const io::Calibration& cal
         keep_best(dets, std::move(d));
     };
     auto window = [&] {
-      const auto& last = *track->last;
+      const auto last = track->last_all.empty()
+                            ? std::vector<std::array<cv::Point2d, 4>>{*track->last}
+                            : track->last_all;
       const cv::Rect w = tracking_window(last, tracking_);
-      const double side = narrowest_side(last);
+      double side = narrowest_side(last[0]);
+      for (const auto& c : last) side = std::min(side, narrowest_side(c));
       SearchOptions opt;
       if (side < tracking_.full_res_below_px) opt.decimate = 1.0;
       search(kSearchWindow, w, opt);
@@ -124,23 +153,37 @@ TagObservation FrontEnd::observe(const cv::Mat& gray, const io::Calibration& cal
   if (track) {
     track->searches = searches;
     track->found_by = found_by;
-    if (const TagDetection* t = dets.target()) {
-      track->last = t->corners;
+    track->last.reset();
+    track->last_all.clear();
+    for (const auto& t : dets.tags)
+      if (t.index >= 0) track->last_all.push_back(dets.all[static_cast<size_t>(t.index)].corners);
+    if (!track->last_all.empty()) {
+      track->last = track->last_all[0];
       track->blind_frames = 0;
     } else {
-      track->last.reset();
       ++track->blind_frames;
     }
   }
   obs.status = dets.status;
   obs.reason = dets.reason;
-  if (const TagDetection* t = dets.target()) {
-    obs.delta = true;
-    obs.tag_id = t->id;
-    obs.hamming = t->hamming;
-    obs.margin = t->margin;
-    obs.corners_px = t->corners;
-    obs.f_normalized = normalized_features(t->corners, calib);
+  for (size_t k = 0; k < dets.tags.size(); ++k) {
+    if (dets.tags[k].index < 0) continue;
+    const TagDetection& t = dets.all[static_cast<size_t>(dets.tags[k].index)];
+    if (!obs.delta) {
+      obs.delta = true;
+      obs.tag_id = t.id;
+      obs.hamming = t.hamming;
+      obs.margin = t.margin;
+      obs.corners_px = t.corners;
+    }
+    obs.slots.push_back(static_cast<int>(k));
+    obs.tag_corners_px.push_back(t.corners);
+  }
+  if (obs.delta) {
+    obs.f_normalized.resize(static_cast<Eigen::Index>(8 * obs.slots.size()));
+    for (size_t j = 0; j < obs.slots.size(); ++j)
+      obs.f_normalized.segment<8>(static_cast<Eigen::Index>(8 * j)) =
+          normalized_features(obs.tag_corners_px[j], calib);
   }
   if (all) *all = std::move(dets);
   return obs;

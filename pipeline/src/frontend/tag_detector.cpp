@@ -39,6 +39,13 @@ void validate(const DetectorSettings& s) {
   if (s.min_white_black_diff < 0 || s.min_white_black_diff > 255)
     bad("min_white_black_diff must be in 0..255");
   if (s.target_id < 0) bad("target id must be >= 0");
+  for (size_t k = 0; k < s.bundle_ids.size(); ++k) {
+    if (s.bundle_ids[k] < 0) bad("bundle ids must be >= 0");
+    if (s.bundle_ids[k] == s.target_id ||
+        std::count(s.bundle_ids.begin(), s.bundle_ids.begin() + static_cast<long>(k),
+                   s.bundle_ids[k]))
+      bad("tag id " + std::to_string(s.bundle_ids[k]) + " listed twice in the target");
+  }
   if (!(s.min_decision_margin >= 0.0)) bad("min_decision_margin must be >= 0");
   if (s.max_hamming < 0) bad("max_hamming must be >= 0");
   if (!(s.border_min_contrast >= 0.0 && s.border_min_contrast <= 1.0))
@@ -589,9 +596,9 @@ struct TagDetector::Impl {
   DetectorSettings s;
   render::TagFamilyPtr family{nullptr, nullptr};
   apriltag_detector_t* td = nullptr;
-  cv::Mat gray;        // conversion buffer for non-gray input
-  cv::Mat normalized;  // the image with the searched region normalised (SearchOptions)
-  cv::Mat pattern;     // the target's bitmap, for the border check
+  cv::Mat gray;                   // conversion buffer for non-gray input
+  cv::Mat normalized;             // the image with the searched region normalised (SearchOptions)
+  std::vector<cv::Mat> patterns;  // bitmap of each tag of the body, for the border check
 
   explicit Impl(DetectorSettings settings) : s(std::move(settings)) {
     validate(s);
@@ -606,7 +613,8 @@ struct TagDetector::Impl {
     td->decode_sharpening = s.decode_sharpening;
     td->qtp.min_white_black_diff = s.min_white_black_diff;
     td->debug = false;
-    pattern = tag_pattern(s.family, s.target_id);
+    patterns.push_back(tag_pattern(s.family, s.target_id));
+    for (int id : s.bundle_ids) patterns.push_back(tag_pattern(s.family, id));
   }
   ~Impl() {
     if (td) apriltag_detector_destroy(td);  // before the family it holds
@@ -712,79 +720,123 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
   }
   apriltag_detections_destroy(dets);
 
-  // Target decision. Every detection of the target id that passes hamming and margin is refined
-  // and border-checked; the duplicate-id rule counts only those that pass, so a partly visible
-  // second tag of the same id (a neighbouring face of a cube, a tag cut by the image border)
-  // does not hide a good one. Without a passing one, the reason is the furthest any candidate
-  // got: border check, then margin, then hamming.
-  int n_id = 0, n_hamming_ok = 0, n_margin_ok = 0, n_passed = 0, passed = -1;
-  double best_margin = -1.0;
-  int best_hamming = 1 << 30;
-  std::string border_reason;
-  for (size_t i = 0; i < out.all.size(); ++i) {
-    TagDetection& d = out.all[i];
-    if (d.id != s.target_id) continue;
-    ++n_id;
-    best_hamming = std::min(best_hamming, d.hamming);
-    if (d.hamming > s.max_hamming) continue;
-    ++n_hamming_ok;
-    best_margin = std::max(best_margin, d.margin);
-    if (d.margin < s.min_decision_margin) continue;
-    ++n_margin_ok;
-    std::array<cv::Point2d, 4> corners = d.corners;
-    refine_corners(*g, corners, s.refinement, border_cells(), calib);
-    BorderCheck bc = s.border_check
-                         ? check_border(*g, corners, impl_->pattern, border_cells(), s, calib)
-                         : BorderCheck{};
-    if (bc.ok && opt.normalized) {
-      // Corners must not depend on the illumination correction: where a shadow boundary runs
-      // along a border edge, the fits on the image and on its normalised copy disagree.
-      std::array<cv::Point2d, 4> plain = d.corners;
-      refine_corners(*original, plain, s.refinement, border_cells(), calib);
-      double moved = 0.0;
-      for (size_t k = 0; k < 4; ++k) moved = std::max(moved, cv::norm(plain[k] - corners[k]));
-      if (moved > kMaxNormalizedDisagreement) {
-        bc.ok = false;
-        std::snprintf(buf, sizeof buf,
-                      "shadow edge along the border: corners fitted on the image and on its "
-                      "normalised copy differ by %.2f px",
-                      moved);
-        bc.reason = buf;
+  // Target decision, per tag of the body. Every detection of the tag's id that passes hamming
+  // and margin is refined and border-checked; the duplicate-id rule counts only those that
+  // pass, so a partly visible second tag of the same id (a neighbouring face of a cube, a tag
+  // cut by the image border) does not hide a good one. Without a passing one, the reason is the
+  // furthest any candidate got: border check, then margin, then hamming.
+  auto decide = [&](int tag_id, const cv::Mat& pattern) {
+    TagDecision dec;
+    dec.id = tag_id;
+    int n_id = 0, n_hamming_ok = 0, n_margin_ok = 0, n_passed = 0, passed = -1;
+    double best_margin = -1.0;
+    int best_hamming = 1 << 30;
+    std::string border_reason;
+    for (size_t i = 0; i < out.all.size(); ++i) {
+      TagDetection& d = out.all[i];
+      if (d.id != tag_id) continue;
+      ++n_id;
+      best_hamming = std::min(best_hamming, d.hamming);
+      if (d.hamming > s.max_hamming) continue;
+      ++n_hamming_ok;
+      best_margin = std::max(best_margin, d.margin);
+      if (d.margin < s.min_decision_margin) continue;
+      ++n_margin_ok;
+      std::array<cv::Point2d, 4> corners = d.corners;
+      refine_corners(*g, corners, s.refinement, border_cells(), calib);
+      BorderCheck bc = s.border_check ? check_border(*g, corners, pattern, border_cells(), s, calib)
+                                      : BorderCheck{};
+      if (bc.ok && opt.normalized) {
+        // Corners must not depend on the illumination correction: where a shadow boundary runs
+        // along a border edge, the fits on the image and on its normalised copy disagree.
+        std::array<cv::Point2d, 4> plain = d.corners;
+        refine_corners(*original, plain, s.refinement, border_cells(), calib);
+        double moved = 0.0;
+        for (size_t k = 0; k < 4; ++k) moved = std::max(moved, cv::norm(plain[k] - corners[k]));
+        if (moved > kMaxNormalizedDisagreement) {
+          bc.ok = false;
+          std::snprintf(buf, sizeof buf,
+                        "shadow edge along the border: corners fitted on the image and on its "
+                        "normalised copy differ by %.2f px",
+                        moved);
+          bc.reason = buf;
+        }
       }
+      if (!bc.ok) {
+        if (border_reason.empty()) border_reason = bc.reason;
+        continue;
+      }
+      d.corners = corners;  // only a passing candidate's corners are replaced by refined ones
+      ++n_passed;
+      passed = static_cast<int>(i);
     }
-    if (!bc.ok) {
-      if (border_reason.empty()) border_reason = bc.reason;
-      continue;
+    if (n_passed > 1) {
+      dec.status = TargetStatus::duplicate_id;
+      std::snprintf(
+          buf, sizeof buf,
+          "%d detections of id %d pass every check (more than one tag with the target id in view)",
+          n_passed, tag_id);
+    } else if (n_passed == 1) {
+      dec.status = TargetStatus::detected;
+      dec.index = passed;
+      buf[0] = '\0';
+    } else if (n_margin_ok > 0) {
+      dec.status = TargetStatus::border_mismatch;
+      std::snprintf(buf, sizeof buf, "%.*s", 190, border_reason.c_str());
+    } else if (n_hamming_ok > 0) {
+      dec.status = TargetStatus::low_margin;
+      std::snprintf(buf, sizeof buf, "decision margin %.1f below %g", best_margin,
+                    s.min_decision_margin);
+    } else if (n_id > 0) {
+      dec.status = TargetStatus::high_hamming;
+      std::snprintf(buf, sizeof buf, "%d corrected bits, more than %d", best_hamming,
+                    s.max_hamming);
+    } else {
+      std::snprintf(buf, sizeof buf, "id %d not decoded (%zu other tag(s) decoded)", tag_id,
+                    out.all.size());
     }
-    d.corners = corners;  // only a passing candidate's corners are replaced by refined ones
-    ++n_passed;
-    passed = static_cast<int>(i);
+    dec.reason = buf;
+    return dec;
+  };
+  out.tags.push_back(decide(s.target_id, impl_->patterns[0]));
+  for (size_t k = 0; k < s.bundle_ids.size(); ++k)
+    out.tags.push_back(decide(s.bundle_ids[k], impl_->patterns[k + 1]));
+  out.target_index = out.tags[0].index;
+  if (s.bundle_ids.empty()) {  // a single tag: its decision is the target's
+    out.status = out.tags[0].status;
+    out.reason = out.tags[0].reason;
+    return out;
   }
-  if (n_passed > 1) {
-    out.status = TargetStatus::duplicate_id;
-    std::snprintf(
-        buf, sizeof buf,
-        "%d detections of id %d pass every check (more than one tag with the target id in view)",
-        n_passed, s.target_id);
-  } else if (n_passed == 1) {
-    out.status = TargetStatus::detected;
-    out.target_index = passed;
-    buf[0] = '\0';
-  } else if (n_margin_ok > 0) {
-    out.status = TargetStatus::border_mismatch;
-    std::snprintf(buf, sizeof buf, "%.*s", 190, border_reason.c_str());
-  } else if (n_hamming_ok > 0) {
-    out.status = TargetStatus::low_margin;
-    std::snprintf(buf, sizeof buf, "decision margin %.1f below %g", best_margin,
-                  s.min_decision_margin);
-  } else if (n_id > 0) {
-    out.status = TargetStatus::high_hamming;
-    std::snprintf(buf, sizeof buf, "%d corrected bits, more than %d", best_hamming, s.max_hamming);
+  const auto rank = [](TargetStatus st) {
+    switch (st) {
+      case TargetStatus::detected:
+        return 5;
+      case TargetStatus::duplicate_id:
+        return 4;
+      case TargetStatus::border_mismatch:
+        return 3;
+      case TargetStatus::low_margin:
+        return 2;
+      case TargetStatus::high_hamming:
+        return 1;
+      default:
+        return 0;
+    }
+  };
+  const TagDecision* best = &out.tags[0];
+  for (const auto& t : out.tags)
+    if (rank(t.status) > rank(best->status)) best = &t;
+  out.status = best->status;
+  if (best->status == TargetStatus::detected) {
+    out.reason.clear();
+  } else if (best->status != TargetStatus::not_found) {
+    out.reason = "tag " + std::to_string(best->id) + ": " + best->reason;
   } else {
-    std::snprintf(buf, sizeof buf, "id %d not decoded (%zu other tag(s) decoded)", s.target_id,
-                  out.all.size());
+    std::string ids;
+    for (const auto& t : out.tags) ids += (ids.empty() ? "" : ", ") + std::to_string(t.id);
+    out.reason =
+        "ids " + ids + " not decoded (" + std::to_string(out.all.size()) + " other tag(s) decoded)";
   }
-  out.reason = buf;
   return out;
 }
 

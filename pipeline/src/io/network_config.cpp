@@ -1,5 +1,6 @@
 #include "netvmo/pipeline/io/network_config.hpp"
 
+#include <algorithm>
 #include <climits>
 #include <cmath>
 #include <set>
@@ -40,6 +41,32 @@ std::vector<std::pair<int, int>> read_edges(const Value& edges, const std::set<i
   return out;
 }
 
+std::optional<std::string> tags_overlap(double size_a, const obs::SE3& g_oa, double size_b,
+                                        const obs::SE3& g_ob) {
+  const obs::Vec3 d = g_ob.translation() - g_oa.translation();
+  if (d.norm() < 1e-6) return std::string("its centre coincides with");
+  const obs::Vec3 na = g_oa.linear().col(2), nb = g_ob.linear().col(2);
+  const bool coplanar =
+      std::acos(std::clamp(na.dot(nb), -1.0, 1.0)) < 1e-6 && std::abs(na.dot(d)) < 1e-6;
+  if (!coplanar) return std::nullopt;
+  // Separating axes of two squares in one plane: their side directions (x and y of each tag).
+  const auto corners = [](double s, const obs::SE3& g) {
+    std::vector<obs::Vec3> c;
+    for (const auto& [x, y] : {std::pair{-1, -1}, {1, -1}, {1, 1}, {-1, 1}})
+      c.push_back(g * obs::Vec3(x * s / 2, y * s / 2, 0.0));
+    return c;
+  };
+  const auto ca = corners(size_a, g_oa), cb = corners(size_b, g_ob);
+  for (const obs::Vec3 axis :
+       {g_oa.linear().col(0), g_oa.linear().col(1), g_ob.linear().col(0), g_ob.linear().col(1)}) {
+    double a0 = 1e300, a1 = -1e300, b0 = 1e300, b1 = -1e300;
+    for (const auto& c : ca) a0 = std::min(a0, axis.dot(c)), a1 = std::max(a1, axis.dot(c));
+    for (const auto& c : cb) b0 = std::min(b0, axis.dot(c)), b1 = std::max(b1, axis.dot(c));
+    if (std::min(a1, b1) - std::max(a0, b0) < 1e-9) return std::nullopt;  // separated or touching
+  }
+  return std::string("its square overlaps, in the same plane,");
+}
+
 int NetworkConfig::index_of(int camera_id) const {
   for (size_t i = 0; i < cameras.size(); ++i)
     if (cameras[i].id == camera_id) return static_cast<int>(i);
@@ -72,6 +99,33 @@ NetworkConfig load_network_config(const std::filesystem::path& file) {
     const auto size = t.get("size");
     net.target.size = size.number();
     if (!(net.target.size > 0)) size.fail("must be positive (metres)");
+    if (auto b = t.find("bundle")) {
+      std::set<int> tag_ids{net.target.id};
+      for (const auto& bv : b->sequence()) {
+        auto m = bv.map();
+        BundleTag tag;
+        const auto bid = m.get("id");
+        tag.id = bid.integer();
+        if (tag.id < 0) bid.fail("must not be negative");
+        if (!tag_ids.insert(tag.id).second)
+          bid.fail("tag id " + std::to_string(tag.id) + " listed twice in the target" +
+                   (tag.id == net.target.id ? " (it is the primary tag's id)" : ""));
+        const auto bsize = m.get("size");
+        tag.size = bsize.number();
+        if (!(tag.size > 0)) bsize.fail("must be positive (metres)");
+        tag.g_ot = obs::make_pose(m.get("p").vec<3>(), m.get("r").vec<3>());
+        m.finish();
+        net.target.bundle.push_back(tag);
+        const size_t k = net.target.tag_count() - 1;
+        for (size_t j = 0; j < k; ++j)
+          if (auto why =
+                  tags_overlap(net.target.tag_size(j), net.target.tag_pose(j), tag.size, tag.g_ot))
+            bv.fail("tag " + std::to_string(tag.id) + ": " + *why + " tag " +
+                    std::to_string(net.target.tag_id(j)) +
+                    (j == 0 ? " (the primary)" : " (bundle[" + std::to_string(j - 1) + "])") +
+                    "; tags of a body must not overlap");
+      }
+    }
     t.finish();
   }
   std::set<int> ids;
@@ -103,6 +157,22 @@ std::string network_yaml(const NetworkConfig& net) {
   y << YAML::Key << "family" << YAML::Value << net.target.family;
   y << YAML::Key << "id" << YAML::Value << net.target.id;
   y << YAML::Key << "size" << YAML::Value << net.target.size;
+  if (!net.target.bundle.empty()) {
+    y << YAML::Key << "bundle" << YAML::Value << YAML::BeginSeq;
+    for (const auto& b : net.target.bundle) {
+      const obs::Vec3 p = b.g_ot.translation();
+      const obs::Vec3 r = obs::log_so3(b.g_ot.linear());
+      y << YAML::Flow << YAML::BeginMap;
+      y << YAML::Key << "id" << YAML::Value << b.id;
+      y << YAML::Key << "size" << YAML::Value << b.size;
+      y << YAML::Key << "p" << YAML::Value << YAML::Flow
+        << std::vector<double>{p.x(), p.y(), p.z()};
+      y << YAML::Key << "r" << YAML::Value << YAML::Flow
+        << std::vector<double>{r.x(), r.y(), r.z()};
+      y << YAML::EndMap;
+    }
+    y << YAML::EndSeq;
+  }
   y << YAML::EndMap;
   y << YAML::Key << "cameras" << YAML::Value << YAML::BeginSeq;
   for (const auto& c : net.cameras) {

@@ -304,6 +304,13 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
         pt.tag = read_tag(em.get("tag"));
         pt.g_ot = read_pose(em.get("pose"));
         em.finish();
+        if (auto why = tags_overlap(s.target.tag.size, obs::SE3::Identity(), pt.tag.size, pt.g_ot))
+          e.fail(*why + " the primary tag; tags of a body must not overlap");
+        for (size_t j = 0; j < s.target.extra_tags.size(); ++j)
+          if (auto why = tags_overlap(s.target.extra_tags[j].tag.size, s.target.extra_tags[j].g_ot,
+                                      pt.tag.size, pt.g_ot))
+            e.fail(*why + " extra_tags[" + std::to_string(j) +
+                   "]; tags of a body must not overlap");
         s.target.extra_tags.push_back(pt);
       }
     if (const auto sh = t.find("shapes")) s.target.shapes = read_shapes(*sh, base_dir);
@@ -383,6 +390,13 @@ NetworkConfig scene_network_config(const render::SceneDescription& scene, int fr
   net.target.family = scene.target.tag.family;
   net.target.id = scene.target.tag.id;
   net.target.size = scene.target.tag.size;
+  // The body's other tags are its bundle (ground truth: g_wo composed with each g_ot). An extra
+  // tag repeating an id already on the body (tag_cube.yaml's decoys) or of another family
+  // cannot be told apart by the detector's one family: rendered, not written.
+  std::set<int> ids{net.target.id};
+  for (const auto& e : scene.target.extra_tags)
+    if (e.tag.family == net.target.family && ids.insert(e.tag.id).second)
+      net.target.bundle.push_back({e.tag.id, e.tag.size, e.g_ot});
   for (const auto& c : scene.cameras) net.cameras.push_back({c.id, c.g_wi_believed, {}});
   net.edges = scene.edges;
   net.source = "the scene";

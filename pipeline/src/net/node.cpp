@@ -185,13 +185,11 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   };
 
   frontend::DetectorSettings ds = o.run.detector;
-  ds.family = netcfg.target.family;
-  ds.target_id = netcfg.target.id;
+  frontend::set_target(ds, netcfg.target);
   const int workers = std::max(1, std::min<int>(o.run.workers, static_cast<int>(n)));
   ds.nthreads = std::max(1, ds.nthreads / workers);
   frontend::FrontEnd front_end(ds, o.run.tracking);
   frontend::TrackState track;
-  const auto model = obs::FeatureModel::square(netcfg.target.size);
 
   int frames = o.frames ? *o.frames : provider->frame_count();
   if (o.run.max_frames) frames = std::min(frames, *o.run.max_frames);
@@ -259,13 +257,16 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
     if (!cam.read_failed) {
       cam.obs = front_end.observe(image, provider->calibration(si), nullptr, &track);
       if (cam.obs.delta) {
+        const auto model = frontend::observation_model(netcfg.target, cam.obs);
         const auto pose = frontend::pnp_pose(cam.obs.f_normalized, model);
         if (pose) cam.g_io_pnp = pose->g_io;
+        if (!netcfg.target.bundle.empty()) cam.points_o = model.points_o;
       }
     }
     obs::Measurement z;
     z.delta = cam.obs.delta;
     z.f = cam.obs.f_normalized;
+    z.points_o = cam.points_o;
     z.g_io_pnp = cam.g_io_pnp;
     const auto target = provider->target_truth(k);
     const auto true_wi = provider->camera_truth(si, k);

@@ -41,6 +41,7 @@ std::vector<CameraInput> camera_inputs(const std::vector<CameraFrame>& cams,
   for (size_t i = 0; i < cams.size(); ++i) {
     in[i].delta = cams[i].obs.delta;
     in[i].f = cams[i].obs.f_normalized;  // (eq:visual_mea) with lambda = 1
+    in[i].points_o = cams[i].points_o;   // a bundle's seen corners (empty: the tag's square)
     in[i].g_io_pnp = cams[i].g_io_pnp;
     if (target && true_wi[i])
       in[i].g_io_true = true_wi[i]->inverse() * *target;  // g_io = g_wi^-1 g_wo
@@ -112,8 +113,7 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
   runner.set_transport(make_transport(options.transport, graph));
 
   frontend::DetectorSettings ds = options.detector;
-  ds.family = net.target.family;
-  ds.target_id = net.target.id;
+  frontend::set_target(ds, net.target);
   const int workers = std::max(1, std::min<int>(options.workers, static_cast<int>(n)));
   // Cameras run in parallel; each worker owns a detector whose libapriltag threads share the
   // remaining cores.
@@ -121,7 +121,6 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
   std::vector<frontend::FrontEnd> front_ends;
   for (int w = 0; w < workers; ++w) front_ends.emplace_back(ds, options.tracking);
   std::vector<frontend::TrackState> tracks(n);  // camera i is always handled by worker i % workers
-  const auto model = obs::FeatureModel::square(net.target.size);
 
   std::vector<std::optional<obs::SE3>> true_wi(n);
   std::vector<obs::Vec6> V_wi(n, obs::Vec6::Zero());
@@ -162,8 +161,10 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
         cams[i].obs = front_ends[static_cast<size_t>(w)].observe(images[i], provider.calibration(i),
                                                                  nullptr, &tracks[i]);
         if (cams[i].obs.delta) {
+          const auto model = frontend::observation_model(net.target, cams[i].obs);
           const auto pose = frontend::pnp_pose(cams[i].obs.f_normalized, model);
           if (pose) cams[i].g_io_pnp = pose->g_io;
+          if (!net.target.bundle.empty()) cams[i].points_o = model.points_o;
         }
       }
     };

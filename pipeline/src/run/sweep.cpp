@@ -16,6 +16,10 @@ namespace fs = std::filesystem;
 
 RecordedInputs record_inputs(sources::NetworkSource& provider, const ImageRunOptions& options) {
   sources::require_static_cameras(provider, "netvmo sweep");
+  if (!provider.network().target.bundle.empty())
+    throw InputError(provider.network().source +
+                     ": target.bundle: netvmo sweep does not take tag bundles (its inputs cache "
+                     "holds one tag's 8 features); use netvmo run");
   const auto result = run_images(provider, options);
   const size_t n = provider.network().cameras.size();
   std::vector<std::optional<SE3>> true_wi(n);
@@ -92,6 +96,10 @@ std::optional<RecordedInputs> read_inputs_cache(const fs::path& file,
   in.dt = 1.0 / provider.network().fps;
   in.frames.assign(frames, std::vector<CameraInput>(n));
   sources::require_static_cameras(provider, "netvmo sweep");
+  if (!provider.network().target.bundle.empty())
+    throw InputError(provider.network().source +
+                     ": target.bundle: netvmo sweep does not take tag bundles (its inputs cache "
+                     "holds one tag's 8 features); use netvmo run");
   std::vector<std::optional<SE3>> true_wi(n);
   for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth(i, 0);
   size_t rows = 0;

@@ -6,29 +6,51 @@
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
+#include "netvmo/observer/jacobian.hpp"
 #include "netvmo/pipeline/frontend/tag_detector.hpp"
 #include "netvmo/pipeline/io/calibration.hpp"
+#include "netvmo/pipeline/io/network_config.hpp"
 
 namespace netvmo::frontend {
 
-/// One camera's measurement of the target in one frame.
+/// One camera's measurement of the target in one frame. A target with a bundle (several tags
+/// on one body) is measured by every tag of it that is accepted, in slot order (0 the primary,
+/// k >= 1 network.yaml's target.bundle[k - 1]); the first accepted tag's fields are also those
+/// of the single-tag members (tag_id, hamming, margin, corners_px).
 struct TagObservation {
-  bool delta = false;  ///< delta_i(t): the target id was decoded and accepted
+  bool delta = false;  ///< delta_i(t): at least one tag of the target decoded and accepted
   TargetStatus status = TargetStatus::not_found;
   std::string reason;  ///< why the target was rejected (empty when detected)
-  int tag_id = -1;     ///< the target id when detected, else -1
+  int tag_id = -1;     ///< the first accepted tag's id when detected, else -1
   int hamming = 0;
-  double margin = 0.0;                      ///< decision margin of the accepted detection
-  std::array<cv::Point2d, 4> corners_px{};  ///< refined corners, OpenCV pixels
-  /// Undistorted normalized coordinates [x0,y0,x1,y1,x2,y2,x3,y3], corner k matching
-  /// obs::FeatureModel::square(size).points_o[k]. Zero when not detected.
-  Eigen::Matrix<double, 8, 1> f_normalized = Eigen::Matrix<double, 8, 1>::Zero();
+  double margin = 0.0;                      ///< decision margin of the first accepted tag
+  std::array<cv::Point2d, 4> corners_px{};  ///< its refined corners, OpenCV pixels
+  /// Slots of the accepted tags, increasing (a single tag: {0} when detected).
+  std::vector<int> slots;
+  /// Refined corners of every accepted tag, as `slots` (OpenCV pixels, libapriltag order).
+  std::vector<std::array<cv::Point2d, 4>> tag_corners_px;
+  /// Undistorted normalized coordinates [x0,y0,...,x3,y3] of every accepted tag in `slots`
+  /// order (8 per tag), corner k of a tag matching tag_points()'s order. Eight zeros when not
+  /// detected.
+  Eigen::VectorXd f_normalized = Eigen::VectorXd::Zero(8);
 };
 
 /// Corners (OpenCV pixels) to the observer's feature vector f (undistorted normalized).
 Eigen::Matrix<double, 8, 1> normalized_features(const std::array<cv::Point2d, 4>& corners_px,
                                                 const io::Calibration& calib);
+
+/// The detector settings' tag ids for a target: family, primary id and bundle ids.
+void set_target(DetectorSettings& s, const io::TargetConfig& target);
+
+/// The object points (object frame o) that go with an observation's f_normalized: for each
+/// accepted slot k, the 4 corners of that tag, g_ot(k) * (+-s_k/2, +-s_k/2, 0) in libapriltag's
+/// order. For a single tag this is obs::FeatureModel::square(size).
+obs::FeatureModel tag_points(const io::TargetConfig& target, const std::vector<int>& slots);
+/// The object points of a detected observation's f_normalized: the primary tag's square for a
+/// single-tag target, else tag_points(target, o.slots).
+obs::FeatureModel observation_model(const io::TargetConfig& target, const TagObservation& o);
 
 /// Length of the shortest side of a quad [px] (the "narrowest side" of a projected tag).
 double narrowest_side(const std::array<cv::Point2d, 4>& corners);
@@ -68,6 +90,9 @@ void validate(const TrackingSettings& t);
 /// One camera's tracking state (keep one per camera, pass it on every frame).
 struct TrackState {
   std::optional<std::array<cv::Point2d, 4>> last;  ///< corners of the last detection
+  /// With a bundle: the corners of every tag accepted in the last detection (the window covers
+  /// them all; `last` is the first of them).
+  std::vector<std::array<cv::Point2d, 4>> last_all;
   int frames_since_full = 0;
   int blind_frames = 0;  ///< consecutive frames without the target (acquisition period)
   /// How the last frame was searched, for tests and benchmarks: bit 0 window, bit 1 normalised

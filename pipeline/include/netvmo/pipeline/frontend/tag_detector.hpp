@@ -48,7 +48,10 @@ struct DetectorSettings {
   /// benchmark) and still finds tags whose black/white contrast is 40 gray levels or more (tested).
   int min_white_black_diff = 20;
   // Acceptance of the target tag
-  int target_id = 0;                  ///< the target's tag id
+  int target_id = 0;  ///< the target's (primary) tag id
+  /// The ids of the body's other tags (a tag bundle: network.yaml's target.bundle, in its
+  /// order), each decided by the same rules as target_id. Empty (default): a single tag.
+  std::vector<int> bundle_ids;
   double min_decision_margin = 20.0;  ///< reject target detections with a lower decision margin
   int max_hamming = 1;                ///< reject target detections with more corrected bits
   // Refinement of the accepted target's corners
@@ -105,12 +108,27 @@ inline constexpr TargetStatus kAllTargetStatuses[] = {
     TargetStatus::low_margin, TargetStatus::high_hamming, TargetStatus::border_mismatch,
     TargetStatus::no_image};
 
-/// All tags decoded in a frame and the decision about the target.
+/// The decision about one tag of the target's body (the rules of TargetStatus, per id).
+struct TagDecision {
+  int id = -1;
+  TargetStatus status = TargetStatus::not_found;
+  std::string reason;  ///< empty when detected
+  int index = -1;      ///< index into FrameDetections::all of the accepted detection, or -1
+};
+
+/// All tags decoded in a frame and the decision about the target. With a bundle
+/// (DetectorSettings::bundle_ids) the target is `detected` when at least one of its tags is;
+/// otherwise the status and reason are those of the tag that got furthest (duplicate_id, then
+/// border_mismatch, low_margin, high_hamming; the primary first on ties), the reason prefixed by
+/// `tag <id>: `, or `ids 0, 1 not decoded (...)` when none was decoded.
 struct FrameDetections {
   std::vector<TagDetection> all;  ///< every decoded tag (other ids are reported, not used)
   TargetStatus status = TargetStatus::not_found;
   std::string reason;     ///< why the target was rejected (empty when detected)
-  int target_index = -1;  ///< index into `all` of the accepted target, or -1
+  int target_index = -1;  ///< index into `all` of the accepted primary tag, or -1
+  /// One decision per tag of the body: the primary, then the bundle in order (empty when the
+  /// image was not searched).
+  std::vector<TagDecision> tags;
   /// The accepted target detection (refined corners), or nullptr.
   const TagDetection* target() const {
     return target_index >= 0 ? &all[static_cast<size_t>(target_index)] : nullptr;

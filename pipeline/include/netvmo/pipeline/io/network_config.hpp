@@ -3,6 +3,8 @@
 //   fps: 30                                   # frames per second (> 0)
 //   frames: 300                               # optional: the dataset's frame count
 //   target: {family: tag36h11, id: 0, size: 0.2}   # size = side of the black border square, m
+//     bundle:                                 # optional: the body's other tags (same family)
+//       - {id: 1, size: 0.15, p: [x, y, z], r: [rx, ry, rz]}   # pose g_ot in the object frame
 //   cameras:                                  # believed camera poses g_wi in the world
 //     - {id: 1, p_wi: [x, y, z], r_wi: [rx, ry, rz]}   # r_wi: rotation vector of R_wi
 //       fps: 15                               # optional: this camera's own frame rate (> 0;
@@ -11,7 +13,9 @@
 //
 // Read strictly: a misspelt or unknown key anywhere is an InputError naming network.yaml and
 // the key path; so are duplicate camera ids, non-positive ids, unknown ids or self-loops or
-// duplicates in edges, an unsupported tag family, and non-positive fps or size. `frames` is the
+// duplicates in edges, an unsupported tag family, and non-positive fps or size; in a bundle, an
+// id listed twice (the primary's included), a non-positive size, two overlapping tags
+// (tags_overlap). `frames` is the
 // only optional top-level key.
 #pragma once
 
@@ -27,11 +31,38 @@
 
 namespace netvmo::io {
 
-struct TargetSpec {
+/// Another tag of the target's body (a tag bundle), of the primary tag's family.
+struct BundleTag {
+  int id = 0;
+  double size = 0.0;                     ///< metres, side of the black border square
+  obs::SE3 g_ot = obs::SE3::Identity();  ///< pose of the tag in the object frame
+};
+
+/// One tagged rigid body: its primary tag (whose frame is the object frame o) and the other
+/// tags it carries. Tags of a body: slot 0 is the primary, slot k >= 1 is bundle[k - 1].
+struct TargetConfig {
   std::string family = "tag36h11";
   int id = 0;
-  double size = 0.0;  ///< metres, side of the black border square
+  double size = 0.0;              ///< metres, side of the primary tag's black border square
+  std::vector<BundleTag> bundle;  ///< empty: a single-tag target
+
+  /// Number of tags of the body (1 + bundle size).
+  size_t tag_count() const { return 1 + bundle.size(); }
+  /// Tag id, side [m] and pose g_ot of slot k (0: the primary, identity pose).
+  int tag_id(size_t k) const { return k == 0 ? id : bundle.at(k - 1).id; }
+  double tag_size(size_t k) const { return k == 0 ? size : bundle.at(k - 1).size; }
+  obs::SE3 tag_pose(size_t k) const {
+    return k == 0 ? obs::SE3::Identity() : bundle.at(k - 1).g_ot;
+  }
 };
+
+/// Why two tags of a body cannot both be printed where they are, or nullopt. They overlap when
+/// their centres are closer than 1e-6 m, or when they are coplanar and facing the same way
+/// (normals within 1e-6 rad, the second centre within 1e-6 m of the first tag's plane) and their
+/// squares' interiors intersect (separating-axis test on the 4 side directions, overlaps under
+/// 1e-9 m are touching edges, allowed).
+std::optional<std::string> tags_overlap(double size_a, const obs::SE3& g_oa, double size_b,
+                                        const obs::SE3& g_ob);
 
 struct CameraConfig {
   int id = 0;                            ///< positive, unique
@@ -42,7 +73,7 @@ struct CameraConfig {
 struct NetworkConfig {
   double fps = 0.0;
   std::optional<int> frames;  ///< optional frame count declared by the dataset
-  TargetSpec target;
+  TargetConfig target;
   std::vector<CameraConfig> cameras;
   std::vector<std::pair<int, int>> edges;  ///< camera ids
   std::string source;                      ///< file it was read from

@@ -38,7 +38,10 @@ struct ImageRunOptions {
 struct CameraFrame {
   frontend::TagObservation obs;      ///< detection (delta, corners, normalized features)
   std::optional<obs::SE3> g_io_pnp;  ///< ViSP pose when detected
-  bool read_failed = false;          ///< the image could not be read (only with keep_going)
+  /// The object points of obs.f_normalized when the target has a bundle (tag_points of the
+  /// accepted tags; empty for a single tag, whose points are the error model's fixed square).
+  std::vector<obs::Vec3> points_o;
+  bool read_failed = false;  ///< the image could not be read (only with keep_going)
 };
 
 /// Called after each frame with the frame's images, the front-end results and the record.
