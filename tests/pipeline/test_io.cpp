@@ -78,12 +78,13 @@ TEST(Calibration, OpenCvMatrixSizeCheckedBeforeReading) {
   expect_input_error([&] { load_calibration_opencv(dir / "b.yaml"); },
                      {"b.yaml", "camera_matrix", "at most 9 numbers", "rows 100000 x cols 100000"});
   // corpus calibration_opencv/empty_key_length_error: OpenCV's YAML parser throws
-  // std::length_error (not a cv::Exception) on this line.
+  // std::length_error (not a cv::Exception) on this line; it is now refused before OpenCV sees
+  // it, as not well-formed YAML.
   write(dir / "c.yaml", head + K +
                             "distortion_coefficients: !!opencv-matrix\n  rows: 1\n"
                             "  cols: 5\n   :t: d\n  * data: [0, 0, 0, 0, 0]\n");
   expect_input_error([&] { load_calibration_opencv(dir / "c.yaml"); },
-                     {"c.yaml", "cannot parse calibration"});
+                     {"c.yaml:13", "not well-formed YAML"});
   // corpus calibration_opencv/nul_byte_hang: OpenCV's parser did not return on this file.
   write(dir / "d.yaml", std::string("%YAML:1.0\n cols:age_width:i640\nim") + '\0' +
                             "%YAML:1.0\n---\nimage_width: 640\n");
@@ -116,6 +117,21 @@ TEST(Calibration, OpenCvMatrixSizeCheckedBeforeReading) {
   write(dir / "k.yaml", "%YAML:1.0 !!%opex\n   rows: 6\n   cols\xdb[\xdb: 3\n  1.0\n--\n-\nim");
   expect_input_error([&] { load_calibration_opencv(dir / "k.yaml"); },
                      {"k.yaml:4", "indentation of 2 spaces matches no enclosing line"});
+  // corpus calibration_opencv/flow_map_dedent_hang: a '{' opening a flow mapping that is never
+  // closed, then a dedent (OpenCV's parser did not return): not well-formed YAML (yaml-cpp).
+  write(dir / "l.yaml", "%YAML:1.0 !!opex\n   rows: 6\n   {ols: 3\n  1.0\n--\n-\nim");
+  expect_input_error([&] { load_calibration_opencv(dir / "l.yaml"); },
+                     {"l.yaml:", "not well-formed YAML"});
+  // One document: a second '---', a '---' after the first key, or a '...' is refused.
+  write(dir / "m.yaml", head + "---\n" + K);
+  expect_input_error([&] { load_calibration_opencv(dir / "m.yaml"); },
+                     {"m.yaml:5", "one YAML document expected"});
+  write(dir / "n.yaml", "%YAML:1.0\nimage_width: 640\n---\n");
+  expect_input_error([&] { load_calibration_opencv(dir / "n.yaml"); },
+                     {"n.yaml:3", "one YAML document expected"});
+  write(dir / "o.yaml", head + "...\n" + K);
+  expect_input_error([&] { load_calibration_opencv(dir / "o.yaml"); },
+                     {"o.yaml:5", "one YAML document expected"});
   // What OpenCV writes still loads: a `data:` list continued on a line indented deeper than any
   // key, then a key back at column 0 (flow lines are not checked).
   write(dir / "h.yaml", head +

@@ -3,6 +3,7 @@
 #include <visp3/core/vpCameraParameters.h>
 #include <visp3/core/vpException.h>
 #include <visp3/core/vpXmlParserCamera.h>
+#include <yaml-cpp/yaml.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -127,19 +128,44 @@ Calibration load_calibration_opencv(const fs::path& path) {
     // It also loops for ever on a YAML document marker with text after it ("--- a: 1" or
     // "-----a: 1", then a later line ending in "---"; found by fuzzing). OpenCV writes the marker
     // alone on its line, so only that form is accepted.
+    // OpenCV reads a file as YAML by its content whatever its name (a "cam_1.xml" starting with
+    // "%YAML" is parsed as YAML), so the checks go by the content: not XML ('<'), not JSON ('{').
+    const size_t lead = text.find_first_not_of(" \t\r\n");
+    const bool yaml = lead != std::string::npos && text[lead] != '<' && text[lead] != '{';
     size_t line_no = 1;
+    int markers = 0;
+    bool content = false;  // a line of the document seen
     for (size_t at = 0; at < text.size(); ++line_no) {
       const size_t end = std::min(text.find('\n', at), text.size());
-      if (text.compare(at, 3, "---") == 0 && text.find_first_not_of(" \t\r", at + 3) < end)
+      const bool alone = text.find_first_not_of(" \t\r", at + 3) >= end;
+      if (text.compare(at, 3, "---") == 0 && !alone)
         throw InputError(file + ":" + std::to_string(line_no) +
                          ": a YAML document marker '---' must stand alone on its line");
+      if (yaml && ((text.compare(at, 3, "---") == 0 && (++markers > 1 || content)) ||
+                   (text.compare(at, 3, "...") == 0 && alone)))
+        throw InputError(file + ":" + std::to_string(line_no) +
+                         ": one YAML document expected (a calibration file has at most one '---', "
+                         "before its first key, and no '...')");
+      const size_t first = text.find_first_not_of(" \t\r", at);
+      if (first < end && text[first] != '#' && text[at] != '%' && text.compare(at, 3, "---") != 0)
+        content = true;
       at = end + 1;
     }
-    // OpenCV reads a file as YAML by its content whatever its name (a "cam_1.xml" starting with
-    // "%YAML" is parsed as YAML), so the check goes by the content: not XML ('<'), not JSON ('{').
-    const size_t lead = text.find_first_not_of(" \t\r\n");
-    if (lead != std::string::npos && text[lead] != '<' && text[lead] != '{')
+    if (yaml) {
       check_yaml_indentation(text, file);
+      // Then the whole file must be well-formed YAML (yaml-cpp; the single document the checks
+      // above leave, so its single-document Load sees all of it): OpenCV's own parser does not
+      // return on some malformed files (three kinds found by fuzzing, and more may exist).
+      // OpenCV's "%YAML:1.0" first line is not a YAML 1.2 directive: blanked, keeping line numbers.
+      std::string doc = text;
+      if (!doc.empty() && doc[0] == '%') doc.replace(0, std::min(doc.find('\n'), doc.size()), "");
+      try {
+        (void)YAML::Load(doc);
+      } catch (const YAML::Exception& e) {
+        const std::string at = e.mark.is_null() ? "" : ":" + std::to_string(e.mark.line + 1);
+        throw InputError(file + at + ": not well-formed YAML: " + e.msg);
+      }
+    }
   }
   Calibration c;
   c.source = file;
