@@ -349,6 +349,12 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
       if (const auto dr = dm.find("dr")) cam.believed_drift.tail<3>() = dr->vec<3>();
       dm.finish();
     }
+    // Its own clock (the scene's by default): images at start + k / fps.
+    if (const auto f = cm.find("fps")) cam.fps = positive(*f);
+    if (const auto st = cm.find("start")) {
+      cam.start = st->number();
+      if (!(cam.start >= 0)) st->fail("must be >= 0 (seconds)");
+    }
     cm.finish();
     s.cameras.push_back(cam);
   }
@@ -383,7 +389,7 @@ NetworkConfig scene_network_config(const render::SceneDescription& scene, int fr
   net.target.family = scene.target.tag.family;
   net.target.id = scene.target.tag.id;
   net.target.size = scene.target.tag.size;
-  for (const auto& c : scene.cameras) net.cameras.push_back({c.id, c.g_wi_believed, {}});
+  for (const auto& c : scene.cameras) net.cameras.push_back({c.id, c.g_wi_believed, c.fps});
   net.edges = scene.edges;
   net.source = "the scene";
   return net;
