@@ -179,6 +179,14 @@ struct Pipeline {
                                 " blind at frame " + std::to_string(frame) + ")");
     }
   }
+  // After frame k's record: the hook, the front-end results kept for the outputs, progress.
+  void frame_done(int k, const std::vector<cv::Mat>& images, const std::vector<CameraFrame>& cams,
+                  const FrameRecord& record, const FrameHook& hook, ImageRunResult& result,
+                  Progress& progress) const {
+    if (hook) hook(k, images, cams, record);
+    if (options.runner.keep_history) result.frames.push_back(cams);
+    progress.update(k + 1);
+  }
   // Runs f(w) for every worker w, worker 0 on the calling thread.
   template <class F>
   void in_parallel(F&& f) const {
@@ -318,9 +326,7 @@ void run_union(Pipeline& p, const FrameHook& hook, ImageRunResult& result) {
     const auto& record = p.runner.record(k, tk, camera_inputs(held_cams, target, true_wi), target);
     result.source_frames[static_cast<size_t>(k)] = held_frame;
     result.seconds_observer += seconds_since(t_obs);
-    if (hook) hook(k, held_images, held_cams, record);
-    if (options.runner.keep_history) result.frames.push_back(held_cams);
-    progress.update(k + 1);
+    p.frame_done(k, held_images, held_cams, record, hook, result, progress);
   }
   progress.finish();
   result.seconds = seconds_since(t_start);
@@ -390,9 +396,7 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
     const auto in = camera_inputs(cams, target, true_wi);
     const auto& record = runner.process(k, k * dt, dt, in, target);
     result.seconds_observer += seconds_since(t_obs);
-    if (hook) hook(k, images, cams, record);
-    if (options.runner.keep_history) result.frames.push_back(cams);
-    progress.update(k + 1);
+    p.frame_done(k, images, cams, record, hook, result, progress);
   }
   progress.finish();
   result.seconds = seconds_since(t_start);
