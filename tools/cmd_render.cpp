@@ -1,5 +1,6 @@
 // netvmo render SCENARIO --out DATASET [--frames N] [--spp S] [--seed K]
 // Renders a scenario with the Embree renderer into a dataset folder (datasets/README.md).
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 
@@ -80,9 +81,9 @@ void add_render(CLI::App& app, int& exit_code) {
         const render::Pose g_fict = scene.cameras[i].g_wi_believed * t0.g_io;
         const render::Vec3 p = g_fict.translation(), r = obs::log_so3(g_fict.linear());
         std::printf("%6d  %10.1f%%  %10.1f%%   p [%.3f %.3f %.3f]  r [%.3f %.3f %.3f]\n", c.id,
-                    100.0 * c.frames_in_fov / summary.frames,
-                    100.0 * c.frames_visible / summary.frames, p.x(), p.y(), p.z(), r.x(), r.y(),
-                    r.z());
+                    100.0 * c.frames_in_fov / std::max(1, c.images),
+                    100.0 * c.frames_visible / std::max(1, c.images), p.x(), p.y(), p.z(), r.x(),
+                    r.y(), r.z());
       }
       return 0;
     });

@@ -108,6 +108,9 @@ json run_and_report(sources::NetworkSource& provider, const RunCliOptions& o, co
   if (overlays) overlays->finish();
   for (size_t k = provider.warnings().size(); k < result.warnings.size(); ++k)
     std::fprintf(stderr, "warning: %s\n", result.warnings[k].c_str());
+  // Where the image times came from (a camera without timestamps.csv rows or video timestamps:
+  // frame / fps), once the run has succeeded.
+  for (const auto& note : provider.notes()) std::fprintf(stderr, "note: %s\n", note.c_str());
   const json s = run::write_run_outputs(dir, provider, options, result);
   if (!o.no_plots) {
     std::vector<int> ids;

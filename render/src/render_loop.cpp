@@ -21,7 +21,8 @@ enum class Radiance { Trace, Reuse, Partial };
 
 // What every tile of one image shares.
 struct FrameJob {
-  FrameJob(const Renderer::Impl& I, const SceneDescription& scene, int ci, int frame, cv::Mat& out)
+  FrameJob(const Renderer::Impl& I, const SceneDescription& scene, int ci, int frame, double t,
+           cv::Mat& out)
       : impl(I),
         cc(I.cams[size_t(ci)]),
         im(scene.imaging),
@@ -40,7 +41,7 @@ struct FrameJob {
         cache(*I.radiance[size_t(ci)]),
         out(out) {
     const CameraSpec& cam = scene.cameras[size_t(ci)];
-    g_wc = cam.true_pose(frame / scene.fps);  // the camera's true pose at this frame
+    g_wc = cam.true_pose(t);  // the camera's true pose at this frame's time
     R = g_wc.linear().cast<float>();
     O = g_wc.translation().cast<float>();
     const Intrinsics& Kc = cam.intrinsics;
@@ -281,7 +282,7 @@ cv::Mat Renderer::render(int ci, int frame) {
   const Impl& I = *impl_;
   const Intrinsics& Kc = scene_.cameras[size_t(ci)].intrinsics;
   cv::Mat out(Kc.height, Kc.width, CV_8UC1);
-  FrameJob f(I, scene_, ci, frame, out);
+  FrameJob f(I, scene_, ci, frame, time_of(frame), out);
   int packets = 0;
   for (int tile = 0; tile < f.ntiles; ++tile) {
     f.first_packet.push_back(packets);

@@ -43,6 +43,12 @@ Pose Renderer::believed_camera_pose(int ci, int frame) const {
   return scene_.cameras.at(size_t(ci)).believed_pose(time_of(frame));
 }
 
+void Renderer::set_frame_times(std::vector<double> times) {
+  frame_times_ = std::move(times);
+  impl_->current_frame = -1;  // the current frame's time may have changed
+  set_frame(0);
+}
+
 void Renderer::set_frame(int frame) {
   std::unique_lock<std::shared_mutex> lock(impl_->mutex);
   Impl& I = *impl_;

@@ -1,6 +1,7 @@
 // Validation of a scene description before anything is built: one std::invalid_argument with
 // one line naming the problem.
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -54,8 +55,36 @@ void validate_imaging(const Imaging& im) {
 
 }  // namespace
 
+bool SceneDescription::one_clock() const {
+  for (const auto& c : cameras)
+    if ((c.fps && *c.fps != fps) || c.start != 0.0) return false;
+  return true;
+}
+
+std::vector<double> SceneDescription::image_times(size_t ci, int n) const {
+  const CameraSpec& c = cameras.at(ci);
+  std::vector<double> t;
+  if (!c.fps && c.start == 0.0) {  // the scene's clock, written as Renderer::time_of does
+    for (int k = 0; k < n; ++k) t.push_back(k / fps);
+    return t;
+  }
+  const double f = c.fps.value_or(fps), end = n / fps;
+  for (int k = 0;; ++k) {
+    const double tk = c.start + k / f;
+    if (!(tk < end - 1e-9)) break;
+    t.push_back(tk);
+  }
+  return t;
+}
+
 void SceneDescription::validate() const {
   validate_cameras(cameras);
+  for (const auto& c : cameras) {
+    if (c.fps && !(*c.fps > 0 && std::isfinite(*c.fps)))
+      fail("camera " + std::to_string(c.id) + ": fps must be positive");
+    if (!(c.start >= 0 && std::isfinite(c.start)))
+      fail("camera " + std::to_string(c.id) + ": start must be >= 0 s");
+  }
   validate_edges(cameras, edges);
   if (!(fps > 0)) fail("fps must be positive");
   if (frames < 1) fail("frames must be at least 1");

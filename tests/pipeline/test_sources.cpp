@@ -206,8 +206,10 @@ TEST(Sources, TimestampsAndPerCameraFps) {
   testing::write_synth_dataset(dir, testing::simple_dataset_spec(2, 4));
   {
     Dataset ds = open_dataset(dir);
-    ASSERT_EQ(ds.notes.size(), 1u);
-    EXPECT_NE(ds.notes[0].find("no " + (dir / "timestamps.csv").string()), std::string::npos);
+    ASSERT_EQ(ds.notes.size(), 2u);  // one per camera
+    EXPECT_NE(ds.notes[0].find("no " + (dir / "timestamps.csv").string() + ": camera 1"),
+              std::string::npos);
+    EXPECT_NE(ds.notes[1].find("camera 2: its times are frame index / its fps"), std::string::npos);
     EXPECT_DOUBLE_EQ(ds.frame_time(1, 3), 3.0 / ds.network.fps);
   }
   auto net = load_network_config(dir / "network.yaml");

@@ -1,5 +1,6 @@
 #include "netvmo/pipeline/io/dataset_writer.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -15,9 +16,53 @@
 namespace netvmo::io {
 namespace fs = std::filesystem;
 
+namespace {
+
+// Every camera's image times (render::SceneDescription::image_times) and the render frames that
+// cover them: the sorted union of all cameras' times (times within 1e-9 s are one frame), and
+// per camera the render frame of each of its images. On the scene's clock the union is
+// k / fps and every camera has an image at every frame.
+struct RenderClock {
+  std::vector<double> frames;               ///< render frame -> time [s]
+  std::vector<std::vector<double>> times;   ///< [camera][its frame] -> time [s]
+  std::vector<std::vector<int>> own_frame;  ///< [camera][render frame] -> its frame, or -1
+};
+
+RenderClock render_clock(const render::SceneDescription& scene, int frames) {
+  RenderClock c;
+  for (size_t ci = 0; ci < scene.cameras.size(); ++ci) {
+    c.times.push_back(scene.image_times(ci, frames));
+    c.frames.insert(c.frames.end(), c.times.back().begin(), c.times.back().end());
+  }
+  std::sort(c.frames.begin(), c.frames.end());
+  c.frames.erase(std::unique(c.frames.begin(), c.frames.end(),
+                             [](double a, double b) { return b - a <= 1e-9; }),
+                 c.frames.end());
+  for (const auto& t : c.times) {
+    c.own_frame.emplace_back(c.frames.size(), -1);
+    size_t u = 0;
+    for (size_t k = 0; k < t.size(); ++k) {
+      while (c.frames[u] < t[k] - 1e-9) ++u;
+      c.own_frame.back()[u] = static_cast<int>(k);
+    }
+  }
+  return c;
+}
+
+}  // namespace
+
 DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const DatasetOptions& opt) {
   const render::SceneDescription& scene = r.scene();
   const int frames = opt.frames > 0 ? opt.frames : scene.frames;
+  // Cameras on their own clocks (scenario `fps`, `start`): render frame u is at the u-th time
+  // of the union of every camera's image times, and each camera renders only its own.
+  const RenderClock clock = render_clock(scene, frames);
+  if (!scene.one_clock()) r.set_frame_times(clock.frames);
+  const auto render_frame = [&](int ci, int k) {
+    return static_cast<int>(
+        std::find(clock.own_frame[size_t(ci)].begin(), clock.own_frame[size_t(ci)].end(), k) -
+        clock.own_frame[size_t(ci)].begin());
+  };
   io::ensure_directory(out);
   io::ensure_directory(out / "calib");
   for (const auto& c : scene.cameras) {
@@ -27,64 +72,83 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
   }
   io::write_file_atomic(out / "network.yaml", network_yaml(scene_network_config(scene, frames)));
   {
-    // Per camera image: the believed pose (cameras.csv, what the camera thinks it is) and the
-    // true (rendering) pose, for evaluation: g_io,true = g_wi,true^-1 g_wo.
-    io::AtomicFile believed(out / "cameras.csv"), truth(out / "truth_cameras.csv");
+    // Per camera image: its time (timestamps.csv), the believed pose (cameras.csv, what the
+    // camera thinks it is) and the true (rendering) pose, for evaluation:
+    // g_io,true = g_wi,true^-1 g_wo.
+    io::AtomicFile stamps(out / "timestamps.csv"), believed(out / "cameras.csv"),
+        truth(out / "truth_cameras.csv");
+    stamps << kTimestampsHeader << "\n";
     believed << kCameraPosesHeader << "\n";
     truth << kCameraPosesHeader << "\n";
-    for (int ci = 0; ci < r.camera_count(); ++ci)
-      for (int f = 0; f < frames; ++f) {
+    for (int ci = 0; ci < r.camera_count(); ++ci) {
+      const auto& times = clock.times[size_t(ci)];
+      for (int f = 0; f < static_cast<int>(times.size()); ++f) {
         const int id = scene.cameras[size_t(ci)].id;
-        believed << format_camera_pose_row(id, f, r.time_of(f), r.believed_camera_pose(ci, f))
+        const int u = render_frame(ci, f);
+        stamps << format_timestamp_row(id, f, times[size_t(f)]) << "\n";
+        believed << format_camera_pose_row(id, f, r.time_of(u), r.believed_camera_pose(ci, u))
                  << "\n";
-        truth << format_camera_pose_row(id, f, r.time_of(f), r.camera_pose(ci, f)) << "\n";
+        truth << format_camera_pose_row(id, f, r.time_of(u), r.camera_pose(ci, u)) << "\n";
       }
+    }
+    stamps.commit();
     believed.commit();
     truth.commit();
   }
 
   DatasetSummary summary;
   summary.frames = frames;
-  for (const auto& c : scene.cameras) summary.cameras.push_back({c.id, 0, 0});
+  for (size_t ci = 0; ci < scene.cameras.size(); ++ci)
+    summary.cameras.push_back(
+        {scene.cameras[ci].id, 0, 0, static_cast<int>(clock.times[ci].size())});
 
+  // truth.csv: a row per camera image (its own frame and time); target.csv: a row per render
+  // frame, i.e. at every image time of any camera (frame = the index of that time).
   io::AtomicFile truth(out / "truth.csv");
   io::AtomicFile target(out / "target.csv");
   truth << kTruthHeader << "\n";
   target << kTargetHeader << "\n";
-  Progress progress("render", frames, opt.progress);
+  const int render_frames = static_cast<int>(clock.frames.size());
+  Progress progress("render", render_frames, opt.progress);
   std::vector<uchar> png;
-  for (int f = 0; f < frames; ++f) {
-    r.set_frame(f);
-    target << format_target_row(f, r.time_of(f), r.target_pose(f)) << "\n";
+  for (int u = 0; u < render_frames; ++u) {
+    r.set_frame(u);
+    target << format_target_row(u, r.time_of(u), r.target_pose(u)) << "\n";
     for (int ci = 0; ci < r.camera_count(); ++ci) {
+      const int f = clock.own_frame[size_t(ci)][size_t(u)];
+      if (f < 0) continue;  // this camera takes no image at this time
       const int id = scene.cameras[size_t(ci)].id;
-      const cv::Mat img = r.render(ci, f);
+      const cv::Mat img = r.render(ci, u);
       if (!cv::imencode(".png", img, png))
         throw InputError("cannot encode PNG for camera " + std::to_string(id));
       char name[32];
       std::snprintf(name, sizeof name, "%06d.png", f);
       io::write_file_atomic(out / ("cam_" + std::to_string(id)) / name,
                             std::string(reinterpret_cast<const char*>(png.data()), png.size()));
-      const render::FrameTruth t = r.truth(ci, f);
+      render::FrameTruth t = r.truth(ci, u);
+      t.frame = f;
       truth << format_truth_row(t) << "\n";
       summary.cameras[size_t(ci)].frames_in_fov += t.in_fov ? 1 : 0;
       summary.cameras[size_t(ci)].frames_visible += t.visible_fraction > 0 ? 1 : 0;
     }
-    progress.update(f + 1);
+    progress.update(u + 1);
   }
   truth.commit();
   target.commit();
   progress.finish();
   // A dataset rewritten with fewer frames must not keep the old run's extra images.
-  for (const auto& c : scene.cameras)
-    for (const auto& e : fs::directory_iterator(out / ("cam_" + std::to_string(c.id)))) {
+  for (size_t ci = 0; ci < scene.cameras.size(); ++ci) {
+    const int own = static_cast<int>(clock.times[ci].size());
+    for (const auto& e :
+         fs::directory_iterator(out / ("cam_" + std::to_string(scene.cameras[ci].id)))) {
       const std::string name = e.path().filename().string();
       if (name.size() == 10 && name.compare(6, 4, ".png") == 0 &&
-          name.find_first_not_of("0123456789") == 6 && std::stoi(name.substr(0, 6)) >= frames) {
+          name.find_first_not_of("0123456789") == 6 && std::stoi(name.substr(0, 6)) >= own) {
         std::error_code ec;
         fs::remove(e.path(), ec);
       }
     }
+  }
   return summary;
 }
 

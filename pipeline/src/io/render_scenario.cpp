@@ -356,6 +356,12 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
       if (const auto dr = dm.find("dr")) cam.believed_drift.tail<3>() = dr->vec<3>();
       dm.finish();
     }
+    // Its own clock (the scene's by default): images at start + k / fps.
+    if (const auto f = cm.find("fps")) cam.fps = positive(*f);
+    if (const auto st = cm.find("start")) {
+      cam.start = st->number();
+      if (!(cam.start >= 0)) st->fail("must be >= 0 (seconds)");
+    }
     cm.finish();
     s.cameras.push_back(cam);
   }
@@ -397,7 +403,7 @@ NetworkConfig scene_network_config(const render::SceneDescription& scene, int fr
   for (const auto& e : scene.target.extra_tags)
     if (e.tag.family == net.target.family && ids.insert(e.tag.id).second)
       net.target.bundle.push_back({e.tag.id, e.tag.size, e.g_ot});
-  for (const auto& c : scene.cameras) net.cameras.push_back({c.id, c.g_wi_believed, {}});
+  for (const auto& c : scene.cameras) net.cameras.push_back({c.id, c.g_wi_believed, c.fps});
   net.edges = scene.edges;
   net.source = "the scene";
   return net;

@@ -276,6 +276,10 @@ std::string format_detection_row(const DetectionRow& r) {
   return s;
 }
 
+std::string format_timestamp_row(int camera, int frame, double t) {
+  return std::to_string(camera) + "," + std::to_string(frame) + "," + fmt("%.17g", t);
+}
+
 std::string format_camera_pose_row(int camera, int frame, double t, const obs::SE3& g_wi) {
   const obs::Vec3 p = g_wi.translation(), r = obs::log_so3(g_wi.linear());
   std::string s = std::to_string(camera) + "," + std::to_string(frame) + "," + fmt("%.6f", t);

@@ -154,18 +154,17 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
   // its latest row at or before it; estimates.csv keeps every camera's own rows and times. The
   // merged files count time from t0 (the nodes' files keep the dataset's times).
   std::vector<std::vector<const Row*>> held(n);
-  double t0 = 0.0;
+  const run::TimeGrid grid = run::time_grid(provider, frames);
+  const double t0 = own_clocks ? grid.t0 : 0.0;
   if (own_clocks) {
-    t0 = provider.frame_time(0, 0);
-    for (size_t i = 1; i < n; ++i) t0 = std::min(t0, provider.frame_time(i, 0));
     result.source_frames.assign(static_cast<size_t>(frames), std::vector<int>(n, -1));
     for (size_t i = 0; i < n; ++i) {
-      size_t next = 0;
+      std::vector<double> times;
+      for (const auto& r : rows[i]) times.push_back(r.t);
       for (int k = 0; k < frames; ++k) {
-        const double t = t0 + k * dt;
-        while (next < rows[i].size() && rows[i][next].t <= t + 1e-9) ++next;
-        held[i].push_back(next > 0 ? &rows[i][next - 1] : nullptr);
-        if (next > 0) result.source_frames[static_cast<size_t>(k)][i] = rows[i][next - 1].frame;
+        const int at = run::latest_at_or_before(times, grid.time(k));
+        held[i].push_back(at >= 0 ? &rows[i][static_cast<size_t>(at)] : nullptr);
+        if (at >= 0) result.source_frames[static_cast<size_t>(k)][i] = rows[i][size_t(at)].frame;
       }
       for (const auto& r : rows[i])
         result.own_estimates.push_back(
@@ -184,7 +183,8 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
     run::FrameRecord r;
     r.frame = k;
     r.t = k * dt;  // since t0
-    r.g_wo_true = provider.target_truth(k);
+    // Own clocks: the truth at the grid time (target.csv holds every image time of any camera).
+    r.g_wo_true = own_clocks ? provider.target_truth_at(grid.time(k)) : provider.target_truth(k);
     r.cameras.resize(n);
     std::vector<run::CameraFrame> cams(n);
     for (size_t i = 0; i < n; ++i) {
@@ -193,7 +193,8 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
       cams[i] = row.cam;
       auto& c = r.cameras[i];
       const SE3& g_wi = net.cameras[i].g_wi;  // static cameras (moving ones: netvmo run)
-      const auto true_wi = provider.camera_truth(i, k);
+      const auto true_wi =
+          own_clocks ? provider.camera_truth_at(i, grid.time(k)) : provider.camera_truth(i, k);
       c.delta = row.cam.obs.delta;
       c.initialized = row.initialized;
       c.est_w = row.est_w;

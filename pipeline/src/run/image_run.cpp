@@ -1,9 +1,11 @@
 #include "netvmo/pipeline/run/image_run.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <limits>
 #include <thread>
 
 #include "netvmo/pipeline/error.hpp"
@@ -92,36 +94,264 @@ int checked_rounds(double dt, double k_e, double k_s, int max_degree, int rounds
   return rounds > 0 ? rounds : static_cast<int>(stable);
 }
 
+TimeGrid time_grid(const sources::NetworkSource& provider, int frames) {
+  const io::NetworkConfig& net = provider.network();
+  TimeGrid g;
+  g.dt = 1.0 / net.fps;
+  double last = -std::numeric_limits<double>::infinity();
+  g.t0 = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < net.cameras.size(); ++i) {
+    const auto images = sources::camera_images(provider, i);
+    if (images.empty()) continue;
+    g.t0 = std::min(g.t0, images.front().second);
+    last = std::max(last, images.back().second);
+  }
+  if (!std::isfinite(g.t0)) g.t0 = last = 0.0;
+  g.frames = frames > 0 ? frames : static_cast<int>(std::floor((last - g.t0) / g.dt + 1e-9)) + 1;
+  return g;
+}
+
+int latest_at_or_before(const std::vector<double>& times, double t) {
+  return static_cast<int>(std::upper_bound(times.begin(), times.end(), t + 1e-9) - times.begin()) -
+         1;
+}
+
+namespace {
+
+// What the synchronised run and the run on the union of timestamps share: the runner, one front
+// end per worker thread and each camera's tracking state.
+struct Pipeline {
+  Pipeline(sources::NetworkSource& provider, const ImageRunOptions& options,
+           const obs::Graph& graph)
+      : provider(provider),
+        options(options),
+        n(provider.network().cameras.size()),
+        runner(graph, believed_at_start(provider), runner_settings(provider, options)),
+        workers(std::max(1, std::min<int>(options.workers, static_cast<int>(n)))),
+        tracks(n) {
+    runner.set_transport(make_transport(options.transport, graph));
+    frontend::DetectorSettings ds = options.detector;
+    frontend::set_target(ds, provider.network().target);
+    // Cameras run in parallel; each worker owns a detector whose libapriltag threads share the
+    // remaining cores.
+    ds.nthreads = std::max(1, ds.nthreads / workers);
+    for (int w = 0; w < workers; ++w) front_ends.emplace_back(ds, options.tracking);
+  }
+  static std::vector<obs::SE3> believed_at_start(const sources::NetworkSource& p) {
+    std::vector<obs::SE3> g;
+    for (size_t i = 0; i < p.network().cameras.size(); ++i) g.push_back(p.camera_believed(i, 0));
+    return g;
+  }
+  static RunnerSettings runner_settings(const sources::NetworkSource& p, const ImageRunOptions& o) {
+    RunnerSettings rs = o.runner;
+    rs.tag_size = p.network().target.size;
+    return rs;
+  }
+  // Camera i's image `frame` through worker w's front end (and PnP when detected). An unreadable
+  // image is returned as the error (with keep_going the camera is marked blind there).
+  std::exception_ptr observe(int w, size_t i, int frame, cv::Mat& image, CameraFrame& cam) {
+    cam = CameraFrame{};
+    try {
+      image = provider.read(i, frame);
+    } catch (const InputError&) {
+      image.release();
+      cam.read_failed = options.keep_going;
+      return std::current_exception();
+    }
+    cam.obs = front_ends[static_cast<size_t>(w)].observe(image, provider.calibration(i), nullptr,
+                                                         &tracks[i]);
+    if (cam.obs.delta) {
+      // PnP on the corners of every accepted tag (a bundle's object points).
+      const auto& target = provider.network().target;
+      const auto m = frontend::observation_model(target, cam.obs);
+      const auto pose = frontend::pnp_pose(cam.obs.f_normalized, m);
+      if (pose) cam.g_io_pnp = pose->g_io;
+      if (!target.bundle.empty()) cam.points_o = m.points_o;
+    }
+    return nullptr;
+  }
+  // Rethrows an unreadable image's error, or with keep_going turns it into a warning.
+  void report(const std::exception_ptr& error, size_t i, int frame, ImageRunResult& result) const {
+    if (!error) return;
+    if (!options.keep_going) std::rethrow_exception(error);
+    try {
+      std::rethrow_exception(error);
+    } catch (const InputError& e) {
+      result.warnings.push_back(std::string(e.what()) + " (camera " +
+                                std::to_string(provider.network().cameras[i].id) +
+                                " blind at frame " + std::to_string(frame) + ")");
+    }
+  }
+  // After frame k's record: the hook, the front-end results kept for the outputs, progress.
+  void frame_done(int k, const std::vector<cv::Mat>& images, const std::vector<CameraFrame>& cams,
+                  const FrameRecord& record, const FrameHook& hook, ImageRunResult& result,
+                  Progress& progress) const {
+    if (hook) hook(k, images, cams, record);
+    if (options.runner.keep_history) result.frames.push_back(cams);
+    progress.update(k + 1);
+  }
+  // Runs f(w) for every worker w, worker 0 on the calling thread.
+  template <class F>
+  void in_parallel(F&& f) const {
+    std::vector<std::thread> pool;
+    for (int w = 1; w < workers; ++w) pool.emplace_back(f, w);
+    f(0);
+    for (auto& t : pool) t.join();
+  }
+
+  sources::NetworkSource& provider;
+  const ImageRunOptions& options;
+  size_t n;
+  NetworkRunner runner;
+  int workers;
+  std::vector<frontend::FrontEnd> front_ends;
+  std::vector<frontend::TrackState> tracks;  // camera i is always handled by worker i % workers
+};
+
+// One camera image of a run on the union of timestamps.
+struct Event {
+  double t = 0.0;
+  size_t camera = 0;
+  int frame = 0;
+};
+
+// Cameras on their own clocks: the observer advances on the union of their image times (see
+// run_images in the header).
+void run_union(Pipeline& p, const FrameHook& hook, ImageRunResult& result) {
+  sources::NetworkSource& provider = p.provider;
+  const ImageRunOptions& options = p.options;
+  const size_t n = p.n;
+  TimeGrid grid = time_grid(provider);
+  if (options.max_frames) grid.frames = std::min(grid.frames, *options.max_frames);
+  const double t_end = grid.time(grid.frames - 1);
+  std::vector<Event> events;
+  for (size_t i = 0; i < n; ++i)
+    for (const auto& [k, t] : sources::camera_images(provider, i))
+      if (t <= t_end + 1e-9) events.push_back({t, i, k});
+  std::stable_sort(events.begin(), events.end(), [](const Event& a, const Event& b) {
+    return a.t < b.t || (a.t == b.t && a.camera < b.camera);
+  });
+  result.union_of_timestamps = true;
+  result.source_frames.assign(static_cast<size_t>(grid.frames), std::vector<int>(n, -1));
+
+  const bool moving = provider.cameras_move();
+  const auto motion_at = [&](double t, double t_next) {
+    std::vector<obs::SE3> g(n);
+    std::vector<obs::Vec6> V(n, obs::Vec6::Zero());
+    for (size_t i = 0; i < n; ++i) {
+      g[i] = provider.camera_believed_at(i, t);
+      if (!options.ignore_camera_velocity && t_next > t)
+        V[i] = camera_velocity(g[i], provider.camera_believed_at(i, t_next), t_next - t);
+    }
+    p.runner.set_camera_motion(g, V);
+  };
+  // The network starts once every camera has taken its first image (the latest first image of
+  // a camera that has any): earlier images only set their cameras' held measurements, so every
+  // camera that sees the target starts from its own PnP pose, as in a synchronised run, instead
+  // of from a neighbour that happened to start first.
+  double net_start = -std::numeric_limits<double>::infinity();
+  std::vector<bool> has_image(n, false);
+  for (const auto& e : events)
+    if (!has_image[e.camera]) {
+      has_image[e.camera] = true;
+      net_start = std::max(net_start, e.t);
+    }
+  // Between two times: pieces of at most one grid step, each with the sub-step rule.
+  const auto advance = [&](double from, double to, const std::vector<CameraInput>& held) {
+    const double span = to - std::max(from, net_start);
+    if (!(span > 0)) return;
+    const int pieces = std::max(1, static_cast<int>(std::ceil(span / grid.dt - 1e-9)));
+    for (int q = 0; q < pieces; ++q) p.runner.advance(span / pieces, held);
+  };
+
+  std::vector<CameraInput> held(n);       // each camera's latest measurement
+  std::vector<CameraFrame> held_cams(n);  // and its front end's result
+  std::vector<cv::Mat> held_images(n);
+  std::vector<int> held_frame(n, -1);
+  // The front end runs ahead in batches of events [fe_base, fe_done): each worker takes its
+  // cameras' images in time order.
+  const size_t batch = std::max<size_t>(2 * n, 8);
+  std::vector<cv::Mat> images;
+  std::vector<CameraFrame> cams;
+  std::vector<std::exception_ptr> errors;
+  size_t next_event = 0, fe_base = 0, fe_done = 0;
+  double now = events.empty() ? grid.t0 : std::min(grid.t0, events.front().t);
+  const auto t_start = Clock::now();
+  Progress progress("run", grid.frames, options.progress);
+  for (int k = 0; k < grid.frames; ++k) {
+    const double tk = grid.time(k);
+    // Every event up to this grid time, in order.
+    for (; next_event < events.size() && events[next_event].t <= tk + 1e-9; ++next_event) {
+      if (next_event == fe_done) {
+        fe_base = fe_done;
+        fe_done = std::min(events.size(), fe_base + batch);
+        images.assign(fe_done - fe_base, cv::Mat());
+        cams.assign(fe_done - fe_base, CameraFrame{});
+        errors.assign(fe_done - fe_base, nullptr);
+        const auto t_fe = Clock::now();
+        p.in_parallel([&](int w) {
+          for (size_t e = fe_base; e < fe_done; ++e)
+            if (static_cast<int>(events[e].camera % static_cast<size_t>(p.workers)) == w)
+              errors[e - fe_base] = p.observe(w, events[e].camera, events[e].frame,
+                                              images[e - fe_base], cams[e - fe_base]);
+        });
+        result.seconds_front_end += seconds_since(t_fe);
+      }
+      const Event& ev = events[next_event];
+      const size_t b = next_event - fe_base, i = ev.camera;
+      p.report(errors[b], i, ev.frame, result);
+      const auto t_obs = Clock::now();
+      advance(now, ev.t, held);
+      now = std::max(now, ev.t);
+      if (moving) motion_at(now, tk);
+      // Only this camera's delta_i and measurement change (held until its next image); the
+      // truth at its image time is for the exact error model.
+      std::vector<std::optional<obs::SE3>> true_wi(n);
+      true_wi[i] = provider.camera_truth_at(i, ev.t);
+      held_cams[i] = cams[b];
+      held[i] = camera_inputs(held_cams, provider.target_truth_at(ev.t), true_wi)[i];
+      held_images[i] = images[b];
+      held_frame[i] = ev.frame;
+      // estimates.csv: the camera's estimate at its image's time.
+      const auto est = p.runner.estimate_world(i);
+      result.own_estimates.push_back(
+          {ev.frame, ev.t, i, held[i].delta, est.has_value(), est.value_or(obs::SE3::Identity())});
+      result.seconds_observer += seconds_since(t_obs);
+    }
+    const auto t_obs = Clock::now();
+    advance(now, tk, held);
+    now = std::max(now, tk);
+    if (moving) motion_at(now, k + 1 < grid.frames ? grid.time(k + 1) : now);
+    std::vector<std::optional<obs::SE3>> true_wi(n);
+    for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth_at(i, tk);
+    const auto target = provider.target_truth_at(tk);
+    const auto& record = p.runner.record(k, tk, camera_inputs(held_cams, target, true_wi), target);
+    result.source_frames[static_cast<size_t>(k)] = held_frame;
+    result.seconds_observer += seconds_since(t_obs);
+    p.frame_done(k, held_images, held_cams, record, hook, result, progress);
+  }
+  progress.finish();
+  result.seconds = seconds_since(t_start);
+}
+
+}  // namespace
+
 ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOptions& options,
                           const FrameHook& hook) {
   const io::NetworkConfig& net = provider.network();
   const size_t n = net.cameras.size();
   const obs::Graph graph = network_graph(net);
-  if (auto m = sources::clock_mismatch(provider))
-    throw InputError(*m +
-                     ": the in-process run needs one clock for every camera (cameras on "
-                     "their own clocks run with `netvmo launch --mode async`)");
+  // The synchronised run steps every camera together by 1 / fps; cameras on their own clocks,
+  // or a common clock at another rate, run on the union of their image times.
+  const bool own_clocks =
+      sources::clock_mismatch(provider).has_value() || sources::irregular_clock(provider);
   checked_rounds(1.0 / net.fps, options.runner.k_e, options.runner.k_s, graph.max_degree(),
                  options.runner.rounds);
 
-  run::RunnerSettings rs = options.runner;
-  rs.tag_size = net.target.size;
+  Pipeline p(provider, options, graph);
+  run::NetworkRunner& runner = p.runner;
   const bool moving = provider.cameras_move();
-  std::vector<obs::SE3> g_wi;
-  for (size_t i = 0; i < n; ++i) g_wi.push_back(provider.camera_believed(i, 0));
-  run::NetworkRunner runner(graph, g_wi, rs);
-  runner.set_transport(make_transport(options.transport, graph));
-
-  frontend::DetectorSettings ds = options.detector;
-  frontend::set_target(ds, net.target);
-  const int workers = std::max(1, std::min<int>(options.workers, static_cast<int>(n)));
-  // Cameras run in parallel; each worker owns a detector whose libapriltag threads share the
-  // remaining cores.
-  ds.nthreads = std::max(1, ds.nthreads / workers);
-  std::vector<frontend::FrontEnd> front_ends;
-  for (int w = 0; w < workers; ++w) front_ends.emplace_back(ds, options.tracking);
-  std::vector<frontend::TrackState> tracks(n);  // camera i is always handled by worker i % workers
-
+  std::vector<obs::SE3> g_wi = Pipeline::believed_at_start(provider);
   std::vector<std::optional<obs::SE3>> true_wi(n);
   std::vector<obs::Vec6> V_wi(n, obs::Vec6::Zero());
 
@@ -132,6 +362,11 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
   result.step_factor = runner.step_factor(dt);
   if (auto w = step_factor_warning(result.substeps, result.step_factor))
     result.warnings.push_back(*w);
+  if (own_clocks) {
+    run_union(p, hook, result);
+    result.history = runner.history();
+    return result;
+  }
   int frames = provider.frame_count();
   if (options.max_frames) frames = std::min(frames, *options.max_frames);
 
@@ -142,47 +377,11 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
   std::vector<std::exception_ptr> errors(n);
   for (int k = 0; k < frames; ++k) {
     const auto t_fe = Clock::now();
-    auto work = [&](int w) {
-      for (size_t i = static_cast<size_t>(w); i < n; i += static_cast<size_t>(workers)) {
-        cams[i] = CameraFrame{};
-        errors[i] = nullptr;
-        try {
-          images[i] = provider.read(i, k);
-        } catch (const InputError&) {
-          images[i].release();
-          if (!options.keep_going) {
-            errors[i] = std::current_exception();
-            continue;
-          }
-          cams[i].read_failed = true;
-          errors[i] = std::current_exception();
-          continue;
-        }
-        cams[i].obs = front_ends[static_cast<size_t>(w)].observe(images[i], provider.calibration(i),
-                                                                 nullptr, &tracks[i]);
-        if (cams[i].obs.delta) {
-          const auto model = frontend::observation_model(net.target, cams[i].obs);
-          const auto pose = frontend::pnp_pose(cams[i].obs.f_normalized, model);
-          if (pose) cams[i].g_io_pnp = pose->g_io;
-          if (!net.target.bundle.empty()) cams[i].points_o = model.points_o;
-        }
-      }
-    };
-    std::vector<std::thread> pool;
-    for (int w = 1; w < workers; ++w) pool.emplace_back(work, w);
-    work(0);
-    for (auto& t : pool) t.join();
-    for (size_t i = 0; i < n; ++i) {
-      if (!errors[i]) continue;
-      if (!options.keep_going) std::rethrow_exception(errors[i]);
-      try {
-        std::rethrow_exception(errors[i]);
-      } catch (const InputError& e) {
-        result.warnings.push_back(std::string(e.what()) + " (camera " +
-                                  std::to_string(net.cameras[i].id) + " blind at frame " +
-                                  std::to_string(k) + ")");
-      }
-    }
+    p.in_parallel([&](int w) {
+      for (size_t i = static_cast<size_t>(w); i < n; i += static_cast<size_t>(p.workers))
+        errors[i] = p.observe(w, i, k, images[i], cams[i]);
+    });
+    for (size_t i = 0; i < n; ++i) p.report(errors[i], i, k, result);
     result.seconds_front_end += seconds_since(t_fe);
 
     const auto t_obs = Clock::now();
@@ -199,9 +398,7 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
     const auto in = camera_inputs(cams, target, true_wi);
     const auto& record = runner.process(k, k * dt, dt, in, target);
     result.seconds_observer += seconds_since(t_obs);
-    if (hook) hook(k, images, cams, record);
-    if (options.runner.keep_history) result.frames.push_back(cams);
-    progress.update(k + 1);
+    p.frame_done(k, images, cams, record, hook, result, progress);
   }
   progress.finish();
   result.seconds = seconds_since(t_start);

@@ -75,6 +75,15 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
   s["reference"] =
       "g_star: average (eq:g_ave) of the fictitious target poses g_wi g_io,true of the cameras "
       "that detect the tag in that frame; true: the true target pose";
+  if (result.union_of_timestamps) {  // cameras on their own clocks (netvmo run)
+    s["clock"] =
+        "union of timestamps: the observer advanced on the union of every camera's image times "
+        "in time order, integrating over the real elapsed time between them; each camera's "
+        "detection and measurement held until its next image; estimates.csv: one row per camera "
+        "image at its time; energies, eps and errors on the regular grid t0 + k / fps against "
+        "g*(t) at each grid time";
+    s["grid"] = {{"t0", h.empty() ? 0.0 : h.front().t}, {"dt", 1.0 / net.fps}};
+  }
 
   std::vector<ErrorStats> net_star(n), net_true(n), ind_star(n), ind_true(n), pnp_star(n),
       pnp_true(n), pnp_own(n);

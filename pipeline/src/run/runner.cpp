@@ -81,6 +81,12 @@ void NetworkRunner::set_camera_motion(const std::vector<SE3>& g_wi,
   }
 }
 
+std::optional<SE3> NetworkRunner::estimate_world(size_t i) const {
+  const auto& c = net_.camera(static_cast<int>(i));
+  if (!c.initialized()) return std::nullopt;
+  return c.estimate_world();
+}
+
 double NetworkRunner::step_factor(double dt) const {
   return run::step_factor(net_.settings(), dt, net_.substeps(dt), graph_.max_degree());
 }
@@ -123,6 +129,11 @@ void evaluate_frame(FrameRecord& r) {
 const FrameRecord& NetworkRunner::process(int frame, double t, double dt,
                                           const std::vector<CameraInput>& in,
                                           const std::optional<SE3>& g_wo_true) {
+  advance(dt, in);
+  return record(frame, t, in, g_wo_true);
+}
+
+void NetworkRunner::advance(double dt, const std::vector<CameraInput>& in) {
   const auto n = static_cast<size_t>(graph_.size());
   if (in.size() != n) throw std::invalid_argument("one input per camera is required");
   const auto& model = net_.camera(0).error_model();
@@ -132,7 +143,12 @@ const FrameRecord& NetworkRunner::process(int frame, double t, double dt,
         throw std::invalid_argument("the " + std::string(model.name()) +
                                     " error model needs ground truth (rendered data)");
   for (auto* o : observers()) o->step(dt, in);
+}
 
+const FrameRecord& NetworkRunner::record(int frame, double t, const std::vector<CameraInput>& in,
+                                         const std::optional<SE3>& g_wo_true) {
+  const auto n = static_cast<size_t>(graph_.size());
+  if (in.size() != n) throw std::invalid_argument("one input per camera is required");
   FrameRecord r;
   r.frame = frame;
   r.t = t;

@@ -14,12 +14,25 @@
 namespace netvmo::run {
 namespace fs = std::filesystem;
 
-RecordedInputs record_inputs(sources::NetworkSource& provider, const ImageRunOptions& options) {
+namespace {
+// The sweep replays one input per static camera and frame at 1 / fps.
+void require_sweepable(const sources::NetworkSource& provider) {
   sources::require_static_cameras(provider, "netvmo sweep");
   if (!provider.network().target.bundle.empty())
     throw InputError(provider.network().source +
                      ": target.bundle: netvmo sweep does not take tag bundles (its inputs cache "
                      "holds one tag's 8 features); use netvmo run");
+  auto m = sources::clock_mismatch(provider);
+  if (!m) m = sources::irregular_clock(provider);
+  if (m)
+    throw InputError(*m +
+                     ": netvmo sweep replays the cameras on one clock at the dataset's fps "
+                     "(cameras on their own clocks run with `netvmo run`)");
+}
+}  // namespace
+
+RecordedInputs record_inputs(sources::NetworkSource& provider, const ImageRunOptions& options) {
+  require_sweepable(provider);
   const auto result = run_images(provider, options);
   const size_t n = provider.network().cameras.size();
   std::vector<std::optional<SE3>> true_wi(n);
@@ -95,11 +108,7 @@ std::optional<RecordedInputs> read_inputs_cache(const fs::path& file,
   RecordedInputs in;
   in.dt = 1.0 / provider.network().fps;
   in.frames.assign(frames, std::vector<CameraInput>(n));
-  sources::require_static_cameras(provider, "netvmo sweep");
-  if (!provider.network().target.bundle.empty())
-    throw InputError(provider.network().source +
-                     ": target.bundle: netvmo sweep does not take tag bundles (its inputs cache "
-                     "holds one tag's 8 features); use netvmo run");
+  require_sweepable(provider);
   std::vector<std::optional<SE3>> true_wi(n);
   for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth(i, 0);
   size_t rows = 0;

@@ -7,6 +7,7 @@
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/truth_io.hpp"
+#include "netvmo/pipeline/io/yaml_reader.hpp"
 #include "stream_util.hpp"
 
 namespace netvmo::sources {
@@ -62,18 +63,54 @@ size_t listed_camera(const Dataset& ds, const fs::path& file, const Row& r) {
   return static_cast<size_t>(i);
 }
 
+// A camera that timestamps.csv does not list takes its stream's own times (a video's
+// timestamps), else frame / its fps; the notes say which.
+void own_or_index_times(Dataset& ds, const std::set<int>& listed, const fs::path& file) {
+  for (size_t i = 0; i < ds.cameras.size(); ++i) {
+    auto& cam = ds.cameras[i];
+    if (listed.count(cam.id)) continue;
+    const std::string why = (fs::exists(file) ? file.string() + " lists no image of camera "
+                                              : "no " + file.string() + ": camera ") +
+                            std::to_string(cam.id);
+    std::string why_not;
+    auto t = readable(cam) ? cam.source->own_times(why_not) : std::vector<double>{};
+    // Containers round times to their time base (Matroska: 1 ms): a video within 1 ms of
+    // frame / fps at every frame is on that clock, and keeps the exact times.
+    const double fps = ds.network.camera_fps(i);
+    bool on_fps_clock = !t.empty();
+    for (size_t k = 0; k < t.size() && on_fps_clock; ++k)
+      on_fps_clock = std::abs(t[k] - static_cast<double>(k) / fps) <= 1e-3;
+    if (on_fps_clock) {
+      ds.notes.push_back(why + ": its video's timestamps are frame index / its fps (" +
+                         io::format_number(fps) + " frames/s) within 1 ms, taken exactly (" +
+                         cam.source->path().string() + ")");
+      continue;
+    }
+    if (!t.empty()) {
+      ds.notes.push_back(why + ": its times are its video's own timestamps (" +
+                         cam.source->path().string() + ")");
+      cam.times = std::move(t);
+      continue;
+    }
+    ds.notes.push_back(why + ": its times are frame index / its fps (" +
+                       io::format_number(ds.network.camera_fps(i)) + " frames/s)" +
+                       (why_not.empty() ? ""
+                                        : "; " + cam.source->path().string() +
+                                              ": its timestamps are not used: " + why_not));
+  }
+}
+
 // timestamps.csv (io::read_timestamps_csv checks the file itself): every listed camera is in
 // network.yaml, and an opened camera it lists has a row for each of its images and none past
-// its last.
+// its last. Cameras it does not list: own_or_index_times.
 void read_timestamps(Dataset& ds) {
   const fs::path file = ds.dir / "timestamps.csv";
+  std::set<int> listed;
   if (!fs::exists(file)) {
-    ds.notes.push_back("no " + file.string() +
-                       ": each image's time is its frame index / its camera's fps");
+    own_or_index_times(ds, listed, file);
     return;
   }
   const auto rows = io::read_timestamps_csv(file);
-  std::set<int> listed;
   for (const auto& r : rows) {
     auto& cam = ds.cameras[listed_camera(ds, file, r)];
     const std::string where = file.string() + ":" + std::to_string(r.line);
@@ -99,10 +136,7 @@ void read_timestamps(Dataset& ds) {
                          ": no row for frame " + std::to_string(k) + " (" +
                          cam.source->frame_name(k) + ")");
   }
-  for (const auto& cam : ds.cameras)
-    if (!listed.count(cam.id))
-      ds.notes.push_back(file.string() + " lists no image of camera " + std::to_string(cam.id) +
-                         ": its times are frame index / its fps");
+  own_or_index_times(ds, listed, file);
 }
 
 // cameras.csv (io::read_camera_poses_csv checks the file itself): every listed camera is in

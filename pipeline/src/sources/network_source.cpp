@@ -1,5 +1,6 @@
 #include "netvmo/pipeline/sources/network_source.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -24,7 +25,13 @@ class DatasetProvider final : public NetworkSource {
       : ds_(open_dataset(dir, only_camera, keep_going)) {
     const fs::path target = dir / "target.csv", cams = dir / "truth_cameras.csv";
     if (fs::exists(target) && fs::exists(cams)) {
-      for (const auto& r : io::read_target_csv(target)) target_[r.frame] = r.g_wo;
+      for (const auto& r : io::read_target_csv(target)) {
+        target_[r.frame] = r.g_wo;
+        if (target_times_.empty() || r.t > target_times_.back()) {  // by time, for _at
+          target_times_.push_back(r.t);
+          target_poses_.push_back(r.g_wo);
+        }
+      }
       // Per frame, or one static pose per camera (frame -1, older datasets).
       std::map<int, std::vector<obs::SE3>> by_id;
       std::map<int, bool> fixed;
@@ -71,16 +78,69 @@ class DatasetProvider final : public NetworkSource {
     return ds_.listed_time(i, frame);
   }
   std::string name() const override { return ds_.dir.string(); }
+  // target.csv's times have 6 decimals: a time within half of that is the row's.
+  std::optional<obs::SE3> target_truth_at(double t) const override {
+    return pose_at(target_times_, target_poses_, t, 5e-7);
+  }
+  std::optional<obs::SE3> camera_truth_at(size_t i, double t) const override {
+    if (i >= camera_truth_.size()) return std::nullopt;
+    const auto& [poses, fixed] = camera_truth_[i];
+    if (fixed) return poses.front();
+    return pose_at(image_times(i, poses.size()), poses, t, 1e-9);
+  }
+  obs::SE3 camera_believed_at(size_t i, double t) const override {
+    const auto& poses = ds_.cameras.at(i).poses;
+    if (poses.empty()) return ds_.network.cameras.at(i).g_wi;
+    const auto times = image_times(i, poses.size());
+    // Held before the first and after the last image, like camera_believed.
+    return *pose_at(times, poses, std::clamp(t, times.front(), times.back()), 1e-9);
+  }
 
  private:
+  std::vector<double> image_times(size_t i, size_t n) const {
+    std::vector<double> t;
+    for (size_t k = 0; k < n; ++k) t.push_back(ds_.frame_time(i, static_cast<int>(k)));
+    return t;
+  }
+
   Dataset ds_;
   std::map<int, obs::SE3> target_;
+  std::vector<double> target_times_;  ///< target.csv's rows in time order
+  std::vector<obs::SE3> target_poses_;
   /// Per camera: its true poses by frame, or (flag set) one static pose.
   std::vector<std::pair<std::vector<obs::SE3>, bool>> camera_truth_;
   bool moving_ = false;
 };
 
 }  // namespace
+
+std::optional<obs::SE3> pose_at(const std::vector<double>& times,
+                                const std::vector<obs::SE3>& poses, double t, double tol) {
+  if (times.empty() || t < times.front() - tol || t > times.back() + tol) return std::nullopt;
+  const size_t hi =
+      static_cast<size_t>(std::lower_bound(times.begin(), times.end(), t - tol) - times.begin());
+  if (hi == times.size()) return poses.back();
+  if (std::abs(times[hi] - t) <= tol || hi == 0) return poses[hi];
+  const size_t lo = hi - 1;
+  const double s = (t - times[lo]) / (times[hi] - times[lo]);
+  // The geodesic between the two poses (the renderer's keyframe interpolation).
+  return obs::SE3(poses[lo] * obs::exp_se3(s * obs::log_se3(poses[lo].inverse() * poses[hi])));
+}
+
+std::vector<std::pair<int, double>> camera_images(const NetworkSource& source, size_t i) {
+  const int n = source.camera_frame_count(i);
+  bool listed = false;
+  for (int k = 0; k < n && !listed; ++k) listed = source.listed_time(i, k).has_value();
+  std::vector<std::pair<int, double>> out;
+  for (int k = 0; k < n; ++k) {
+    if (listed) {
+      if (const auto t = source.listed_time(i, k)) out.emplace_back(k, *t);
+    } else {
+      out.emplace_back(k, source.frame_time(i, k));
+    }
+  }
+  return out;
+}
 
 std::optional<std::string> clock_mismatch(const NetworkSource& source) {
   const io::NetworkConfig& net = source.network();
@@ -115,6 +175,20 @@ std::optional<std::string> clock_mismatch(const NetworkSource& source) {
                std::to_string(net.cameras[i].id) + " (timestamps.csv)";
     }
   }
+  return std::nullopt;
+}
+
+std::optional<std::string> irregular_clock(const NetworkSource& source) {
+  const io::NetworkConfig& net = source.network();
+  std::optional<double> t0;
+  for (size_t i = 0; i < net.cameras.size(); ++i)
+    for (const auto& [k, t] : camera_images(source, i)) {
+      if (!t0) t0 = t - k / net.fps;
+      if (std::abs(t - *t0 - k / net.fps) > 1e-6)
+        return "camera " + std::to_string(net.cameras[i].id) + "'s frame " + std::to_string(k) +
+               " is at t = " + fmt(t) + " s, not " + fmt(*t0 + k / net.fps) + " s (frame / " +
+               fmt(net.fps) + " frames/s from the first image)";
+    }
   return std::nullopt;
 }
 

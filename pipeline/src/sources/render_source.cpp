@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/render/renderer.hpp"
 
@@ -37,6 +38,15 @@ class RenderProvider final : public NetworkSource {
     return std::any_of(cams.begin(), cams.end(), [](const auto& c) { return c.moving(); });
   }
   std::string name() const override { return "live rendering"; }
+  std::optional<obs::SE3> target_truth_at(double t) const override {
+    return renderer_.scene().target.motion.at(t);
+  }
+  std::optional<obs::SE3> camera_truth_at(size_t i, double t) const override {
+    return renderer_.scene().cameras.at(i).true_pose(t);
+  }
+  obs::SE3 camera_believed_at(size_t i, double t) const override {
+    return renderer_.scene().cameras.at(i).believed_pose(t);
+  }
 
  private:
   render::Renderer renderer_;
@@ -48,6 +58,11 @@ class RenderProvider final : public NetworkSource {
 }  // namespace
 
 std::unique_ptr<NetworkSource> make_render_source(render::SceneDescription scene, int frames) {
+  for (const auto& c : scene.cameras)
+    if ((c.fps && *c.fps != scene.fps) || c.start != 0.0)
+      throw InputError("live rendering: camera " + std::to_string(c.id) +
+                       " has its own fps or start, but live frames are on the scene's clock "
+                       "(render a dataset with `netvmo render` and run that)");
   return std::make_unique<RenderProvider>(std::move(scene), frames);
 }
 

@@ -1,5 +1,6 @@
 // Video files: cam_<id>.<ext>, anything cv::VideoCapture decodes (avi, mp4, mkv, ...).
 #include <cmath>
+#include <cstdio>
 #include <opencv2/videoio.hpp>
 #include <opencv2/videoio/registry.hpp>
 
@@ -44,6 +45,31 @@ class VideoStream : public CameraStream {
     return file_.string() + " frame " + std::to_string(f);
   }
   const fs::path& path() const override { return file_; }
+  // CAP_PROP_POS_MSEC after grabbing frame k is that frame's presentation time (FFmpeg: its
+  // pts); the times must increase strictly over the whole stream.
+  std::vector<double> own_times(std::string& why_not) override {
+    std::vector<double> t;
+    open();
+    for (int k = 0; k < count_; ++k) {
+      if (!cap_.grab()) {
+        why_not = "its frame " + std::to_string(k) + " cannot be decoded";
+        t.clear();
+        break;
+      }
+      t.push_back(cap_.get(cv::CAP_PROP_POS_MSEC) / 1000.0);
+      if (!std::isfinite(t.back()) || (k > 0 && !(t.back() > t[t.size() - 2]))) {
+        char b[160];
+        std::snprintf(b, sizeof b,
+                      "its timestamps do not increase (frame %d at %.6g s after %.6g s)", k,
+                      t.back(), k > 0 ? t[t.size() - 2] : 0.0);
+        why_not = b;
+        t.clear();
+        break;
+      }
+    }
+    open();  // read() starts from the beginning again
+    return t;
+  }
 
  private:
   void open() {

@@ -45,6 +45,9 @@ struct CameraSpec {
   Pose g_wi_believed = Pose::Identity();  ///< believed pose at t = 0 (its localization error)
   std::optional<Trajectory> motion;       ///< true g_wi(t); none: static at g_wi_true
   Vec6 believed_drift = Vec6::Zero();     ///< [drift_v (m/s); drift_w (rad/s)], world frame
+  /// Its own frame rate [1/s]; none: the scene's fps (SceneDescription::image_times).
+  std::optional<double> fps;
+  double start = 0.0;  ///< time of its first image [s] (>= 0)
 
   /// True pose at time t [s] (used to render and for the ground truth).
   Pose true_pose(double t) const { return motion ? motion->at(t) : g_wi_true; }

@@ -16,6 +16,7 @@
 #include <memory>
 #include <optional>
 #include <shared_mutex>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -54,7 +55,15 @@ class Renderer {
   const SceneDescription& scene() const { return scene_; }
   int camera_count() const { return static_cast<int>(scene_.cameras.size()); }
   int frame_count() const { return scene_.frames; }
-  double time_of(int frame) const { return frame / scene_.fps; }
+  /// The time [s] of render frame `frame`: frame / fps, or its entry of set_frame_times().
+  double time_of(int frame) const {
+    return frame >= 0 && size_t(frame) < frame_times_.size() ? frame_times_[size_t(frame)]
+                                                             : frame / scene_.fps;
+  }
+  /// Render frames at arbitrary times (cameras on their own clocks): frame k is at times[k]
+  /// from now on (frames past the list stay at k / fps). Not thread-safe: call before
+  /// rendering, not concurrently with render() or truth().
+  void set_frame_times(std::vector<double> times);
   /// Index of the camera with this id; throws std::invalid_argument if unknown.
   int camera_index(int id) const;
 
@@ -88,6 +97,7 @@ class Renderer {
   std::shared_lock<std::shared_mutex> acquire(int camera_index, int frame);
 
   SceneDescription scene_;
+  std::vector<double> frame_times_;  ///< set_frame_times(); empty: k / fps
   std::unique_ptr<Impl> impl_;
 };
 

@@ -101,6 +101,12 @@ struct SceneDescription {
 
   /// Throws std::invalid_argument with one line naming the problem.
   void validate() const;
+  /// Whether every camera takes its images at the scene's clock (k / fps, no own fps or start).
+  bool one_clock() const;
+  /// The times [s] of camera `ci`'s images over a run of `frames` frames at the scene's fps:
+  /// start + k / its fps for k = 0, 1, ... while the time is before frames / fps (k / fps for
+  /// k < frames on the scene's clock).
+  std::vector<double> image_times(size_t ci, int frames) const;
 };
 
 }  // namespace netvmo::render

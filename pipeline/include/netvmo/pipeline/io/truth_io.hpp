@@ -5,7 +5,8 @@
 //               corners in OpenCV pixels (libapriltag corner order), empty when the tag is
 //               behind the camera
 //   target.csv  frame,t,px,py,pz,rx,ry,rz         (g_wo: target position, rotation vector)
-//   timestamps.csv  camera,frame,t       (recorded folders, optional: each image's time [s];
+//   timestamps.csv  camera,frame,t       (rendered datasets; optional in recorded ones: each
+//   image's time [s];
 //               frame = the image's index in its camera's folder or video)
 //   cameras.csv camera,frame,t,px,py,pz,rx,ry,rz   (optional: believed g_wi per camera image)
 //   truth_cameras.csv  the same columns (true g_wi per camera image), or, in older datasets,
@@ -117,6 +118,9 @@ struct TimestampRow {
 /// finite, no (camera, frame) twice, and per camera the times strictly increase with the frame.
 /// Rows are returned by camera, then frame. Errors name the file, line and column.
 std::vector<TimestampRow> read_timestamps_csv(const std::filesystem::path& file);
+/// One timestamps.csv line (without newline); t with 17 significant digits, so it reads back
+/// to the same double.
+std::string format_timestamp_row(int camera, int frame, double t);
 
 /// One truth.csv line (without newline): times with 6 decimals, corners with 4 (a corner behind
 /// the camera is written empty).

@@ -78,7 +78,26 @@ struct ImageRunResult {
   std::vector<EstimateRow> own_estimates;
   /// With own_estimates: [grid frame][camera] the camera's own frame held there (-1: none yet).
   std::vector<std::vector<int>> source_frames;
+  /// `netvmo run` on cameras on their own clocks: the observer advanced on the union of their
+  /// image times (run_images); summary.json says so.
+  bool union_of_timestamps = false;
 };
+
+/// The regular grid on which runs of cameras on their own clocks are evaluated (the energies,
+/// epsilon-levels and errors against g*(t)): t0 + k dt, k < frames, t0 = the earliest first
+/// image of any camera, dt = 1 / the dataset's fps.
+struct TimeGrid {
+  double t0 = 0.0;
+  double dt = 0.0;
+  int frames = 0;
+  double time(int k) const { return t0 + k * dt; }
+};
+/// The grid of a source: `frames` grid times, or when 0 every grid time up to the last image of
+/// any camera (1e-9 s slack).
+TimeGrid time_grid(const sources::NetworkSource& provider, int frames = 0);
+/// What a camera holds at time t: the index of its latest image at or before t (times in
+/// increasing order, 1e-9 s slack), or -1 before its first.
+int latest_at_or_before(const std::vector<double>& times, double t);
 
 /// The communication graph of network.yaml (camera indices in its order). Throws InputError
 /// naming network.yaml when it is disconnected (Assumption 1).
@@ -113,7 +132,25 @@ int checked_rounds(double dt, double k_e, double k_s, int max_degree, int rounds
 /// V = log(g_k^-1 g_k1) / dt, so g_k exp(dt hat(V)) = g_k1 (zero when the poses are equal).
 obs::Vec6 camera_velocity(const obs::SE3& g_k, const obs::SE3& g_k1, double dt);
 
-/// Runs the whole network over the provider's frames. Moving cameras: before frame k the
+/// Runs the whole network over the provider's frames.
+///
+/// Cameras on their own clocks (sources::clock_mismatch: their own fps, or different times for
+/// the same frame index): the run is on the union of every camera's image times
+/// (sources::camera_images). The network starts once every camera has taken its first image
+/// (earlier images only set their cameras' held measurements, so each camera that sees the
+/// target starts from its own PnP pose as in a synchronised run). Events in time order; between
+/// two consecutive times (events and
+/// grid times) every camera's estimate is integrated over the real elapsed time, in pieces of at
+/// most 1 / fps, each with the run's sub-step rule (so h <= the step checked_rounds allows); a
+/// camera's image updates only its own delta_i and measurement, which it holds until its next
+/// image. history and frames are on time_grid(provider) (max_frames grid times at most), each
+/// record holding the estimates at that time, the held detections and g*(t) from the truth at
+/// t (target_truth_at, camera_truth_at); own_estimates hold every camera image's row (its
+/// frame, time and its camera's estimate at that time). The front end still runs on `workers`
+/// threads, each camera's images in order on one thread. The hook is called at grid times with
+/// each camera's latest image.
+///
+/// Moving cameras: before frame k the
 /// runner gets every camera's believed pose g_wi(t_k) and the body velocity
 /// camera_velocity(g_wi(t_k), g_wi(t_k+1), dt), held over the frame's sub-steps
 /// (NetworkRunner::set_camera_motion); the ground truth is each frame's. Throws InputError for

@@ -106,8 +106,17 @@ class NetworkRunner {
   /// record of the estimates after the frame.
   const FrameRecord& process(int frame, double t, double dt, const std::vector<CameraInput>& in,
                              const std::optional<SE3>& g_wo_true = std::nullopt);
+  /// process() in two halves, for cameras on their own clocks: advance() initialises cameras
+  /// and steps every observer by dt with these (held) measurements; record() evaluates the
+  /// current estimates as frame `frame` at time t (in: delta, PnP and true g_io at that time)
+  /// and appends the record to history().
+  void advance(double dt, const std::vector<CameraInput>& in);
+  const FrameRecord& record(int frame, double t, const std::vector<CameraInput>& in,
+                            const std::optional<SE3>& g_wo_true = std::nullopt);
 
   const std::vector<FrameRecord>& history() const { return history_; }
+  /// Camera i's networked estimate in the world now (g_wi g_bar_i), once it has one.
+  std::optional<SE3> estimate_world(size_t i) const;
   int substeps(double dt) const { return net_.substeps(dt); }
   const RunnerSettings& settings() const { return settings_; }
   const obs::Graph& graph() const { return graph_; }

@@ -31,6 +31,13 @@ class CameraStream {
   virtual const std::filesystem::path& path() const = 0;
   /// Missing frames found when opening (numeric image names with gaps), ascending.
   virtual std::vector<int> missing_frames() const { return {}; }
+  /// The stream's own time [s] of every frame (a video's presentation timestamps), or empty
+  /// when it has none; `why_not` says why usable-looking times were refused (e.g. not
+  /// increasing). May read the whole stream.
+  virtual std::vector<double> own_times(std::string& why_not) {
+    (void)why_not;
+    return {};
+  }
 };
 
 /// Image folder (png, jpg, jpeg, pgm; other files ignored). Throws InputError if the folder

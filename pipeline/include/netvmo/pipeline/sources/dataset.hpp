@@ -13,7 +13,7 @@
 //                                       (truth_io.hpp); a camera without rows is static at its
 //                                       network.yaml pose
 //   timestamps.csv                      optional: every image's time (truth_io.hpp); without
-//                                       it, time = frame index / the camera's fps (a note)
+//                                       it, a video's own times or frame / fps (a note)
 //
 // Frame-count rule (never a silent shift of frames):
 //  - Image folder, all file stems numeric (e.g. 000042.png): the number IS the frame index
@@ -27,8 +27,10 @@
 //    frames is blind after its last one (warning); frames beyond `frames` are ignored (warning).
 //    A camera with its own `fps` (network.yaml) keeps all its frames, on its own clock.
 //  - Times: timestamps.csv gives each image's time; a camera it lists needs a row for every
-//    image it has (and none beyond its last), and a camera it does not list runs on
-//    frame / its fps. Without the file every camera does, and `notes` says so.
+//    image it has (and none beyond its last). A camera it does not list (every camera without
+//    the file) takes its video's own timestamps (CameraStream::own_times, strictly increasing;
+//    within 1 ms of frame / fps they are taken as exactly that), else frame / its fps; `notes`
+//    says which, per camera.
 //  - A frame that exists but cannot be decoded is an InputError naming the file (and frame for
 //    videos), thrown by read(); callers may treat that camera as blind for that frame.
 #pragma once

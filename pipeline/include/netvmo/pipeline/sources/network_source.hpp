@@ -61,13 +61,52 @@ class NetworkSource {
   }
   /// A name for messages and summaries.
   virtual std::string name() const = 0;
+
+  // Ground truth and believed poses at any time t [s] (cameras on their own clocks: the run's
+  // regular grid falls between images), interpolated on the geodesic between the nearest
+  // recorded poses (pose_at).
+  /// True target pose at time t, when known (dataset: target.csv's rows by their t).
+  virtual std::optional<obs::SE3> target_truth_at(double t) const {
+    (void)t;
+    return std::nullopt;
+  }
+  /// True pose of a camera at time t, when known (dataset: truth_cameras.csv by the times of the
+  /// camera's images).
+  virtual std::optional<obs::SE3> camera_truth_at(size_t camera_index, double t) const {
+    (void)camera_index;
+    (void)t;
+    return std::nullopt;
+  }
+  /// Believed pose of a camera at time t (dataset: cameras.csv by the times of its images); by
+  /// default network()'s.
+  virtual obs::SE3 camera_believed_at(size_t camera_index, double t) const {
+    (void)t;
+    return network().cameras.at(camera_index).g_wi;
+  }
 };
+
+/// The pose at time t of a sequence of poses at strictly increasing times: poses[k] where
+/// |t - times[k]| <= tol, else g_k exp(s log(g_k^-1 g_k+1)), s = (t - t_k) / (t_k+1 - t_k),
+/// between the two around t (the geodesic, as the renderer's keyframes); nothing outside
+/// [times.front() - tol, times.back() + tol] or for an empty sequence.
+std::optional<obs::SE3> pose_at(const std::vector<double>& times,
+                                const std::vector<obs::SE3>& poses, double t, double tol);
+
+/// One camera's images on its clock: (frame, time) in frame order. A camera that
+/// timestamps.csv lists (or whose video gives times) has an image at each frame with a time;
+/// otherwise at frames 0 .. camera_frame_count - 1, at frame / its fps.
+std::vector<std::pair<int, double>> camera_images(const NetworkSource& source, size_t camera_index);
 
 /// Why the cameras do not share one clock (a camera at its own fps, or two cameras whose images
 /// of the same frame index have different times: listed in timestamps.csv for both, or for one
 /// and frame / fps for the other), or nothing when they do. `netvmo run` and
 /// lock-step processes need a common clock.
 std::optional<std::string> clock_mismatch(const NetworkSource& source);
+
+/// Why the cameras' common clock is not the dataset's fps (an image whose time, counted from
+/// the first image, differs from frame / fps by more than 1 us), or nothing when it is. The
+/// synchronised run steps by 1 / fps; `netvmo run` takes the union of timestamps otherwise.
+std::optional<std::string> irregular_clock(const NetworkSource& source);
 
 /// Refuses (InputError, one line naming `what`) a source whose cameras move: `what` handles
 /// static cameras only.
