@@ -11,6 +11,7 @@
 #   render datasets/paper5_render.yaml: every image, calibration, network.yaml and truth file
 #   run on that rendered dataset (each build on its own rendering):
 #       estimates.csv, energies.csv, errors.csv, summary.json without its "timing" block
+#   (not the output folders' .lock files: they hold the writer's pid)
 # Exit status 0 when everything is identical; a CSV file whose every field is the same number
 # written differently (e.g. -0 and 0) counts as identical and is listed; otherwise the
 # differing files are listed and the status is 1.
@@ -39,7 +40,7 @@ while [ $# -gt 0 ]; do
       }
       if [ "$1" = --tolerance ]; then tolerance="$2"; else abs_tol="$2"; fi
       shift 2 ;;
-    -h|--help) sed -n 2,21p "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n 2,22p "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) if [ -z "$ref" ]; then ref="$1"; else new="$1"; fi; shift ;;
   esac
 done
@@ -161,8 +162,8 @@ while IFS= read -r f; do
       status=1
     fi
   fi
-done < <(find "$work/ref" -type f | sort)
-extra=$(cd "$work/new" && find . -type f | sort | sed 's|^\./||' | while read -r r; do [ -e "$work/ref/$r" ] || echo "$r"; done)
+done < <(find "$work/ref" -type f ! -name '*.lock' | sort)  # a lock notes its writer's pid
+extra=$(cd "$work/new" && find . -type f ! -name '*.lock' | sort | sed 's|^\./||' | while read -r r; do [ -e "$work/ref/$r" ] || echo "$r"; done)
 if [ -n "$extra" ]; then
   echo "only in $new_name: $extra"
   status=1
