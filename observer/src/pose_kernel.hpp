@@ -119,7 +119,8 @@ inline bool finite(const Pose& g) {
 /// .toRotationMatrix() (Shoemake's conversion, branch for branch) with the quaternion left
 /// unnormalised: the conversion's q times 2t, t = sqrt(t^2), needs no square root, and the
 /// rotation of q / |q| is I + (2 / |q|^2) Q(q), Q the quadratic terms of toRotationMatrix. Returns
-/// |q|^2 (>= 1 when R is finite: the branch's t^2 term is, exactly, 1 plus a non-negative number).
+/// |q|^2 (in exact arithmetic >= 1 for a finite R: the branch's t^2 term is 1 plus a
+/// non-negative number; integrate tests it).
 inline double orthonormalise(Mat3& R) {
   double q[4];  // x, y, z, w
   const double tr = R.trace();
