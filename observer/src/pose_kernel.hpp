@@ -115,7 +115,7 @@ inline bool finite(const Pose& g) {
   return g.R.allFinite() && g.p.allFinite();
 }
 
-/// The rotation nearest to R through a unit quaternion: Eigen's Quaternion(R).normalized()
+/// R re-orthonormalised through its unit quaternion: Eigen's Quaternion(R).normalized()
 /// .toRotationMatrix() (Shoemake's conversion, branch for branch) with the quaternion left
 /// unnormalised: the conversion's q times 2t, t = sqrt(t^2), needs no square root, and the
 /// rotation of q / |q| is I + (2 / |q|^2) Q(q), Q the quadratic terms of toRotationMatrix. Returns
