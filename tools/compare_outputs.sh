@@ -2,7 +2,7 @@
 # Proves that a change leaves netvmo's outputs unchanged: builds a reference commit and the
 # working tree, runs both on the same inputs and compares every output file byte for byte.
 #
-#   bash tools/compare_outputs.sh [REF [NEW]] [--frames N]
+#   bash tools/compare_outputs.sh [REF [NEW]] [--frames N] [--tolerance REL [--abs ABS]]
 #
 # REF defaults to the commit recorded in tools/compare_outputs.ref (the last commit before the
 # restructuring); NEW to the working tree (uncommitted changes included). Compared:
@@ -11,9 +11,15 @@
 #   render datasets/paper5_render.yaml: every image, calibration, network.yaml and truth file
 #   run on that rendered dataset (each build on its own rendering):
 #       estimates.csv, energies.csv, errors.csv, summary.json without its "timing" block
+#   (not the output folders' .lock files: they hold the writer's pid)
 # Exit status 0 when everything is identical; a CSV file whose every field is the same number
 # written differently (e.g. -0 and 0) counts as identical and is listed; otherwise the
 # differing files are listed and the status is 1.
+# --tolerance REL (numeric mode, for changes that move results by round-off): a text file that is
+# not byte-identical passes when it has the same lines, the same text between the numbers, and
+# every number within |a - b| <= max(REL * max(|a|, |b|), ABS) of the reference's (ABS default
+# 1e-12); each such file is listed with the count and the largest absolute and relative (of
+# numbers above ABS) differences of its numbers.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 top=$(pwd)
@@ -21,10 +27,20 @@ top=$(pwd)
 ref=""
 new=""
 frames=60
+tolerance=""
+abs_tol=1e-12
+number='^[-+]?([0-9]+[.]?[0-9]*|[.][0-9]+)([eE][-+]?[0-9]+)?$'
 while [ $# -gt 0 ]; do
   case "$1" in
     --frames) frames="$2"; shift 2 ;;
-    -h|--help) sed -n 2,15p "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    --tolerance|--abs)
+      [ $# -ge 2 ] && [[ "$2" =~ $number ]] || {
+        echo "compare_outputs: $1 needs a number, got '${2:-}'" >&2
+        exit 2
+      }
+      if [ "$1" = --tolerance ]; then tolerance="$2"; else abs_tol="$2"; fi
+      shift 2 ;;
+    -h|--help) sed -n 2,22p "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) if [ -z "$ref" ]; then ref="$1"; else new="$1"; fi; shift ;;
   esac
 done
@@ -87,9 +103,47 @@ same_numbers() {
              m = FNR }
            END { exit (m != n) }' "$1" "$2"
 }
+# Numeric mode: the same lines, the same text between the numbers, every number within the
+# tolerance. Prints "COUNT MAX_ABS MAX_REL" of the differing numbers; status 1 when not within.
+within_tolerance() {
+  awk -v rel="$tolerance" -v abs="$abs_tol" '
+    function split_numbers(s, num, txt,   k) {  # txt[0] num[1] txt[1] ... num[k] txt[k]
+      k = 0
+      while (match(s, /[-+]?([0-9]+[.]?[0-9]*|[.][0-9]+)([eE][-+]?[0-9]+)?/)) {
+        txt[k] = substr(s, 1, RSTART - 1); num[++k] = substr(s, RSTART, RLENGTH)
+        s = substr(s, RSTART + RLENGTH)
+      }
+      txt[k] = s
+      return k
+    }
+    NR == FNR { a[FNR] = $0; n = FNR; next }
+    {
+      if (!(FNR in a)) { bad = 1; exit }
+      ka = split_numbers(a[FNR], xa, ta); kb = split_numbers($0, xb, tb)
+      if (ka != kb) { bad = 1; exit }
+      for (i = 0; i <= ka; i++) if (ta[i] != tb[i]) { bad = 1; exit }
+      for (i = 1; i <= ka; i++) {
+        if (xa[i] == xb[i]) continue
+        x = xa[i] + 0; y = xb[i] + 0; d = x - y; if (d < 0) d = -d
+        if (d == 0) continue
+        m = x < 0 ? -x : x; my = y < 0 ? -y : y; if (my > m) m = my
+        count++
+        if (d > max_abs) max_abs = d
+        if (m > abs && d / m > max_rel) max_rel = d / m
+        if (d > rel * m && d > abs) bad = 1
+      }
+      last = FNR
+    }
+    END {
+      if (last != n) bad = 1
+      printf "%d %.3g %.3g\n", count, max_abs, max_rel
+      exit bad
+    }' "$1" "$2"
+}
 status=0
 count=0
 numeric=0
+rounded=0
 while IFS= read -r f; do
   rel=${f#"$work/ref/"}
   count=$((count + 1))
@@ -98,18 +152,25 @@ while IFS= read -r f; do
       echo "numerically identical, not byte-identical: $rel"
       { diff "$f" "$work/new/$rel" || true; } | head -4 | sed "s/^/    /"
       numeric=$((numeric + 1))
+    elif [ -n "$tolerance" ] && [ -f "$work/new/$rel" ] && grep -Iq . "$f" &&
+         stats=$(within_tolerance "$f" "$work/new/$rel"); then
+      read -r c a r <<< "$stats"
+      echo "within tolerance: $rel ($c numbers differ, largest difference $a absolute, $r relative)"
+      rounded=$((rounded + 1))
     else
       echo "DIFFERENT: $rel"
       status=1
     fi
   fi
-done < <(find "$work/ref" -type f | sort)
-extra=$(cd "$work/new" && find . -type f | sort | sed 's|^\./||' | while read -r r; do [ -e "$work/ref/$r" ] || echo "$r"; done)
+done < <(find "$work/ref" -type f ! -name '*.lock' | sort)  # a lock notes its writer's pid
+extra=$(cd "$work/new" && find . -type f ! -name '*.lock' | sort | sed 's|^\./||' | while read -r r; do [ -e "$work/ref/$r" ] || echo "$r"; done)
 if [ -n "$extra" ]; then
   echo "only in $new_name: $extra"
   status=1
 fi
-if [ $status = 0 ] && [ $numeric = 0 ]; then
+if [ $status = 0 ] && [ $rounded != 0 ]; then
+  echo "compare_outputs: all $count files identical or within tolerance $tolerance (absolute $abs_tol): $((count - rounded)) identical ($numeric of them numerically), $rounded within tolerance (listed above)"
+elif [ $status = 0 ] && [ $numeric = 0 ]; then
   echo "compare_outputs: all $count files identical"
 elif [ $status = 0 ]; then
   echo "compare_outputs: all $count files identical, $numeric of them numerically but not byte for byte (listed above)"

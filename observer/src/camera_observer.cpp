@@ -29,6 +29,12 @@ Vec6 mutual_error(const SE3& g_bar_w_i, const SE3& g_bar_w_j) {
   return kernel::mutual_error(kernel::pose_of(g_bar_w_i), kernel::pose_of(g_bar_w_j));
 }
 
+Vec6 mutual_sum(const SE3& g_bar_w_i, const std::vector<SE3>& g_bar_w_nb) {
+  kernel::PoseSum nb;
+  for (const auto& g : g_bar_w_nb) nb.add(kernel::pose_of(g));
+  return kernel::mutual_sum(kernel::pose_of(g_bar_w_i), nb);
+}
+
 SE3 integrate(const SE3& g_bar, const Vec6& V_wi, const Vec6& u, double h) {
   return kernel::to_se3(kernel::integrate(kernel::pose_of(g_bar), V_wi, u, h));
 }

@@ -20,6 +20,7 @@ InProcessVmo::InProcessVmo(const Graph& graph) : n_(graph.size()) {
   for (auto& b : pub_init_) b.resize(n);
   init_.resize(n);
   moving_.resize(n);
+  wi_room_.resize(n);
   sees_.resize(n);
   V_.resize(n);
   u_.resize(n);
@@ -42,6 +43,7 @@ bool InProcessVmo::gather(const CameraObserver& c, int i) {
   const auto k = static_cast<size_t>(i);
   g_bar_[k] = kernel::pose_of(c.st_.g_bar);
   g_wi_[k] = kernel::pose_of(c.g_wi_);
+  wi_room_[k] = kernel::check_has_room(g_wi_[k]);
   V_[k] = c.V_wi_;
   moving_[k] = !c.V_wi_.isZero(0.0);
   init_[k] = c.st_.initialized;
@@ -61,7 +63,7 @@ bool InProcessVmo::step(int i, int cur, const Measurement& z, double h, bool pub
   const auto& P_init = pub_init_[cur];
   const int* first = nbr_.data() + offset_[k];
   const int* last = nbr_.data() + offset_[k + 1];
-  bool started = false;
+  bool started = false, unit = false;
   if (!init_[k] && s_->init_from_neighbours) {  // Vmo::step's self-initialisation
     std::vector<SE3> nb;
     for (const int* j = first; j != last; ++j)
@@ -75,20 +77,23 @@ bool InProcessVmo::step(int i, int cur, const Measurement& z, double h, bool pub
   if (init_[k]) {  // Vmo::step: (eq:EsRRBM) with (eq:input_f-)
     // This camera's own message of the round is g_wi g_bar_i (unless it has just started).
     const kernel::Pose own_w = started ? kernel::compose(g_wi_[k], g_bar_[k]) : P[k];
-    Vec6 mutual = Vec6::Zero();
+    kernel::PoseSum nb;
     for (const int* j = first; j != last; ++j)
-      if (P_init[static_cast<size_t>(*j)])
-        mutual += kernel::mutual_error(own_w, P[static_cast<size_t>(*j)]);
+      if (P_init[static_cast<size_t>(*j)]) nb.add(P[static_cast<size_t>(*j)]);
+    const Vec6 mutual = kernel::mutual_sum(own_w, nb);
     Vec6 visual;
     if (sees_[k]) visual = model_->error(kernel::to_se3(g_bar_[k]), z, s_->features);
     u_[k] = kernel::vmo_input(*s_, mutual, sees_[k] ? &visual : nullptr);
     static const Vec6 still = Vec6::Zero();
-    g_bar_[k] = kernel::integrate(g_bar_[k], moving_[k] ? V_[k] : still, u_[k], h);
+    g_bar_[k] = kernel::integrate(g_bar_[k], moving_[k] ? V_[k] : still, u_[k], h, &unit);
   }
   if (!publish) return true;
   auto& next = pub_[1 - cur][k];
   next = kernel::compose(g_wi_[k], g_bar_[k]);
   pub_init_[1 - cur][k] = init_[k];
+  // CameraObserver::receive's check, which accepts every finite product of a camera pose with
+  // room and a rotation fresh from the quaternion (kernel::check_has_room).
+  if (unit && wi_room_[k]) return kernel::finite(next);
   return kernel::check_pose(next) == MessageVerdict::accepted;
 }
 

@@ -7,7 +7,9 @@
 // contiguous array of world-frame poses (12 doubles each; CSR adjacency, no message copies), steps,
 // and writes its own next estimate into the other half of a double buffer, so a round is one pass
 // over the cameras and one barrier. Every published pose is checked once (CameraObserver's check,
-// which each of its receivers would apply alike). At the end of the frame the cameras' state,
+// which each of its receivers would apply alike; for a pose fresh from the Euler step, whose
+// rotation is a unit quaternion's, a finiteness test gives the same verdict, see
+// kernel::check_has_room). At the end of the frame the cameras' state,
 // round counters and latest neighbour messages are written back exactly as the per-camera
 // exchange leaves them, so CameraObserver's API (latest(), input(), estimate()) is unchanged.
 //
@@ -63,6 +65,7 @@ class InProcessVmo {
   std::vector<kernel::Pose> pub_[2];        ///< g_wi g_bar_i of the round, double-buffered
   std::vector<unsigned char> pub_init_[2];  ///< the published `initialized` flag
   std::vector<unsigned char> init_, moving_, sees_, refused_;
+  std::vector<unsigned char> wi_room_;  ///< kernel::check_has_room(g_wi)
   std::vector<Vec6> V_, u_;
   std::vector<std::uint64_t> round0_, incarnation_;
 };

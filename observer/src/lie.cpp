@@ -11,25 +11,6 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kSmallAngle = 1e-4;
 // Within this distance of pi, sin(theta) is too small to recover the axis from sk(R).
 constexpr double kNearPi = 1e-3;
-// (s W) W for W = hat(w) with w finite, to the last bit as Eigen evaluates that product: every
-// entry is a sum of three terms, ((x0 + x1) + x2) in rows 0 and 1 and (x0 + (x1 + x2)) in row 2,
-// and the terms through the zero diagonal of W are signed zeros. Adding a zero to a non-zero sum
-// leaves it unchanged, so they are left out; where the whole entry is zero its sign may differ,
-// but I + a W + (s W) W adds it to an entry of I + a W that is +0 or 1, which is then the same.
-Mat3 scaled_hat_squared(double s, const Mat3& W) {
-  const Mat3 S = s * W;
-  Mat3 P;
-  P(0, 0) = S(0, 1) * W(1, 0) + S(0, 2) * W(2, 0);
-  P(1, 1) = S(1, 0) * W(0, 1) + S(1, 2) * W(2, 1);
-  P(2, 2) = S(2, 0) * W(0, 2) + S(2, 1) * W(1, 2);
-  P(0, 1) = S(0, 2) * W(2, 1);
-  P(0, 2) = S(0, 1) * W(1, 2);
-  P(1, 0) = S(1, 2) * W(2, 0);
-  P(1, 2) = S(1, 0) * W(0, 2);
-  P(2, 0) = S(2, 1) * W(1, 0);
-  P(2, 1) = S(2, 0) * W(0, 1);
-  return P;
-}
 }  // namespace
 
 Mat3 exp_so3(const Vec3& w) {
@@ -83,33 +64,36 @@ SE3 exp_se3(const Vec6& V) {
 }
 
 void exp_se3(const Vec6& V, Mat3& R, Vec3& p) {
+  // R = I + a W + a2 W^2 (as exp_so3) and p = J v with the left Jacobian J = I + b W + c W^2,
+  // W = hat(w), written out with W^2 = w w^T - |w|^2 I, W v = w x v, W^2 v = w x (w x v).
   const Vec3 v = V.head<3>();
   const Vec3 w = V.tail<3>();
   const double t2 = w.squaredNorm();
-  const double t = std::sqrt(t2);
-  double a, a2;  // R = I + a hat(w) + a2 hat(w)^2, as exp_so3
-  double b, c;   // left Jacobian J = I + b hat(w) + c hat(w)^2
-  if (t < kSmallAngle) {
-    a = 1.0 - t2 / 6.0 + t2 * t2 / 120.0;
-    a2 = 0.5 - t2 / 24.0 + t2 * t2 / 720.0;
-    b = 0.5 - t2 / 24.0;
-    c = 1.0 / 6.0 - t2 / 120.0;
+  double a, a2, c;                       // b = a2
+  if (t2 < kSmallAngle * kSmallAngle) {  // Taylor series in t2 (Horner form)
+    a = 1.0 - t2 * (1.0 / 6.0 - t2 * (1.0 / 120.0));
+    a2 = 0.5 - t2 * (1.0 / 24.0 - t2 * (1.0 / 720.0));
+    c = 1.0 / 6.0 - t2 * (1.0 / 120.0);
   } else {
-    const double s = std::sin(t), co = std::cos(t);
-    a = s / t;
-    a2 = (1.0 - co) / t2;
-    b = (1.0 - co) / t2;
-    c = (t - s) / (t2 * t);
+    const double t = std::sqrt(t2), s = std::sin(t), co = std::cos(t);
+    const double inv_t = 1.0 / t, inv_t2 = inv_t * inv_t;
+    a = s * inv_t;
+    a2 = (1.0 - co) * inv_t2;
+    c = (t - s) * (inv_t2 * inv_t);
   }
-  const Mat3 W = hat(w);
-  if (!std::isfinite(t2)) {  // the plain expressions (their NaN and infinities)
-    R = Mat3::Identity() + a * W + a2 * W * W;
-    p = (Mat3::Identity() + b * W + c * W * W) * v;
-    return;
-  }
-  R = Mat3::Identity() + a * W + scaled_hat_squared(a2, W);
-  const Mat3 J = Mat3::Identity() + b * W + scaled_hat_squared(c, W);
-  p = J * v;
+  const double x = w(0), y = w(1), z = w(2);
+  const double xx = x * x, yy = y * y, zz = z * z, xy = x * y, xz = x * z, yz = y * z;
+  R(0, 0) = 1.0 - a2 * (yy + zz);
+  R(1, 1) = 1.0 - a2 * (xx + zz);
+  R(2, 2) = 1.0 - a2 * (xx + yy);
+  R(0, 1) = a2 * xy - a * z;
+  R(1, 0) = a2 * xy + a * z;
+  R(0, 2) = a2 * xz + a * y;
+  R(2, 0) = a2 * xz - a * y;
+  R(1, 2) = a2 * yz - a * x;
+  R(2, 1) = a2 * yz + a * x;
+  const Vec3 wv = w.cross(v);
+  p = v + a2 * wv + c * w.cross(wv);
 }
 
 Vec6 log_se3(const SE3& g) {

@@ -56,9 +56,10 @@ class Vmo final : public Estimator {
     if (!st.initialized) return;
     // The same arithmetic as NetworkedObserver's in-process fast path (pose_kernel.hpp).
     const kernel::Pose own_w = kernel::compose(kernel::pose_of(cv.g_wi), kernel::pose_of(st.g_bar));
-    Vec6 mutual = Vec6::Zero();
+    kernel::PoseSum nb;
     for (const auto& m : cv.latest)
-      if (m && m->initialized) mutual += kernel::mutual_error(own_w, kernel::pose_of(m->g_w));
+      if (m && m->initialized) nb.add(kernel::pose_of(m->g_w));
+    const Vec6 mutual = kernel::mutual_sum(own_w, nb);  // sum_j E_R(g_bar_i^-1 g_ij g_bar_j)
     Vec6 visual;
     const bool sees = cv.model.usable(cv.z);
     if (sees) visual = cv.model.error(st.g_bar, cv.z, s.features);

@@ -92,8 +92,13 @@ MessageVerdict check_pose(const SE3& g);
 /// E_R(g_bar_i^-1 g_bar_{i,j}) with both poses expressed in the world frame through the believed
 /// camera poses: g_bar_i^-1 g_ij g_bar_j = (g_wi g_bar_i)^-1 (g_wj g_bar_j) (eq:input_f-).
 Vec6 mutual_error(const SE3& g_bar_w_i, const SE3& g_bar_w_j);
+/// The summed mutual term sum_j E_R(g_bar_w_i^-1 g_bar_w_j) of (eq:input_f-) over the estimates
+/// g_bar_w_nb, as the vmo computes it (one 3x3 product: E_R is linear in g_bar_w_j's entries);
+/// the sum of the mutual_error terms up to round-off.
+Vec6 mutual_sum(const SE3& g_bar_w_i, const std::vector<SE3>& g_bar_w_nb);
 
-/// One Lie-group Euler step of (eq:EsRRBM): exp(-h hat(V_wi)) g_bar exp(h hat(u)).
+/// One Lie-group Euler step of (eq:EsRRBM): exp(-h hat(V_wi)) g_bar exp(h hat(u)), the rotation
+/// re-orthonormalised through a unit quaternion.
 SE3 integrate(const SE3& g_bar, const Vec6& V_wi, const Vec6& u, double h);
 
 /// Smallest N with (dt/N) * rate_bound <= step_factor, rate_bound the estimator's
