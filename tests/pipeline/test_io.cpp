@@ -132,6 +132,17 @@ TEST(Calibration, OpenCvMatrixSizeCheckedBeforeReading) {
   write(dir / "o.yaml", head + "...\n" + K);
   expect_input_error([&] { load_calibration_opencv(dir / "o.yaml"); },
                      {"o.yaml:5", "one YAML document expected"});
+  // corpus calibration_opencv/xml_attribute_at_end_segv: OpenCV's XML parser dereferenced a
+  // null pointer on a file ending after an attribute's '=' (also behind a quoted '>').
+  write(dir / "p.xml", "<?xml version=");
+  expect_input_error([&] { load_calibration_opencv(dir / "p.xml"); },
+                     {"p.xml", "ends inside a tag"});
+  write(dir / "q.xml", "<?xml version=\"1.0\"?>\n<opencv_storage>\n<a c=\">\" b=  \n");
+  expect_input_error([&] { load_calibration_opencv(dir / "q.xml"); },
+                     {"q.xml", "ends inside a tag"});
+  write(dir / "r.xml", "<?xml version=\"1.0\"?>\n<opencv_storage>\n<!-- it's <a b=");
+  expect_input_error([&] { load_calibration_opencv(dir / "r.xml"); },
+                     {"r.xml", "ends inside a comment"});
   // What OpenCV writes still loads: a `data:` list continued on a line indented deeper than any
   // key, then a key back at column 0 (flow lines are not checked).
   write(dir / "h.yaml", head +

@@ -7,10 +7,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <opencv2/calib3d.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "netvmo/pipeline/error.hpp"
@@ -113,6 +115,39 @@ void check_yaml_indentation(const std::string& text, const std::string& file) {
   }
 }
 
+// OpenCV's XML parser reads past the end of the text (a null pointer dereference, found by
+// fuzzing) when the file ends inside a tag after an attribute's '=' (`<a b=` and only spaces
+// after it). A well-formed file never ends inside a tag; one that does is refused, whatever
+// precedes the end (quoted attribute values, which may hold '<' or '>', comments and CDATA
+// sections are skipped).
+void check_xml_ends_outside_tags(const std::string& text, const std::string& file) {
+  bool in_tag = false;
+  char quote = 0;
+  for (size_t k = 0; k < text.size(); ++k) {
+    const char ch = text[k];
+    if (!in_tag) {
+      if (ch != '<') continue;
+      for (const auto& [open, close] :
+           {std::pair<const char*, const char*>{"<!--", "-->"}, {"<![CDATA[", "]]>"}}) {
+        if (text.compare(k, std::strlen(open), open) != 0) continue;
+        const size_t end = text.find(close, k + std::strlen(open));
+        if (end == std::string::npos)
+          throw InputError(file + ": the XML file ends inside a comment or CDATA section");
+        k = end + std::strlen(close) - 1;
+        break;
+      }
+      in_tag = text[k] == '<';
+    } else if (quote) {
+      if (ch == quote) quote = 0;
+    } else if (ch == '"' || ch == '\'') {
+      quote = ch;
+    } else if (ch == '>') {
+      in_tag = false;
+    }
+  }
+  if (in_tag) throw InputError(file + ": the XML file ends inside a tag (truncated?)");
+}
+
 }  // namespace
 
 Calibration load_calibration_opencv(const fs::path& path) {
@@ -151,6 +186,7 @@ Calibration load_calibration_opencv(const fs::path& path) {
         content = true;
       at = end + 1;
     }
+    if (lead != std::string::npos && text[lead] == '<') check_xml_ends_outside_tags(text, file);
     if (yaml) {
       check_yaml_indentation(text, file);
       // Then the whole file must be well-formed YAML (yaml-cpp; the single document the checks
