@@ -122,6 +122,11 @@ TEST(Calibration, OpenCvMatrixSizeCheckedBeforeReading) {
   write(dir / "l.yaml", "%YAML:1.0 !!opex\n   rows: 6\n   {ols: 3\n  1.0\n--\n-\nim");
   expect_input_error([&] { load_calibration_opencv(dir / "l.yaml"); },
                      {"l.yaml:", "not well-formed YAML"});
+  // corpus calibration_opencv/scalar_root_hang: yaml-cpp reads this as one multi-line scalar,
+  // OpenCV as keys and an unclosed flow mapping (it did not return): the top level must be a map.
+  write(dir / "s.yaml", "%YAML:1.0 !!opex\n   rows:\x83\x83\x83 6\n   {ol:s 3\n  1.0\n--\n-\nim");
+  expect_input_error([&] { load_calibration_opencv(dir / "s.yaml"); },
+                     {"s.yaml", "top level is not a mapping"});
   // One document: a second '---', a '---' after the first key, or a '...' is refused.
   write(dir / "m.yaml", head + "---\n" + K);
   expect_input_error([&] { load_calibration_opencv(dir / "m.yaml"); },

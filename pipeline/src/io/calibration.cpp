@@ -196,7 +196,13 @@ Calibration load_calibration_opencv(const fs::path& path) {
       std::string doc = text;
       if (!doc.empty() && doc[0] == '%') doc.replace(0, std::min(doc.find('\n'), doc.size()), "");
       try {
-        (void)YAML::Load(doc);
+        // A calibration file's top level is a mapping of keys: a text that yaml-cpp reads as one
+        // multi-line scalar (a first line without ": ", the rest continuing it) hung OpenCV's
+        // parser, which reads the same text as keys and flow collections (found by fuzzing).
+        if (!YAML::Load(doc).IsMap())
+          throw InputError(file +
+                           ": not a calibration file: its top level is not a mapping of keys "
+                           "(e.g. image_width: 640)");
       } catch (const YAML::Exception& e) {
         const std::string at = e.mark.is_null() ? "" : ":" + std::to_string(e.mark.line + 1);
         throw InputError(file + at + ": not well-formed YAML: " + e.msg);
