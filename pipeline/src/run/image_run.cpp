@@ -36,18 +36,22 @@ obs::Graph network_graph(const io::NetworkConfig& net) {
   return g;
 }
 
+CameraInput camera_input(const CameraFrame& cam, const std::optional<obs::SE3>& target,
+                         const std::optional<obs::SE3>& true_wi) {
+  CameraInput in;
+  in.delta = cam.obs.delta;
+  in.f = cam.obs.f_normalized;  // (eq:visual_mea) with lambda = 1
+  in.points_o = cam.points_o;   // a bundle's seen corners (empty: the tag's square)
+  in.g_io_pnp = cam.g_io_pnp;
+  if (target && true_wi) in.g_io_true = true_wi->inverse() * *target;  // g_io = g_wi^-1 g_wo
+  return in;
+}
+
 std::vector<CameraInput> camera_inputs(const std::vector<CameraFrame>& cams,
                                        const std::optional<obs::SE3>& target,
                                        const std::vector<std::optional<obs::SE3>>& true_wi) {
   std::vector<CameraInput> in(cams.size());
-  for (size_t i = 0; i < cams.size(); ++i) {
-    in[i].delta = cams[i].obs.delta;
-    in[i].f = cams[i].obs.f_normalized;  // (eq:visual_mea) with lambda = 1
-    in[i].points_o = cams[i].points_o;   // a bundle's seen corners (empty: the tag's square)
-    in[i].g_io_pnp = cams[i].g_io_pnp;
-    if (target && true_wi[i])
-      in[i].g_io_true = true_wi[i]->inverse() * *target;  // g_io = g_wi^-1 g_wo
-  }
+  for (size_t i = 0; i < cams.size(); ++i) in[i] = camera_input(cams[i], target, true_wi[i]);
   return in;
 }
 
@@ -306,10 +310,9 @@ void run_union(Pipeline& p, const FrameHook& hook, ImageRunResult& result) {
       if (moving) motion_at(now, tk);
       // Only this camera's delta_i and measurement change (held until its next image); the
       // truth at its image time is for the exact error model.
-      std::vector<std::optional<obs::SE3>> true_wi(n);
-      true_wi[i] = provider.camera_truth_at(i, ev.t);
       held_cams[i] = cams[b];
-      held[i] = camera_inputs(held_cams, provider.target_truth_at(ev.t), true_wi)[i];
+      held[i] = camera_input(held_cams[i], provider.target_truth_at(ev.t),
+                             provider.camera_truth_at(i, ev.t));
       held_images[i] = images[b];
       held_frame[i] = ev.frame;
       // estimates.csv: the camera's estimate at its image's time.

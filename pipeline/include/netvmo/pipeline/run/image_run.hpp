@@ -103,6 +103,10 @@ int latest_at_or_before(const std::vector<double>& times, double t);
 /// naming network.yaml when it is disconnected (Assumption 1).
 obs::Graph network_graph(const io::NetworkConfig& net);
 
+/// One camera's observer input (camera_inputs, for one camera; true_wi: its true pose, if known).
+CameraInput camera_input(const CameraFrame& cam, const std::optional<obs::SE3>& target,
+                         const std::optional<obs::SE3>& true_wi);
+
 /// One frame's observer inputs: delta, the normalized corners and the PnP pose from the front
 /// end, and on data with truth the true relative pose g_io = g_wi^-1 g_wo (true_wi: the
 /// cameras' true poses, when known).
