@@ -49,8 +49,8 @@ class LoopSource final : public sources::NetworkSource {
   const io::Calibration& calibration(size_t i) const override { return inner_->calibration(i); }
   int frame_count() const override { return frames_; }
   cv::Mat read(size_t i, int frame) override { return inner_->read(i, frame % n_); }
-  std::optional<obs::SE3> target_truth(int frame) const override {
-    return inner_->target_truth(frame % n_);
+  std::optional<obs::SE3> target_truth(int frame, size_t target) const override {
+    return inner_->target_truth(frame % n_, target);
   }
   std::optional<obs::SE3> camera_truth(size_t i, int frame) const override {
     return inner_->camera_truth(i, frame % n_);
@@ -81,8 +81,9 @@ void soak(sources::NetworkSource& source, const std::string& what, int every, co
   run.runner.keep_history = false;
   const auto t0 = std::chrono::steady_clock::now();
   auto last = t0;
-  const auto hook = [&](int k, const std::vector<cv::Mat>&, const std::vector<run::CameraFrame>&,
-                        const run::FrameRecord&) {
+  const auto hook = [&](int k, const std::vector<cv::Mat>&,
+                        const std::vector<std::vector<run::CameraFrame>>&,
+                        const std::vector<const run::FrameRecord*>&) {
     if ((k + 1) % every != 0) return;
     const auto now = std::chrono::steady_clock::now();
     const double total = std::chrono::duration<double>(now - t0).count();
@@ -102,6 +103,7 @@ void add_bench(CLI::App& app, int& exit_code) {
   struct Options {
     std::string scenario = "datasets/paper5_render.yaml";
     std::string moving = "datasets/moving_target.yaml";
+    std::string targets = "datasets/two_targets.yaml";
     int frames = 60;
     int live_spp = 1;
     int soak = 0, soak_every = 1000;
@@ -116,6 +118,10 @@ void add_bench(CLI::App& app, int& exit_code) {
   cmd->add_option("--moving-scenario", o->moving,
                   "Scenario with moving bodies, rendered live (re-tracing where bodies moved, and "
                   "again traced in full every frame)")
+      ->capture_default_str();
+  cmd->add_option("--targets-scenario", o->targets,
+                  "Scenario with several targets, one carrying a tag bundle (recorded: every "
+                  "target decided in one front-end pass, one networked observer per target)")
       ->capture_default_str();
   cmd->add_option("--frames", o->frames, "Frames per measurement (1 to 100000)")
       ->capture_default_str()
@@ -156,15 +162,16 @@ void add_bench(CLI::App& app, int& exit_code) {
       // Recorded: render a dataset first (not timed), then decode + detect + observe.
       const fs::path tmp =
           fs::temp_directory_path() / ("netvmo_bench_" + std::to_string(::getpid()));
-      {
-        render::Renderer renderer(scene);
+      const auto render_dataset = [&](const render::SceneDescription& sc, const fs::path& from) {
+        render::Renderer renderer(sc);
         io::DatasetOptions d;
         d.frames = o->frames;
         d.progress = false;
         std::printf("rendering %d frames of %s for the recorded measurement...\n", o->frames,
-                    scenario.string().c_str());
+                    from.string().c_str());
         io::write_dataset(renderer, tmp, d);
-      }
+      };
+      render_dataset(scene, scenario);
       if (o->soak > 0) {  // recorded: the dataset just rendered (o->frames), looped
         LoopSource looped(sources::open_dataset_source(tmp), o->soak);
         soak(looped, std::to_string(o->frames) + " frames of " + scenario.string() + " looped",
@@ -176,6 +183,18 @@ void add_bench(CLI::App& app, int& exit_code) {
       const auto r1 = run::run_images(*recorded, run);
       report("recorded (PNG decode+detect+observe)", r1, scene.cameras.size());
       fs::remove_all(tmp);
+      {
+        const fs::path targets_file = find_scenario(o->targets);
+        const auto targets_scene = io::load_render_scenario(targets_file);
+        render_dataset(targets_scene, targets_file);
+        auto two = sources::open_dataset_source(tmp);
+        const auto r = run::run_images(*two, run);
+        char what[64];
+        std::snprintf(what, sizeof what, "recorded, %zu targets (bundle)",
+                      two->network().targets.size());
+        report(what, r, targets_scene.cameras.size());
+        fs::remove_all(tmp);
+      }
       auto live_scene = scene;
       live_scene.imaging.spp = o->live_spp;
       auto live = sources::make_render_source(live_scene, o->frames);

@@ -94,8 +94,9 @@ int run_detect(DetectOptions o) {
   io::OutputDir out(o.out, "detect");
   Dataset ds = open_dataset(o.dataset, {}, o.keep_going);
   for (const auto& w : ds.warnings) std::fprintf(stderr, "netvmo detect: warning: %s\n", w.c_str());
-  set_target(o.det, ds.network.target);
-  const auto& target = ds.network.target;
+  // Several targets: all are decided in one pass (as netvmo run does); the rows report the first.
+  set_targets(o.det, ds.network.targets);
+  const auto& target = ds.network.target();
   std::set<int> body_ids;
   for (size_t k = 0; k < target.tag_count(); ++k) body_ids.insert(target.tag_id(k));
   FrontEnd fe(o.det, o.tracking);
@@ -185,9 +186,13 @@ int run_detect(DetectOptions o) {
   csv.commit();
   out.commit();  // complete, even when frames were unreadable (reported below)
 
-  std::printf("netvmo detect: %s -> %s (%d frames, target %s id %d)\n", o.dataset.c_str(),
-              (out_dir / "detections.csv").string().c_str(), ds.frame_count,
-              ds.network.target.family.c_str(), ds.network.target.id);
+  std::printf(
+      "netvmo detect: %s -> %s (%d frames, target %s id %d%s)\n", o.dataset.c_str(),
+      (out_dir / "detections.csv").string().c_str(), ds.frame_count,
+      ds.network.target().family.c_str(), ds.network.target().id,
+      ds.network.targets.size() > 1
+          ? (", the first of " + std::to_string(ds.network.targets.size()) + " targets").c_str()
+          : "");
   // Per camera: detections, then one column per reason the target was not used in a frame
   // (the `status` tokens of detections.csv), then other ids and unreadable frames.
   std::printf("%-8s %-28s %7s %7s %9s %6s %11s", "camera", "source", "frames", "images", "detected",

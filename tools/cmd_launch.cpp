@@ -111,8 +111,8 @@ json merge_and_report(sources::NetworkSource& provider, const run::ImageRunOptio
             result.source_frames.empty() ? k : result.source_frames[static_cast<size_t>(k)][i];
         if (own >= 0) images[i] = provider.read(i, own);
       }
-      overlays(k, images, result.frames[static_cast<size_t>(k)],
-               result.history[static_cast<size_t>(k)]);
+      overlays(k, images, {result.frames[static_cast<size_t>(k)]},
+               {&result.history[static_cast<size_t>(k)]});
     }
     overlays.finish();
   }
@@ -120,9 +120,7 @@ json merge_and_report(sources::NetworkSource& provider, const run::ImageRunOptio
     std::fprintf(stderr, "warning: %s\n", result.warnings[k].c_str());
   const json s = run::write_run_outputs(dir, provider, options, result);
   if (!cli.no_plots) {
-    std::vector<int> ids;
-    for (const auto& c : netcfg.cameras) ids.push_back(c.id);
-    plot_run(dir, ids);
+    plot_run(dir, netcfg);
   }
   // Every node reads the one estimates topic: messages of non-neighbours are ignored (and
   // counted apart from those refused as malformed or out of order).
@@ -202,6 +200,7 @@ void add_launch(CLI::App& app, int& exit_code) {
       require_paper_observer(options);
       auto provider = sources::open_dataset_source(o->dataset, {}, options.keep_going);
       sources::require_static_cameras(*provider, "netvmo launch");
+      sources::require_single_target(*provider, "netvmo launch");
       const auto& netcfg = provider->network();
       for (const auto& w : provider->warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
       run::checked_rounds(1.0 / netcfg.fps, options.runner.k_e, options.runner.k_s,
@@ -388,6 +387,7 @@ void add_merge(CLI::App& app, int& exit_code) {
     exit_code = guarded("merge", [&] {
       auto provider = sources::open_dataset_source(o->dataset);
       sources::require_static_cameras(*provider, "netvmo merge");
+      sources::require_single_target(*provider, "netvmo merge");
       const auto& netcfg = provider->network();
       for (const auto& w : provider->warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
       const fs::path nodes = o->nodes;

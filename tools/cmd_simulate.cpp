@@ -45,12 +45,12 @@ void make_plots(const sim::SimScenario& s, const sim::SimResult& r, const fs::pa
   plot::Panel ur{"orientation error energy U_R", "U_R", true, {}, std::nullopt};
   const std::string solid = "lines lw 2 lc rgb '#d62728'",
                     dashed = "lines lw 2 dt 2 lc rgb '#1f77b4'";
-  up.series.push_back({dir / "energies.csv", "k_s = " + short_number(s.k_s), 2, 1, solid});
-  ur.series.push_back({dir / "energies.csv", "k_s = " + short_number(s.k_s), 3, 1, solid});
+  up.series.push_back({dir / "energies.csv", "k_s = " + short_number(s.k_s), 2, 1, solid, {}});
+  ur.series.push_back({dir / "energies.csv", "k_s = " + short_number(s.k_s), 3, 1, solid, {}});
   if (compare) {
     const fs::path c = compare->second / "energies.csv";
-    up.series.push_back({c, "k_s = " + short_number(compare->first), 2, 1, dashed});
-    ur.series.push_back({c, "k_s = " + short_number(compare->first), 3, 1, dashed});
+    up.series.push_back({c, "k_s = " + short_number(compare->first), 2, 1, dashed, {}});
+    ur.series.push_back({c, "k_s = " + short_number(compare->first), 3, 1, dashed, {}});
   }
   plot::panels_figure(
       {up, ur}, dir / "energies.png",
@@ -61,8 +61,12 @@ void make_plots(const sim::SimScenario& s, const sim::SimResult& r, const fs::pa
                   {},
                   std::make_pair(std::string("average g*"), obs::e_R(r.g_star.linear()).x())};
   for (size_t i = 0; i < s.cameras.size(); ++i)
-    ori.series.push_back({dir / "orientation_x.csv", "camera " + std::to_string(s.cameras[i].id),
-                          static_cast<int>(i) + 2, 1, "lines lw 2"});
+    ori.series.push_back({dir / "orientation_x.csv",
+                          "camera " + std::to_string(s.cameras[i].id),
+                          static_cast<int>(i) + 2,
+                          1,
+                          "lines lw 2",
+                          {}});
   plot::panels_figure({ori}, dir / "orientation_x.png",
                       "Orientation estimates, k_s = " + short_number(s.k_s));
 }

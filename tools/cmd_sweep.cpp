@@ -22,7 +22,7 @@ void plot_sweep(const fs::path& dir, std::string title) {
     title.insert(at, "\\");  // a literal underscore in gnuplot's enhanced text
   const fs::path csv = dir / "sweep.csv";
   const auto s = [&](const char* t, int y, const char* style) {
-    return plot::Series{csv, t, y, 3, style};
+    return plot::Series{csv, t, y, 3, style, {}};
   };
   const auto panel = [](const char* title, const char* ylabel, std::vector<plot::Series> ser) {
     plot::Panel p{title, ylabel, true, std::move(ser), std::nullopt};

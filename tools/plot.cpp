@@ -56,8 +56,18 @@ void panels_figure(const std::vector<Panel>& panels, const fs::path& png,
       if (k) s << ", ";
       // On a log axis, clamp at 1e-12 so exact zeros do not vanish.
       s << quoted(c.csv.string()) << " every ::1 using " << c.x_column << ":";
+      // Rows filtered out are undefined (1/0): gnuplot skips them.
+      std::string open, close;
+      if (c.where) {
+        char b[64];
+        std::snprintf(b, sizeof b, "($%d == %.17g ? ", c.where->first, c.where->second);
+        open = b;
+        close = " : 1/0)";
+      }
       if (p.log_y)
-        s << "($" << c.y_column << " > 1e-12 ? $" << c.y_column << " : 1e-12)";
+        s << open << "($" << c.y_column << " > 1e-12 ? $" << c.y_column << " : 1e-12)" << close;
+      else if (c.where)
+        s << open << "$" << c.y_column << close;
       else
         s << c.y_column;
       s << " with " << c.style << " title " << quoted(c.title);

@@ -23,6 +23,8 @@ struct Series {
   int y_column = 2;
   int x_column = 1;
   std::string style = "lines lw 2";
+  /// Only the rows whose column `first` holds the value `second` (e.g. one target's rows).
+  std::optional<std::pair<int, double>> where;
 };
 
 struct Panel {

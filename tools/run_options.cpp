@@ -101,8 +101,9 @@ json run_and_report(sources::NetworkSource& provider, const RunCliOptions& o, co
   run::FrameHook hook;
   if (!o.no_overlays) {
     overlays = std::make_unique<run::OverlayWriter>(dir, provider);
-    hook = [&](int k, const std::vector<cv::Mat>& images, const std::vector<run::CameraFrame>& cams,
-               const run::FrameRecord& r) { (*overlays)(k, images, cams, r); };
+    hook = [&](int k, const std::vector<cv::Mat>& images,
+               const std::vector<std::vector<run::CameraFrame>>& cams,
+               const std::vector<const run::FrameRecord*>& r) { (*overlays)(k, images, cams, r); };
   }
   const auto result = run::run_images(provider, options, hook);
   if (overlays) overlays->finish();
@@ -112,11 +113,7 @@ json run_and_report(sources::NetworkSource& provider, const RunCliOptions& o, co
   // frame / fps), once the run has succeeded.
   for (const auto& note : provider.notes()) std::fprintf(stderr, "note: %s\n", note.c_str());
   const json s = run::write_run_outputs(dir, provider, options, result);
-  if (!o.no_plots) {
-    std::vector<int> ids;
-    for (const auto& c : provider.network().cameras) ids.push_back(c.id);
-    plot_run(dir, ids);
-  }
+  if (!o.no_plots) plot_run(dir, provider.network());
   return s;
 }
 
@@ -137,25 +134,30 @@ void print_run_summary(const json& s, const fs::path& dir) {
       s["estimator"].get<std::string>().c_str(), s["k_e"].get<double>(), s["k_s"].get<double>(),
       s["error"].get<std::string>().c_str(), s["init"].get<std::string>().c_str(),
       s["rounds_per_frame"].get<int>(), s["timing"]["network_frames_per_second"].get<double>());
-  const bool truth = !s["final"].is_null();
-  std::printf("camera  seen   %s\n",
-              truth ? "final error to g*: networked | independent | PnP   [mm, deg]"
-                    : "(no ground truth: no errors)");
-  for (const auto& c : s["cameras"]) {
-    std::printf("%6d  %3.0f%%", c["id"].get<int>(), 100.0 * c["seen_fraction"].get<double>());
-    if (truth) {
-      for (const char* m : {"networked", "independent", "pnp"}) {
-        const auto& st = c[m]["vs_g_star"];
-        std::printf("   %7s %6s", cell(st, "final_position_m", 1000.0, "%.1f").c_str(),
-                    cell(st, "final_orientation_deg", 1.0, "%.2f").c_str());
+  // One block per target (a single target's keys are at the top level).
+  const json blocks = s.contains("targets") ? s["targets"] : json::array({s});
+  for (const auto& b : blocks) {
+    if (blocks.size() > 1) std::printf("target %d:\n", b["target"].get<int>());
+    const bool truth = !b["final"].is_null();
+    std::printf("camera  seen   %s\n",
+                truth ? "final error to g*: networked | independent | PnP   [mm, deg]"
+                      : "(no ground truth: no errors)");
+    for (const auto& c : b["cameras"]) {
+      std::printf("%6d  %3.0f%%", c["id"].get<int>(), 100.0 * c["seen_fraction"].get<double>());
+      if (truth) {
+        for (const char* m : {"networked", "independent", "pnp"}) {
+          const auto& st = c[m]["vs_g_star"];
+          std::printf("   %7s %6s", cell(st, "final_position_m", 1000.0, "%.1f").c_str(),
+                      cell(st, "final_orientation_deg", 1.0, "%.2f").c_str());
+        }
       }
+      std::printf("\n");
     }
-    std::printf("\n");
+    if (truth)
+      std::printf("final U_p = %.3e, U_R = %.3e, eps_p = %.3g, eps_R = %.3g\n",
+                  b["final"]["U_p"].get<double>(), b["final"]["U_R"].get<double>(),
+                  b["final"]["eps_p"].get<double>(), b["final"]["eps_R"].get<double>());
   }
-  if (truth)
-    std::printf("final U_p = %.3e, U_R = %.3e, eps_p = %.3g, eps_R = %.3g\n",
-                s["final"]["U_p"].get<double>(), s["final"]["U_R"].get<double>(),
-                s["final"]["eps_p"].get<double>(), s["final"]["eps_R"].get<double>());
   std::printf("results in %s/\n", dir.string().c_str());
 }
 

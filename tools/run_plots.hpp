@@ -2,12 +2,15 @@
 #pragma once
 
 #include <filesystem>
-#include <vector>
+
+#include "netvmo/pipeline/io/network_config.hpp"
 
 namespace netvmo::tools {
 
 /// energies.png (U_p, U_R against time) and errors.png (each camera's position and orientation
-/// error to g* against time). Skips a plot whose CSV has no data rows (no ground truth).
-void plot_run(const std::filesystem::path& dir, const std::vector<int>& camera_ids);
+/// error to g* against time), one set of curves per target of `net` (several targets: each
+/// selected by the CSVs' `target` column). Skips a plot whose CSV has no data rows (no ground
+/// truth).
+void plot_run(const std::filesystem::path& dir, const io::NetworkConfig& net);
 
 }  // namespace netvmo::tools

@@ -92,10 +92,10 @@ FrameTruth Renderer::truth(int ci, int frame) {
   t.frame = frame;
   t.t = time_of(frame);
   t.camera_id = cam.id;
-  t.g_wo = I.instances[size_t(I.target_instance)].g_wb;
+  t.g_wo = I.instances[size_t(I.target_instances.at(0))].g_wb;
   const Pose g_wi = cam.true_pose(t.t);
   t.g_io = g_wi.inverse() * t.g_wo;
-  project_corners(cam.intrinsics, cc, scene_.target.tag.size / 2, t);
+  project_corners(cam.intrinsics, cc, scene_.target().tag.size / 2, t);
   const double hp = 0.5 * I.tags.front()->printed_side();
   t.visible_fraction =
       visible_fraction(I.top, cam, cc, t, g_wi, hp, scene_.imaging.visibility_grid);

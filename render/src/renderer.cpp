@@ -31,8 +31,8 @@ int Renderer::camera_index(int id) const {
   throw std::invalid_argument("unknown camera id " + std::to_string(id));
 }
 
-Pose Renderer::target_pose(int frame) const {
-  return scene_.target.motion.at(time_of(frame));
+Pose Renderer::target_pose(int frame, size_t target) const {
+  return scene_.targets.at(target).motion.at(time_of(frame));
 }
 
 Pose Renderer::camera_pose(int ci, int frame) const {

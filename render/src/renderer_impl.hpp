@@ -94,7 +94,7 @@ struct CameraCache {
 struct Renderer::Impl {
   RTCDevice device = nullptr;
   RTCScene top = nullptr;
-  std::vector<Instance> instances;  // [0] static (if any), then target, moving bodies
+  std::vector<Instance> instances;  // [0] static (if any), then the targets, moving bodies
   std::vector<int> instance_of_top_id;
   std::vector<std::unique_ptr<TagTexture>> tags;
   std::vector<Eigen::Vector2f> offsets;
@@ -102,7 +102,7 @@ struct Renderer::Impl {
   std::vector<std::unique_ptr<RadianceCache>> radiance;  // per camera
   std::shared_mutex mutex;
   int current_frame = -1;
-  int target_instance = -1;
+  std::vector<int> target_instances;  // instance of each target
 
   ~Impl();
 

@@ -1,5 +1,5 @@
 // Scene building: the Embree device, triangle meshes with their materials and tag textures,
-// one instance for all static geometry (built once), one for the target and one per moving
+// one instance for all static geometry (built once), one per target and one per moving
 // occluder, all attached to the small top-level scene that is recommitted per frame.
 #include <stdexcept>
 
@@ -70,7 +70,7 @@ void Renderer::Impl::create_device() {
 
 void Renderer::Impl::build(const SceneDescription& scene) {
   create_device();
-  instances.reserve(2 + scene.occluders.size());
+  instances.reserve(1 + scene.targets.size() + scene.occluders.size());
   // Static geometry: one scene, built once, instanced with the identity.
   bool any_static = false;
   for (const auto& b : scene.occluders) any_static |= !b.motion && !b.shapes.empty();
@@ -81,14 +81,16 @@ void Renderer::Impl::build(const SceneDescription& scene) {
         for (const auto& s : b.shapes) add_shape(st, s);
     attach_instance(st, int(instances.size() - 1));
   }
-  // The target.
-  Instance& tg = new_instance("target");
-  add_tag(tg, scene.target.tag, Pose::Identity());
-  for (const auto& t : scene.target.extra_tags) add_tag(tg, t.tag, t.g_ot);
-  for (const auto& s : scene.target.shapes) add_shape(tg, s);
-  tg.motion = &scene.target.motion;
-  target_instance = int(instances.size() - 1);
-  attach_instance(tg, target_instance);
+  // The targets, one instance each.
+  for (const Target& target : scene.targets) {
+    Instance& tg = new_instance("target");
+    add_tag(tg, target.tag, Pose::Identity());
+    for (const auto& t : target.extra_tags) add_tag(tg, t.tag, t.g_ot);
+    for (const auto& s : target.shapes) add_shape(tg, s);
+    tg.motion = &target.motion;
+    target_instances.push_back(int(instances.size() - 1));
+    attach_instance(tg, target_instances.back());
+  }
   // Moving occluders.
   for (const auto& b : scene.occluders) {
     if (!b.motion || b.shapes.empty()) continue;

@@ -2,6 +2,7 @@
 // one line naming the problem.
 #include <algorithm>
 #include <cmath>
+#include <set>
 #include <stdexcept>
 #include <string>
 
@@ -77,6 +78,14 @@ std::vector<double> SceneDescription::image_times(size_t ci, int n) const {
   return t;
 }
 
+namespace {
+std::vector<const TagSpec*> tags_of(const Target& t) {
+  std::vector<const TagSpec*> v{&t.tag};
+  for (const auto& e : t.extra_tags) v.push_back(&e.tag);
+  return v;
+}
+}  // namespace
+
 void SceneDescription::validate() const {
   validate_cameras(cameras);
   for (const auto& c : cameras) {
@@ -89,7 +98,21 @@ void SceneDescription::validate() const {
   if (!(fps > 0)) fail("fps must be positive");
   if (frames < 1) fail("frames must be at least 1");
   validate_imaging(imaging);
-  target.motion.validate();
+  if (targets.empty()) fail("at least one target is required");
+  // Tags are told apart by id: a tag of one target may not repeat on another (within a body a
+  // repeated id is a decoy the detector must reject, e.g. tag_cube.yaml).
+  std::set<std::pair<std::string, int>> earlier;
+  for (size_t j = 0; j < targets.size(); ++j) {
+    targets[j].motion.validate();
+    std::set<std::pair<std::string, int>> own;
+    for (const TagSpec* tag : tags_of(targets[j])) {
+      if (earlier.count({tag->family, tag->id}))
+        fail("targets[" + std::to_string(j) + "]: tag " + tag->family + " id " +
+             std::to_string(tag->id) + " is also on an earlier target (tags are told apart by id)");
+      own.insert({tag->family, tag->id});
+    }
+    earlier.insert(own.begin(), own.end());
+  }
   for (const auto& b : occluders)
     if (b.motion) b.motion->validate();
   for (const auto& l : lights)

@@ -29,7 +29,7 @@ double angle_deg(const obs::SE3& a, const obs::SE3& b) {
 
 // The scenario's target as network.yaml has it (the bundle written by `netvmo render`).
 io::TargetConfig bundle_target(const render::SceneDescription& scene) {
-  return io::scene_network_config(scene, 1).target;
+  return io::scene_network_config(scene, 1).target();
 }
 
 frontend::FrontEnd bundle_front_end(const io::TargetConfig& target) {
@@ -47,7 +47,7 @@ TEST(BundleOnRenderedImages, HeadOnBundleResolvesTheTiltOneTagCannot) {
   auto scene = io::load_render_scenario(kScenario);
   const auto target = bundle_target(scene);
   ASSERT_EQ(target.bundle.size(), 1u);
-  const render::Vec3 centre = scene.target.motion.at(0.0).translation();
+  const render::Vec3 centre = scene.target().motion.at(0.0).translation();
   const auto intrinsics = scene.cameras[0].intrinsics;
   scene.cameras.clear();
   scene.edges.clear();
@@ -152,8 +152,8 @@ TEST(BundleOnRenderedImages, RunOnABundleDatasetConvergesToGStar) {
       "render " + kScenario.string() + " --out " + ds + " --frames 30 --spp 2 --quiet", dir, 120);
   ASSERT_EQ(c.code, 0) << c.err;
   const auto net = io::load_network_config(fs::path(ds) / "network.yaml");
-  ASSERT_EQ(net.target.bundle.size(), 1u);
-  EXPECT_EQ(net.target.bundle[0].id, 1);
+  ASSERT_EQ(net.target().bundle.size(), 1u);
+  EXPECT_EQ(net.target().bundle[0].id, 1);
   c = test::run_netvmo("run " + ds + " --out " + out + " --error jacobian --no-overlays --no-plots",
                        dir, 120);
   ASSERT_EQ(c.code, 0) << c.err;

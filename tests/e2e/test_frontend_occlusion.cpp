@@ -107,8 +107,8 @@ TEST(FrontEndOcclusion, OccluderSweepNoCornerOffAndEveryVisibleTagKept) {
     }
   }
   render::Renderer r(scene);
-  frontend::FrontEnd checked(settings(scene.target.tag.id, true)),
-      unchecked(settings(scene.target.tag.id, false));
+  frontend::FrontEnd checked(settings(scene.target().tag.id, true)),
+      unchecked(settings(scene.target().tag.id, false));
   Tally s;
   for (int k = 0; k < r.frame_count(); ++k)
     for (int i = 0; i < r.camera_count(); ++i)
@@ -128,8 +128,8 @@ TEST(FrontEndOcclusion, MovingTargetNoCornerOffOnPartlyVisibleTags) {
   auto scene = io::load_render_scenario(kSource / "datasets/moving_target.yaml");
   for (auto& light : scene.lights) light.shadows = false;
   render::Renderer r(scene);
-  frontend::FrontEnd checked(settings(scene.target.tag.id, true)),
-      unchecked(settings(scene.target.tag.id, false));
+  frontend::FrontEnd checked(settings(scene.target().tag.id, true)),
+      unchecked(settings(scene.target().tag.id, false));
   Tally s;
   for (int k = 0; k < r.frame_count(); ++k)
     for (int i = 0; i < r.camera_count(); ++i) {

@@ -25,7 +25,7 @@ struct CornerStats {
 CornerStats corner_rms(render::SceneDescription scene, int frames) {
   render::Renderer r(std::move(scene));
   frontend::DetectorSettings ds;
-  ds.target_id = r.scene().target.tag.id;
+  ds.target_id = r.scene().target().tag.id;
   frontend::FrontEnd fe(ds);
   double sum = 0.0;
   CornerStats s;
@@ -74,7 +74,7 @@ TEST(FrontEndOnRenderedImages, PnpOfATwentyCentimetreTagAtTwoMetres) {
   // the 60 px tag's corners by only ~0.05 px, so the tilt is not resolved to 0.5 degrees from
   // four corners; README, "Front end".)
   auto scene = io::load_render_scenario(kSource / "datasets/paper5_render.yaml");
-  const render::Pose g_wo = scene.target.motion.at(0.0);
+  const render::Pose g_wo = scene.target().motion.at(0.0);
   const render::Vec3 centre = g_wo.translation();
   const auto intrinsics = scene.cameras[0].intrinsics;
   scene.cameras.clear();
@@ -94,9 +94,9 @@ TEST(FrontEndOnRenderedImages, PnpOfATwentyCentimetreTagAtTwoMetres) {
   scene.imaging.spp = 16;
   render::Renderer r(scene);
   frontend::DetectorSettings ds;
-  ds.target_id = scene.target.tag.id;
+  ds.target_id = scene.target().tag.id;
   frontend::FrontEnd fe(ds);
-  const auto model = obs::FeatureModel::square(scene.target.tag.size);
+  const auto model = obs::FeatureModel::square(scene.target().tag.size);
   for (int i = 0; i < 3; ++i) {
     const auto obs =
         fe.observe(r.render(i, 0), io::scene_calibration(scene.cameras[static_cast<size_t>(i)]));
@@ -123,7 +123,7 @@ TEST(FrontEndOnRenderedImages, DetectionAgreesWithGeometricVisibility) {
   for (auto& light : scene.lights) light.shadows = false;
   render::Renderer r(scene);  // the scenario's own 4 samples per pixel and sensor noise
   frontend::DetectorSettings ds;
-  ds.target_id = scene.target.tag.id;
+  ds.target_id = scene.target().tag.id;
   frontend::FrontEnd fe(ds);
   int must = 0, must_not = 0;
   for (int k = 0; k < r.frame_count(); k += 2) {
@@ -174,7 +174,7 @@ TEST(FrontEndOnRenderedImages, TrackingWindowFindsTheTagWithFullFrameCorners) {
   auto scene = io::load_render_scenario(kSource / "datasets/paper5_render.yaml");
   render::Renderer r(scene);
   frontend::DetectorSettings ds;
-  ds.target_id = scene.target.tag.id;
+  ds.target_id = scene.target().tag.id;
   frontend::FrontEnd tracked(ds), full(ds, frontend::TrackingSettings{false});
   const auto calib = io::scene_calibration(scene.cameras[0]);
   frontend::TrackState track;
@@ -188,6 +188,6 @@ TEST(FrontEndOnRenderedImages, TrackingWindowFindsTheTagWithFullFrameCorners) {
   }
   const auto blind = tracked.observe(r.render(3, 0), calib, nullptr, &track);  // camera 4: no tag
   EXPECT_FALSE(blind.delta);
-  EXPECT_FALSE(track.last.has_value());
+  EXPECT_TRUE(track.last_all.empty());
   EXPECT_EQ(track.frames_since_full, 0);
 }

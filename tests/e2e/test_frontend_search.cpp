@@ -31,7 +31,7 @@ TEST(FrontEndShadows, NormalizedRetryHalvesShadowMissesWithoutWrongCorners) {
   auto scene = io::load_render_scenario(kSource / "datasets/moving_target.yaml");
   render::Renderer r(scene);
   frontend::DetectorSettings ds;
-  ds.target_id = scene.target.tag.id;
+  ds.target_id = scene.target().tag.id;
   frontend::TrackingSettings no_retry;
   no_retry.shadow_retry = false;
   frontend::FrontEnd with(ds), without(ds, no_retry);
@@ -74,7 +74,7 @@ TEST(FrontEndCube, PartlyVisibleNeighbourFacesDoNotHideTheTag) {
   auto scene = io::load_render_scenario(kSource / "datasets/tag_cube.yaml");
   render::Renderer r(scene);
   frontend::DetectorSettings ds;
-  ds.target_id = scene.target.tag.id;
+  ds.target_id = scene.target().tag.id;
   ds.quad_decimate = 1.0;
   frontend::FrontEnd fe(ds);
   frontend::FrameDetections all;

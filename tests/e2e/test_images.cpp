@@ -114,7 +114,7 @@ TEST(EndToEnd, MovingTargetDeltaIsDetectionAndEstimatesStayBounded) {
   // small tags, normalised retry under shadows, acquisition) find more only where the tag is
   // there: those corners lie within 1 px of the renderer's.
   frontend::DetectorSettings ds;
-  ds.target_id = scene.target.tag.id;
+  ds.target_id = scene.target().tag.id;
   frontend::FrontEnd fe(ds);
   auto again = sources::make_render_source(scene, frames);
   render::Renderer truth(scene);

@@ -22,8 +22,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::ofstream(again_path) << io::network_yaml(net);
   const io::NetworkConfig again = io::load_network_config(again_path);
   if (again.cameras.size() != net.cameras.size() || again.edges != net.edges ||
-      again.frames != net.frames || again.target.id != net.target.id ||
-      again.target.family != net.target.family)
+      again.frames != net.frames || again.target().id != net.target().id ||
+      again.target().family != net.target().family)
     __builtin_trap();
   return 0;
 }

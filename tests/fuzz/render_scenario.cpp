@@ -31,7 +31,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   (void)io::load_network_config(yaml_path);  // what the scene writes must read back
   const double t_end = scene.frames / scene.fps;
   for (double t : {0.0, 0.5 * t_end, t_end}) {
-    (void)scene.target.motion.at(t);
+    (void)scene.target().motion.at(t);
     for (const auto& b : scene.occluders)
       if (b.motion) (void)b.motion->at(t);
   }

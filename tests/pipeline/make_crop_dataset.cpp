@@ -46,8 +46,8 @@ int main(int argc, char** argv) {
   io::NetworkConfig net;
   net.fps = 1.0;
   net.frames = 1;
-  net.target.id = id;
-  net.target.size = 0.05;
+  net.target().id = id;
+  net.target().size = 0.05;
   io::ensure_directory(fs::path(out) / "calib");
   std::string truth = std::string(io::kTruthHeader) + "\n";
   std::string line;

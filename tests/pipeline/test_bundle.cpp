@@ -56,26 +56,26 @@ io::TargetConfig wedge() {
 TEST(Bundle, NetworkYamlReadsAndWritesTheBundle) {
   const auto dir = test::scratch_dir("bundle_ok");
   const auto n = io::load_network_config(write_network(dir, kBundleNetwork));
-  ASSERT_EQ(n.target.bundle.size(), 2u);
-  EXPECT_EQ(n.target.tag_count(), 3u);
-  EXPECT_EQ(n.target.tag_id(0), 3);
-  EXPECT_EQ(n.target.tag_id(2), 7);
-  EXPECT_EQ(n.target.tag_size(1), 0.15);
-  EXPECT_LT((n.target.tag_pose(1).translation() - obs::Vec3(0.25, 0, -0.1)).norm(), 1e-12);
-  EXPECT_LT((obs::log_so3(n.target.tag_pose(1).linear()) - obs::Vec3(0, 0.785398, 0)).norm(),
+  ASSERT_EQ(n.target().bundle.size(), 2u);
+  EXPECT_EQ(n.target().tag_count(), 3u);
+  EXPECT_EQ(n.target().tag_id(0), 3);
+  EXPECT_EQ(n.target().tag_id(2), 7);
+  EXPECT_EQ(n.target().tag_size(1), 0.15);
+  EXPECT_LT((n.target().tag_pose(1).translation() - obs::Vec3(0.25, 0, -0.1)).norm(), 1e-12);
+  EXPECT_LT((obs::log_so3(n.target().tag_pose(1).linear()) - obs::Vec3(0, 0.785398, 0)).norm(),
             1e-12);
-  EXPECT_TRUE(n.target.tag_pose(0).isApprox(obs::SE3::Identity()));
+  EXPECT_TRUE(n.target().tag_pose(0).isApprox(obs::SE3::Identity()));
   // Written back, it reads the same.
   const auto back = io::load_network_config(write_network(dir, io::network_yaml(n)));
-  ASSERT_EQ(back.target.bundle.size(), 2u);
+  ASSERT_EQ(back.target().bundle.size(), 2u);
   for (size_t k = 0; k < 3; ++k) {
-    EXPECT_EQ(back.target.tag_id(k), n.target.tag_id(k));
-    EXPECT_EQ(back.target.tag_size(k), n.target.tag_size(k));
-    EXPECT_TRUE(back.target.tag_pose(k).isApprox(n.target.tag_pose(k), 1e-11));
+    EXPECT_EQ(back.target().tag_id(k), n.target().tag_id(k));
+    EXPECT_EQ(back.target().tag_size(k), n.target().tag_size(k));
+    EXPECT_TRUE(back.target().tag_pose(k).isApprox(n.target().tag_pose(k), 1e-11));
   }
   // Without a bundle nothing is written for it.
   io::NetworkConfig single = n;
-  single.target.bundle.clear();
+  single.target().bundle.clear();
   EXPECT_EQ(io::network_yaml(single).find("bundle"), std::string::npos);
 }
 

@@ -337,8 +337,8 @@ TEST(NetworkConfig, ReadsValidFile) {
   EXPECT_EQ(n.fps, 30);
   ASSERT_TRUE(n.frames.has_value());
   EXPECT_EQ(*n.frames, 10);
-  EXPECT_EQ(n.target.id, 3);
-  EXPECT_EQ(n.target.size, 0.2);
+  EXPECT_EQ(n.target().id, 3);
+  EXPECT_EQ(n.target().size, 0.2);
   ASSERT_EQ(n.cameras.size(), 2u);
   EXPECT_EQ(n.cameras[1].id, 4);
   EXPECT_LT((n.cameras[1].g_wi.translation() - obs::Vec3(1, 2, 3)).norm(), 1e-12);

@@ -51,12 +51,12 @@ TEST(RenderScenario, MinimalLoads) {
   EXPECT_DOUBLE_EQ(s.cameras[1].intrinsics.dist[0], -0.05);
   EXPECT_NEAR((s.cameras[0].g_wi_believed.translation() - s.cameras[0].g_wi_true.translation()).x(),
               0.01, 1e-12);
-  EXPECT_EQ(s.target.tag.id, 2);
+  EXPECT_EQ(s.target().tag.id, 2);
   EXPECT_EQ(s.frames, 3);
   EXPECT_EQ(s.imaging.spp, 1);
   EXPECT_EQ(s.imaging.seed, 5u);
   ASSERT_EQ(s.edges.size(), 1u);
-  EXPECT_EQ(s.target.motion.kind, netvmo::render::Trajectory::Kind::Twist);
+  EXPECT_EQ(s.target().motion.kind, netvmo::render::Trajectory::Kind::Twist);
 }
 
 TEST(RenderScenario, ShippedScenariosLoad) {

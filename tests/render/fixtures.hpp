@@ -18,8 +18,8 @@ inline SceneDescription single_tag_scene(const Pose& g_wo, int spp = 16, double 
   cam.intrinsics.cx = 319.5;
   cam.intrinsics.cy = 239.5;
   s.cameras.push_back(cam);
-  s.target.tag.size = size;
-  s.target.motion = Trajectory::fixed(g_wo);
+  s.target().tag.size = size;
+  s.target().motion = Trajectory::fixed(g_wo);
   Light l;
   l.direction = Vec3(0, 0, 1);
   l.intensity = 0.7;

@@ -50,7 +50,7 @@ TEST(CornerOrder, DetectionCornerKIsProjectedCornerK) {
       SCOPED_TRACE("id " + std::to_string(id) + " in-plane angle " + std::to_string(angle));
       auto scene = testing::single_tag_scene(
           testing::facing_pose(Vec3(0.05, -0.03, 1.2), Vec3(0.25, -0.2, angle)));
-      scene.target.tag.id = id;
+      scene.target().tag.id = id;
       scene.imaging.noise = true;  // the detector must work on realistic images
       Renderer r(scene);
       const cv::Mat img = r.render(0, 0);

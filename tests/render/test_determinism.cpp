@@ -13,9 +13,9 @@ SceneDescription noisy_scene(std::uint64_t seed, int threads) {
   s.imaging.noise = true;
   s.imaging.seed = seed;
   s.imaging.threads = threads;
-  s.target.motion.kind = Trajectory::Kind::Twist;
-  s.target.motion.g0 = s.target.motion.g0;
-  s.target.motion.twist << 0.1, 0, 0, 0, 0.2, 0;
+  s.target().motion.kind = Trajectory::Kind::Twist;
+  s.target().motion.g0 = s.target().motion.g0;
+  s.target().motion.twist << 0.1, 0, 0, 0, 0.2, 0;
   Body floor;
   Shape p;
   p.kind = Shape::Kind::Plane;
@@ -91,7 +91,7 @@ namespace {
 TEST(Determinism, StaticSceneReuseIsByteIdentical) {
   for (bool moving : {false, true}) {
     auto scene = noisy_scene(7, 2);
-    if (!moving) scene.target.motion = Trajectory::fixed(scene.target.motion.g0);
+    if (!moving) scene.target().motion = Trajectory::fixed(scene.target().motion.g0);
     auto fresh_scene = scene;
     fresh_scene.imaging.reuse_radiance = false;
     Renderer cached(scene), fresh(fresh_scene);

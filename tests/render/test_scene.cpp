@@ -81,7 +81,7 @@ TEST(Mesh, ObjTargetBodyRenders) {
   box.size = Vec3(0.4, 0.4, 0.4);
   box.pose = make_pose(Vec3(0, 0, -0.201), Vec3::Zero());
   box.material.albedo = 0.3;
-  s.target.shapes = {box};
+  s.target().shapes = {box};
   Renderer a(s);
   const Mesh bm = make_box(box.size);
   std::string obj;
@@ -91,8 +91,8 @@ TEST(Mesh, ObjTargetBodyRenders) {
   for (const auto& t : bm.triangles)
     obj += "f " + std::to_string(t[0] + 1) + " " + std::to_string(t[1] + 1) + " " +
            std::to_string(t[2] + 1) + "\n";
-  s.target.shapes[0].kind = Shape::Kind::Mesh;
-  s.target.shapes[0].mesh = parse_obj(obj, "box.obj");
+  s.target().shapes[0].kind = Shape::Kind::Mesh;
+  s.target().shapes[0].mesh = parse_obj(obj, "box.obj");
   Renderer b(s);
   EXPECT_EQ(cv::countNonZero(a.render(0, 0) != b.render(0, 0)), 0);
 }

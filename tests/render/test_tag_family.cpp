@@ -31,8 +31,8 @@ TEST(RenderTagFamily, EveryFamilyIsRenderedAndDecodedAtItsProjectedCorners) {
     SCOPED_TRACE(f.name);
     auto scene = testing::single_tag_scene(
         testing::facing_pose(Vec3(0.05, -0.03, 1.2), Vec3(0.25, -0.2, 0.6)), /*spp=*/4);
-    scene.target.tag.family = f.name;
-    scene.target.tag.id = 3;
+    scene.target().tag.family = f.name;
+    scene.target().tag.id = 3;
     Renderer r(scene);
     const cv::Mat img = r.render(0, 0);
     const FrameTruth gt = r.truth(0, 0);

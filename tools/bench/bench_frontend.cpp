@@ -219,7 +219,7 @@ const Sequence& sequence(int which) {
                                                 files[which]);
   netvmo::render::Renderer r(scene);
   Sequence seq;
-  seq.target_id = scene.target.tag.id;
+  seq.target_id = scene.target().tag.id;
   std::vector<int> cams, frames;
   if (which == 0) {
     cams = {0, 1, 2};

@@ -23,7 +23,7 @@ std::unique_ptr<Renderer> make_renderer(int spp, bool shadows = true, bool textu
   if (!textures) {
     for (auto& b : scene.occluders)
       for (auto& sh : b.shapes) sh.material.pattern = netvmo::render::Material::Pattern::Solid;
-    for (auto& sh : scene.target.shapes)
+    for (auto& sh : scene.target().shapes)
       sh.material.pattern = netvmo::render::Material::Pattern::Solid;
   }
   return std::make_unique<Renderer>(scene);

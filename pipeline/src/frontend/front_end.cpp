@@ -21,10 +21,19 @@ Eigen::Matrix<double, 8, 1> normalized_features(const std::array<cv::Point2d, 4>
 }
 
 void set_target(DetectorSettings& s, const io::TargetConfig& target) {
-  s.family = target.family;
-  s.target_id = target.id;
+  set_targets(s, {target});
+}
+
+void set_targets(DetectorSettings& s, const std::vector<io::TargetConfig>& targets) {
+  s.family = targets.at(0).family;
+  s.target_id = targets[0].id;
   s.bundle_ids.clear();
-  for (const auto& b : target.bundle) s.bundle_ids.push_back(b.id);
+  s.tags_per_target.clear();
+  for (const auto& t : targets) {
+    for (size_t k = 0; k < t.tag_count(); ++k)
+      if (&t != &targets[0] || k > 0) s.bundle_ids.push_back(t.tag_id(k));
+    if (targets.size() > 1) s.tags_per_target.push_back(static_cast<int>(t.tag_count()));
+  }
 }
 
 obs::FeatureModel tag_points(const io::TargetConfig& target, const std::vector<int>& slots) {
@@ -58,13 +67,55 @@ cv::Rect tracking_window(const std::vector<std::array<cv::Point2d, 4>>& tags,
                   cv::Point(cvCeil(x1 + grow) + 1, cvCeil(y1 + grow) + 1));
 }
 
-/// Keeps the more informative of two results: a detection, else a rejection with a reason
-/// other than not_found, else the first.
+int rank(TargetStatus s) {
+  return s == TargetStatus::detected ? 2 : s == TargetStatus::not_found ? 0 : 1;
+}
+
+/// Keeps, per target, the more informative of two searches' results: a detection, else a
+/// rejection with a reason other than not_found, else the first. When the later search is
+/// better for every target it replaces the result (a single target's searches never mix); else
+/// its tags are appended to `all` and the targets it decided better take its decisions.
 void keep_best(FrameDetections& best, FrameDetections&& next) {
-  const auto rank = [](TargetStatus s) {
-    return s == TargetStatus::detected ? 2 : s == TargetStatus::not_found ? 0 : 1;
-  };
-  if (rank(next.status) > rank(best.status)) best = std::move(next);
+  std::vector<bool> take(best.targets.size());
+  size_t taken = 0;
+  for (size_t j = 0; j < take.size(); ++j) {
+    take[j] = rank(next.targets[j].status) > rank(best.targets[j].status);
+    taken += take[j];
+  }
+  if (taken == 0) return;
+  if (taken == take.size()) {
+    best = std::move(next);
+    return;
+  }
+  const int offset = static_cast<int>(best.all.size());
+  best.all.insert(best.all.end(), next.all.begin(), next.all.end());
+  for (size_t j = 0; j < take.size(); ++j) {
+    if (!take[j]) continue;
+    const TargetDecision& t = next.targets[j];
+    for (size_t k = t.first_tag; k < t.first_tag + t.tag_count; ++k) {
+      best.tags[k] = next.tags[k];
+      if (best.tags[k].index >= 0) best.tags[k].index += offset;
+    }
+    best.targets[j] = t;
+  }
+  best.target_index = best.tags[0].index;
+  best.status = best.targets[0].status;
+  best.reason = best.targets[0].reason;
+}
+
+/// Every target detected (the searches may stop), or each either detected or rejected as a
+/// duplicate (final: a later, narrower search must not pick one of the duplicates).
+bool all_found(const FrameDetections& d) {
+  if (d.targets.empty()) return false;
+  for (const auto& t : d.targets)
+    if (t.status != TargetStatus::detected) return false;
+  return true;
+}
+bool settled(const FrameDetections& d) {
+  if (d.targets.empty()) return false;
+  for (const auto& t : d.targets)
+    if (t.status != TargetStatus::detected && t.status != TargetStatus::duplicate_id) return false;
+  return true;
 }
 }  // namespace
 
@@ -90,31 +141,34 @@ FrontEnd::FrontEnd(DetectorSettings settings, TrackingSettings tracking)
 
 TagObservation FrontEnd::observe(const cv::Mat& gray, const io::Calibration& calib,
                                  FrameDetections* all, TrackState* track) {
-  TagObservation obs;
+  return std::move(observe_targets(gray, calib, all, track).front());
+}
+
+std::vector<TagObservation> FrontEnd::observe_targets(const cv::Mat& gray,
+                                                      const io::Calibration& calib,
+                                                      FrameDetections* all, TrackState* track) {
   FrameDetections dets;
   unsigned searches = 0, found_by = 0;
   if (gray.empty()) {
     dets.status = TargetStatus::no_image;
     dets.reason = "no image (camera blind in this frame)";
+    for (size_t j = 0; j < target_count(); ++j)
+      dets.targets.push_back({TargetStatus::no_image, dets.reason, 0, 0});
   } else {
-    const bool tracked = track && tracking_.enabled && track->last;
-    auto found = [&] { return dets.status == TargetStatus::detected; };
+    const bool tracked = track && tracking_.enabled && !track->last_all.empty();
     auto search = [&](unsigned what, const cv::Rect& region, const SearchOptions& opt) {
-      // A duplicate is final: a later, narrower search (the window) must not pick one of them.
-      if (found() || dets.status == TargetStatus::duplicate_id) return;
+      if (settled(dets)) return;
       const bool first = searches == 0;
       searches |= what;
       FrameDetections d = detector_.detect(gray, region, &calib, opt);
-      if (d.status == TargetStatus::detected) found_by = what;
+      if (d.status == TargetStatus::detected || all_found(d)) found_by = what;
       if (first)
         dets = std::move(d);
       else
         keep_best(dets, std::move(d));
     };
     auto window = [&] {
-      const auto last = track->last_all.empty()
-                            ? std::vector<std::array<cv::Point2d, 4>>{*track->last}
-                            : track->last_all;
+      const auto& last = track->last_all;
       const cv::Rect w = tracking_window(last, tracking_);
       double side = narrowest_side(last[0]);
       for (const auto& c : last) side = std::min(side, narrowest_side(c));
@@ -134,7 +188,7 @@ TagObservation FrontEnd::observe(const cv::Mat& gray, const io::Calibration& cal
     const bool periodic_full =
         tracked && track->frames_since_full + 1 >= tracking_.full_frame_every;
     if (tracked && !periodic_full) window();
-    if (!found()) {
+    if (!all_found(dets)) {
       search(kSearchFullFrame, whole, {});
       if (track) track->frames_since_full = 0;
     } else {
@@ -153,40 +207,48 @@ TagObservation FrontEnd::observe(const cv::Mat& gray, const io::Calibration& cal
   if (track) {
     track->searches = searches;
     track->found_by = found_by;
-    track->last.reset();
     track->last_all.clear();
     for (const auto& t : dets.tags)
       if (t.index >= 0) track->last_all.push_back(dets.all[static_cast<size_t>(t.index)].corners);
-    if (!track->last_all.empty()) {
-      track->last = track->last_all[0];
+    if (!track->last_all.empty())
       track->blind_frames = 0;
-    } else {
+    else
       ++track->blind_frames;
-    }
   }
-  obs.status = dets.status;
-  obs.reason = dets.reason;
-  for (size_t k = 0; k < dets.tags.size(); ++k) {
-    if (dets.tags[k].index < 0) continue;
-    const TagDetection& t = dets.all[static_cast<size_t>(dets.tags[k].index)];
-    if (!obs.delta) {
-      obs.delta = true;
-      obs.tag_id = t.id;
-      obs.hamming = t.hamming;
-      obs.margin = t.margin;
-      obs.corners_px = t.corners;
+  std::vector<TagObservation> out(target_count());
+  for (size_t j = 0; j < out.size(); ++j) {
+    TagObservation& obs = out[j];
+    const TargetDecision& target = dets.targets[j];
+    obs.status = target.status;
+    obs.reason = target.reason;
+    for (size_t k = 0; k < target.tag_count; ++k) {
+      const TagDecision& tag = dets.tags[target.first_tag + k];
+      if (tag.index < 0) continue;
+      const TagDetection& t = dets.all[static_cast<size_t>(tag.index)];
+      if (!obs.delta) {
+        obs.delta = true;
+        obs.tag_id = t.id;
+        obs.hamming = t.hamming;
+        obs.margin = t.margin;
+        obs.corners_px = t.corners;
+      }
+      obs.slots.push_back(static_cast<int>(k));
+      obs.tag_corners_px.push_back(t.corners);
     }
-    obs.slots.push_back(static_cast<int>(k));
-    obs.tag_corners_px.push_back(t.corners);
-  }
-  if (obs.delta) {
-    obs.f_normalized.resize(static_cast<Eigen::Index>(8 * obs.slots.size()));
-    for (size_t j = 0; j < obs.slots.size(); ++j)
-      obs.f_normalized.segment<8>(static_cast<Eigen::Index>(8 * j)) =
-          normalized_features(obs.tag_corners_px[j], calib);
+    if (obs.delta) {
+      obs.f_normalized.resize(static_cast<Eigen::Index>(8 * obs.slots.size()));
+      for (size_t q = 0; q < obs.slots.size(); ++q)
+        obs.f_normalized.segment<8>(static_cast<Eigen::Index>(8 * q)) =
+            normalized_features(obs.tag_corners_px[q], calib);
+    }
   }
   if (all) *all = std::move(dets);
-  return obs;
+  return out;
+}
+
+size_t FrontEnd::target_count() const {
+  const auto& s = detector_.settings();
+  return s.tags_per_target.empty() ? 1 : s.tags_per_target.size();
 }
 
 }  // namespace netvmo::frontend

@@ -46,6 +46,16 @@ void validate(const DetectorSettings& s) {
                    s.bundle_ids[k]))
       bad("tag id " + std::to_string(s.bundle_ids[k]) + " listed twice in the target");
   }
+  if (!s.tags_per_target.empty()) {
+    size_t total = 0;
+    for (int c : s.tags_per_target) {
+      if (c < 1) bad("tags_per_target: every target has at least one tag");
+      total += static_cast<size_t>(c);
+    }
+    if (total != 1 + s.bundle_ids.size())
+      bad("tags_per_target: the counts must add up to the number of tags (" +
+          std::to_string(1 + s.bundle_ids.size()) + ")");
+  }
   if (!(s.min_decision_margin >= 0.0)) bad("min_decision_margin must be >= 0");
   if (s.max_hamming < 0) bad("max_hamming must be >= 0");
   if (!(s.border_min_contrast >= 0.0 && s.border_min_contrast <= 1.0))
@@ -621,6 +631,84 @@ struct TagDetector::Impl {
   }
 };
 
+namespace {
+
+// The tags of each target: DetectorSettings::tags_per_target, or all of them as one.
+std::vector<TargetDecision> target_ranges(const DetectorSettings& s) {
+  std::vector<TargetDecision> t;
+  if (s.tags_per_target.empty()) {
+    t.push_back({TargetStatus::not_found, "", 0, 1 + s.bundle_ids.size()});
+    return t;
+  }
+  size_t first = 0;
+  for (int c : s.tags_per_target) {
+    t.push_back({TargetStatus::not_found, "", first, static_cast<size_t>(c)});
+    first += static_cast<size_t>(c);
+  }
+  return t;
+}
+
+// A region that was not searched: every target not found (their tags' ids in the reason).
+FrameDetections not_searched(FrameDetections out, const DetectorSettings& s) {
+  out.targets = target_ranges(s);
+  for (auto& t : out.targets) {
+    const int id = t.first_tag == 0 ? s.target_id : s.bundle_ids[t.first_tag - 1];
+    t.reason = "id " + std::to_string(id) + " not decoded";
+  }
+  return out;
+}
+
+// Each target's status and reason from its tags' decisions: a single tag's own; a bundle is
+// `detected` when at least one of its tags is, else the status and reason of the tag that got
+// furthest (duplicate_id, then border_mismatch, low_margin, high_hamming; the primary first on
+// ties), prefixed by `tag <id>: `, or `ids 0, 1 not decoded (...)` when none was decoded.
+void decide_targets(FrameDetections& out, const DetectorSettings& s) {
+  const auto rank = [](TargetStatus st) {
+    switch (st) {
+      case TargetStatus::detected:
+        return 5;
+      case TargetStatus::duplicate_id:
+        return 4;
+      case TargetStatus::border_mismatch:
+        return 3;
+      case TargetStatus::low_margin:
+        return 2;
+      case TargetStatus::high_hamming:
+        return 1;
+      default:
+        return 0;
+    }
+  };
+  out.targets = target_ranges(s);
+  for (TargetDecision& target : out.targets) {
+    const auto begin = out.tags.begin() + static_cast<long>(target.first_tag);
+    const auto end = begin + static_cast<long>(target.tag_count);
+    if (target.tag_count == 1) {  // a single tag: its decision is the target's
+      target.status = begin->status;
+      target.reason = begin->reason;
+      continue;
+    }
+    auto best = begin;
+    for (auto t = begin; t != end; ++t)
+      if (rank(t->status) > rank(best->status)) best = t;
+    target.status = best->status;
+    if (best->status == TargetStatus::detected) {
+      target.reason.clear();
+    } else if (best->status != TargetStatus::not_found) {
+      target.reason = "tag " + std::to_string(best->id) + ": " + best->reason;
+    } else {
+      std::string ids;
+      for (auto t = begin; t != end; ++t) ids += (ids.empty() ? "" : ", ") + std::to_string(t->id);
+      target.reason = "ids " + ids + " not decoded (" + std::to_string(out.all.size()) +
+                      " other tag(s) decoded)";
+    }
+  }
+  out.status = out.targets[0].status;
+  out.reason = out.targets[0].reason;
+}
+
+}  // namespace
+
 TagDetector::TagDetector(DetectorSettings settings)
     : impl_(std::make_unique<Impl>(std::move(settings))) {}
 TagDetector::~TagDetector() = default;
@@ -668,7 +756,7 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
   char buf[200];
   std::snprintf(buf, sizeof buf, "id %d not decoded", s.target_id);
   out.reason = buf;
-  if (g->empty()) return out;
+  if (g->empty()) return not_searched(std::move(out), s);
   if (!(opt.decimate == 0.0 || opt.decimate >= 1.0))
     throw std::invalid_argument("TagDetector::detect: decimate must be 0 or >= 1");
   if (opt.normalized && opt.normalize_window < 1)
@@ -685,7 +773,7 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
   aligned.height += region.y - aligned.y;
   const cv::Rect roi = aligned & cv::Rect(0, 0, g->cols, g->rows);
   // Nothing decodable in a tiny region; libapriltag needs a few tiles.
-  if (roi.width < 16 || roi.height < 16) return out;
+  if (roi.width < 16 || roi.height < 16) return not_searched(std::move(out), s);
   // libapriltag searches the region only (a view into the image, no copy, or its normalised
   // normalised copy); corners are mapped back to the whole image and refined there.
   const cv::Mat sub =
@@ -802,41 +890,7 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
   for (size_t k = 0; k < s.bundle_ids.size(); ++k)
     out.tags.push_back(decide(s.bundle_ids[k], impl_->patterns[k + 1]));
   out.target_index = out.tags[0].index;
-  if (s.bundle_ids.empty()) {  // a single tag: its decision is the target's
-    out.status = out.tags[0].status;
-    out.reason = out.tags[0].reason;
-    return out;
-  }
-  const auto rank = [](TargetStatus st) {
-    switch (st) {
-      case TargetStatus::detected:
-        return 5;
-      case TargetStatus::duplicate_id:
-        return 4;
-      case TargetStatus::border_mismatch:
-        return 3;
-      case TargetStatus::low_margin:
-        return 2;
-      case TargetStatus::high_hamming:
-        return 1;
-      default:
-        return 0;
-    }
-  };
-  const TagDecision* best = &out.tags[0];
-  for (const auto& t : out.tags)
-    if (rank(t.status) > rank(best->status)) best = &t;
-  out.status = best->status;
-  if (best->status == TargetStatus::detected) {
-    out.reason.clear();
-  } else if (best->status != TargetStatus::not_found) {
-    out.reason = "tag " + std::to_string(best->id) + ": " + best->reason;
-  } else {
-    std::string ids;
-    for (const auto& t : out.tags) ids += (ids.empty() ? "" : ", ") + std::to_string(t.id);
-    out.reason =
-        "ids " + ids + " not decoded (" + std::to_string(out.all.size()) + " other tag(s) decoded)";
-  }
+  decide_targets(out, s);
   return out;
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <memory>
 #include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -70,7 +71,8 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
     save_calibration_opencv(out / "calib" / ("cam_" + std::to_string(c.id) + ".yaml"),
                             scene_calibration(c));
   }
-  io::write_file_atomic(out / "network.yaml", network_yaml(scene_network_config(scene, frames)));
+  const NetworkConfig net = scene_network_config(scene, frames);
+  io::write_file_atomic(out / "network.yaml", network_yaml(net));
   {
     // Per camera image: its time (timestamps.csv), the believed pose (cameras.csv, what the
     // camera thinks it is) and the true (rendering) pose, for evaluation:
@@ -104,16 +106,22 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
 
   // truth.csv: a row per camera image (its own frame and time); target.csv: a row per render
   // frame, i.e. at every image time of any camera (frame = the index of that time).
+  // Several targets: target_<id>.csv for each after the first (truth.csv's corners are the
+  // first target's).
   io::AtomicFile truth(out / "truth.csv");
-  io::AtomicFile target(out / "target.csv");
+  std::vector<std::unique_ptr<io::AtomicFile>> targets;
+  for (size_t j = 0; j < scene.targets.size(); ++j) {
+    targets.push_back(std::make_unique<io::AtomicFile>(out / target_truth_file(net, j)));
+    *targets.back() << kTargetHeader << "\n";
+  }
   truth << kTruthHeader << "\n";
-  target << kTargetHeader << "\n";
   const int render_frames = static_cast<int>(clock.frames.size());
   Progress progress("render", render_frames, opt.progress);
   std::vector<uchar> png;
   for (int u = 0; u < render_frames; ++u) {
     r.set_frame(u);
-    target << format_target_row(u, r.time_of(u), r.target_pose(u)) << "\n";
+    for (size_t j = 0; j < targets.size(); ++j)
+      *targets[j] << format_target_row(u, r.time_of(u), r.target_pose(u, j)) << "\n";
     for (int ci = 0; ci < r.camera_count(); ++ci) {
       const int f = clock.own_frame[size_t(ci)][size_t(u)];
       if (f < 0) continue;  // this camera takes no image at this time
@@ -134,7 +142,7 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
     progress.update(u + 1);
   }
   truth.commit();
-  target.commit();
+  for (auto& t : targets) t->commit();
   progress.finish();
   // A dataset rewritten with fewer frames must not keep the old run's extra images.
   for (size_t ci = 0; ci < scene.cameras.size(); ++ci) {

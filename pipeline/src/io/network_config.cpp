@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <map>
 #include <set>
 
 #include <yaml-cpp/yaml.h>
@@ -67,6 +68,79 @@ std::optional<std::string> tags_overlap(double size_a, const obs::SE3& g_oa, dou
   return std::string("its square overlaps, in the same plane,");
 }
 
+namespace {
+
+// One `target:` map (or `targets:` entry): primary tag and bundle.
+TargetConfig read_target(const Value& v) {
+  auto t = v.map();
+  TargetConfig target;
+  const auto fam = t.get("family");
+  target.family = fam.string();
+  if (!render::find_tag_family(target.family))
+    fam.fail("unsupported tag family '" + target.family +
+             "' (supported: " + render::tag_family_names() + ")");
+  const auto id = t.get("id");
+  target.id = id.integer();
+  if (target.id < 0) id.fail("must not be negative");
+  const auto size = t.get("size");
+  target.size = size.number();
+  if (!(target.size > 0)) size.fail("must be positive (metres)");
+  if (auto b = t.find("bundle")) {
+    std::set<int> tag_ids{target.id};
+    for (const auto& bv : b->sequence()) {
+      auto m = bv.map();
+      BundleTag tag;
+      const auto bid = m.get("id");
+      tag.id = bid.integer();
+      if (tag.id < 0) bid.fail("must not be negative");
+      if (!tag_ids.insert(tag.id).second)
+        bid.fail("tag id " + std::to_string(tag.id) + " listed twice in the target" +
+                 (tag.id == target.id ? " (it is the primary tag's id)" : ""));
+      const auto bsize = m.get("size");
+      tag.size = bsize.number();
+      if (!(tag.size > 0)) bsize.fail("must be positive (metres)");
+      tag.g_ot = obs::make_pose(m.get("p").vec<3>(), m.get("r").vec<3>());
+      m.finish();
+      target.bundle.push_back(tag);
+      const size_t k = target.tag_count() - 1;
+      for (size_t j = 0; j < k; ++j)
+        if (auto why = tags_overlap(target.tag_size(j), target.tag_pose(j), tag.size, tag.g_ot))
+          bv.fail("tag " + std::to_string(tag.id) + ": " + *why + " tag " +
+                  std::to_string(target.tag_id(j)) +
+                  (j == 0 ? " (the primary)" : " (bundle[" + std::to_string(j - 1) + "])") +
+                  "; tags of a body must not overlap");
+    }
+  }
+  t.finish();
+  return target;
+}
+
+void emit_target(YAML::Emitter& y, const TargetConfig& target) {
+  y << YAML::BeginMap;
+  y << YAML::Key << "family" << YAML::Value << target.family;
+  y << YAML::Key << "id" << YAML::Value << target.id;
+  y << YAML::Key << "size" << YAML::Value << target.size;
+  if (!target.bundle.empty()) {
+    y << YAML::Key << "bundle" << YAML::Value << YAML::BeginSeq;
+    for (const auto& b : target.bundle) {
+      const obs::Vec3 p = b.g_ot.translation();
+      const obs::Vec3 r = obs::log_so3(b.g_ot.linear());
+      y << YAML::Flow << YAML::BeginMap;
+      y << YAML::Key << "id" << YAML::Value << b.id;
+      y << YAML::Key << "size" << YAML::Value << b.size;
+      y << YAML::Key << "p" << YAML::Value << YAML::Flow
+        << std::vector<double>{p.x(), p.y(), p.z()};
+      y << YAML::Key << "r" << YAML::Value << YAML::Flow
+        << std::vector<double>{r.x(), r.y(), r.z()};
+      y << YAML::EndMap;
+    }
+    y << YAML::EndSeq;
+  }
+  y << YAML::EndMap;
+}
+
+}  // namespace
+
 int NetworkConfig::index_of(int camera_id) const {
   for (size_t i = 0; i < cameras.size(); ++i)
     if (cameras[i].id == camera_id) return static_cast<int>(i);
@@ -86,47 +160,29 @@ NetworkConfig load_network_config(const std::filesystem::path& file) {
     net.frames = v->integer();
     if (*net.frames < 0) v->fail("must not be negative");
   }
-  {
-    auto t = root.get("target").map();
-    const auto fam = t.get("family");
-    net.target.family = fam.string();
-    if (!render::find_tag_family(net.target.family))
-      fam.fail("unsupported tag family '" + net.target.family +
-               "' (supported: " + render::tag_family_names() + ")");
-    const auto id = t.get("id");
-    net.target.id = id.integer();
-    if (net.target.id < 0) id.fail("must not be negative");
-    const auto size = t.get("size");
-    net.target.size = size.number();
-    if (!(net.target.size > 0)) size.fail("must be positive (metres)");
-    if (auto b = t.find("bundle")) {
-      std::set<int> tag_ids{net.target.id};
-      for (const auto& bv : b->sequence()) {
-        auto m = bv.map();
-        BundleTag tag;
-        const auto bid = m.get("id");
-        tag.id = bid.integer();
-        if (tag.id < 0) bid.fail("must not be negative");
-        if (!tag_ids.insert(tag.id).second)
-          bid.fail("tag id " + std::to_string(tag.id) + " listed twice in the target" +
-                   (tag.id == net.target.id ? " (it is the primary tag's id)" : ""));
-        const auto bsize = m.get("size");
-        tag.size = bsize.number();
-        if (!(tag.size > 0)) bsize.fail("must be positive (metres)");
-        tag.g_ot = obs::make_pose(m.get("p").vec<3>(), m.get("r").vec<3>());
-        m.finish();
-        net.target.bundle.push_back(tag);
-        const size_t k = net.target.tag_count() - 1;
-        for (size_t j = 0; j < k; ++j)
-          if (auto why =
-                  tags_overlap(net.target.tag_size(j), net.target.tag_pose(j), tag.size, tag.g_ot))
-            bv.fail("tag " + std::to_string(tag.id) + ": " + *why + " tag " +
-                    std::to_string(net.target.tag_id(j)) +
-                    (j == 0 ? " (the primary)" : " (bundle[" + std::to_string(j - 1) + "])") +
-                    "; tags of a body must not overlap");
+  if (root.has("targets")) {
+    if (root.has("target")) root.get("target").fail("give either target or targets, not both");
+    const auto list = root.get("targets");
+    net.targets.clear();
+    for (const auto& tv : list.sequence()) net.targets.push_back(read_target(tv));
+    if (net.targets.empty()) list.fail("at least one target is required");
+    // Tags are told apart by id alone: no id may appear on two bodies.
+    std::map<int, size_t> owner;
+    const auto seq = list.sequence();
+    for (size_t j = 0; j < net.targets.size(); ++j) {
+      const auto& t = net.targets[j];
+      if (t.family != net.targets[0].family)
+        seq[j].fail("family " + t.family + ": every target must use the first target's family (" +
+                    net.targets[0].family + ")");
+      for (size_t k = 0; k < t.tag_count(); ++k) {
+        const auto [it, fresh] = owner.emplace(t.tag_id(k), j);
+        if (!fresh)
+          seq[j].fail("tag id " + std::to_string(t.tag_id(k)) + " is already on targets[" +
+                      std::to_string(it->second) + "]; a tag id may appear on one target only");
       }
     }
-    t.finish();
+  } else {
+    net.targets = {read_target(root.get("target"))};
   }
   std::set<int> ids;
   for (const auto& cv : root.get("cameras").sequence()) {
@@ -153,27 +209,14 @@ std::string network_yaml(const NetworkConfig& net) {
   y << YAML::BeginMap;
   y << YAML::Key << "fps" << YAML::Value << net.fps;
   if (net.frames) y << YAML::Key << "frames" << YAML::Value << *net.frames;
-  y << YAML::Key << "target" << YAML::Value << YAML::BeginMap;
-  y << YAML::Key << "family" << YAML::Value << net.target.family;
-  y << YAML::Key << "id" << YAML::Value << net.target.id;
-  y << YAML::Key << "size" << YAML::Value << net.target.size;
-  if (!net.target.bundle.empty()) {
-    y << YAML::Key << "bundle" << YAML::Value << YAML::BeginSeq;
-    for (const auto& b : net.target.bundle) {
-      const obs::Vec3 p = b.g_ot.translation();
-      const obs::Vec3 r = obs::log_so3(b.g_ot.linear());
-      y << YAML::Flow << YAML::BeginMap;
-      y << YAML::Key << "id" << YAML::Value << b.id;
-      y << YAML::Key << "size" << YAML::Value << b.size;
-      y << YAML::Key << "p" << YAML::Value << YAML::Flow
-        << std::vector<double>{p.x(), p.y(), p.z()};
-      y << YAML::Key << "r" << YAML::Value << YAML::Flow
-        << std::vector<double>{r.x(), r.y(), r.z()};
-      y << YAML::EndMap;
-    }
+  if (net.targets.size() == 1) {  // the single-target form
+    y << YAML::Key << "target" << YAML::Value;
+    emit_target(y, net.targets[0]);
+  } else {
+    y << YAML::Key << "targets" << YAML::Value << YAML::BeginSeq;
+    for (const auto& t : net.targets) emit_target(y, t);
     y << YAML::EndSeq;
   }
-  y << YAML::EndMap;
   y << YAML::Key << "cameras" << YAML::Value << YAML::BeginSeq;
   for (const auto& c : net.cameras) {
     const obs::Vec3 p = c.g_wi.translation();

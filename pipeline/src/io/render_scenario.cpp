@@ -277,6 +277,31 @@ void read_imaging(const Value& v, render::Imaging& im) {
   m.finish();
 }
 
+// One `target:` map (or `targets:` entry): tag, extra tags, shapes and motion.
+render::Target read_target(const Value& v, const std::filesystem::path& base_dir) {
+  MapReader t = v.map();
+  render::Target target;
+  target.tag = read_tag(t.get("tag"));
+  if (const auto extra = t.find("extra_tags"))
+    for (const auto& e : extra->sequence()) {
+      MapReader em = e.map();
+      render::PlacedTag pt;
+      pt.tag = read_tag(em.get("tag"));
+      pt.g_ot = read_pose(em.get("pose"));
+      em.finish();
+      if (auto why = tags_overlap(target.tag.size, obs::SE3::Identity(), pt.tag.size, pt.g_ot))
+        e.fail(*why + " the primary tag; tags of a body must not overlap");
+      for (size_t j = 0; j < target.extra_tags.size(); ++j)
+        if (auto why = tags_overlap(target.extra_tags[j].tag.size, target.extra_tags[j].g_ot,
+                                    pt.tag.size, pt.g_ot))
+          e.fail(*why + " extra_tags[" + std::to_string(j) + "]; tags of a body must not overlap");
+      target.extra_tags.push_back(pt);
+    }
+  if (const auto sh = t.find("shapes")) target.shapes = read_shapes(*sh, base_dir);
+  target.motion = read_motion(t.get("motion"));
+  t.finish();
+  return target;
+}
 }  // namespace
 
 render::SceneDescription load_render_scenario(const std::filesystem::path& file) {
@@ -294,28 +319,20 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
   if (const auto ls = root.find("lights"))
     for (const auto& l : ls->sequence()) s.lights.push_back(read_light(l));
 
-  {
-    MapReader t = root.get("target").map();
-    s.target.tag = read_tag(t.get("tag"));
-    if (const auto extra = t.find("extra_tags"))
-      for (const auto& e : extra->sequence()) {
-        MapReader em = e.map();
-        render::PlacedTag pt;
-        pt.tag = read_tag(em.get("tag"));
-        pt.g_ot = read_pose(em.get("pose"));
-        em.finish();
-        if (auto why = tags_overlap(s.target.tag.size, obs::SE3::Identity(), pt.tag.size, pt.g_ot))
-          e.fail(*why + " the primary tag; tags of a body must not overlap");
-        for (size_t j = 0; j < s.target.extra_tags.size(); ++j)
-          if (auto why = tags_overlap(s.target.extra_tags[j].tag.size, s.target.extra_tags[j].g_ot,
-                                      pt.tag.size, pt.g_ot))
-            e.fail(*why + " extra_tags[" + std::to_string(j) +
-                   "]; tags of a body must not overlap");
-        s.target.extra_tags.push_back(pt);
-      }
-    if (const auto sh = t.find("shapes")) s.target.shapes = read_shapes(*sh, base_dir);
-    s.target.motion = read_motion(t.get("motion"));
-    t.finish();
+  if (root.has("targets")) {
+    if (root.has("target")) root.get("target").fail("give either target or targets, not both");
+    const Value list = root.get("targets");
+    s.targets.clear();
+    for (const auto& t : list.sequence()) {
+      s.targets.push_back(read_target(t, base_dir));
+      if (s.targets.back().tag.family != s.targets[0].tag.family)
+        t.fail("tag.family " + s.targets.back().tag.family +
+               ": every target's tag must be of the first target's family (" +
+               s.targets[0].tag.family + "), the one family the front end decodes");
+    }
+    if (s.targets.empty()) list.fail("at least one target is required");
+  } else {
+    s.targets = {read_target(root.get("target"), base_dir)};
   }
 
   const Value cams = root.get("cameras");
@@ -393,16 +410,21 @@ NetworkConfig scene_network_config(const render::SceneDescription& scene, int fr
   NetworkConfig net;
   net.fps = scene.fps;
   net.frames = frames;
-  net.target.family = scene.target.tag.family;
-  net.target.id = scene.target.tag.id;
-  net.target.size = scene.target.tag.size;
-  // The body's other tags are its bundle (ground truth: g_wo composed with each g_ot). An extra
-  // tag repeating an id already on the body (tag_cube.yaml's decoys) or of another family
-  // cannot be told apart by the detector's one family: rendered, not written.
-  std::set<int> ids{net.target.id};
-  for (const auto& e : scene.target.extra_tags)
-    if (e.tag.family == net.target.family && ids.insert(e.tag.id).second)
-      net.target.bundle.push_back({e.tag.id, e.tag.size, e.g_ot});
+  net.targets.clear();
+  for (const auto& body : scene.targets) {
+    TargetConfig target;
+    target.family = body.tag.family;
+    target.id = body.tag.id;
+    target.size = body.tag.size;
+    // The body's other tags are its bundle (ground truth: g_wo composed with each g_ot). An
+    // extra tag repeating an id already on the body (tag_cube.yaml's decoys) or of another
+    // family cannot be told apart by the detector's one family: rendered, not written.
+    std::set<int> ids{target.id};
+    for (const auto& e : body.extra_tags)
+      if (e.tag.family == target.family && ids.insert(e.tag.id).second)
+        target.bundle.push_back({e.tag.id, e.tag.size, e.g_ot});
+    net.targets.push_back(target);
+  }
   for (const auto& c : scene.cameras) net.cameras.push_back({c.id, c.g_wi_believed, c.fps});
   net.edges = scene.edges;
   net.source = "the scene";

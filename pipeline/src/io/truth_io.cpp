@@ -349,4 +349,9 @@ std::vector<CameraTruthRow> read_truth_cameras_csv(const fs::path& file) {
   return rows;
 }
 
+std::string target_truth_file(const NetworkConfig& net, size_t target) {
+  return target == 0 ? "target.csv"
+                     : "target_" + std::to_string(net.targets.at(target).id) + ".csv";
+}
+
 }  // namespace netvmo::io

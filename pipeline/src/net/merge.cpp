@@ -139,7 +139,7 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
   }
 
   run::RunnerSettings rs = options.runner;
-  rs.tag_size = net.target.size;
+  rs.tag_size = net.target().size;
   const auto os = run::camera_observer_settings(rs, false);
   const double dt = 1.0 / net.fps;
   run::ImageRunResult result;

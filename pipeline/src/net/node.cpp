@@ -136,6 +136,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   auto provider = sources::open_dataset_source(dataset, o.camera_id, o.run.keep_going);
   const io::NetworkConfig& netcfg = provider->network();
   sources::require_static_cameras(*provider, "a camera process (netvmo launch, node)");
+  sources::require_single_target(*provider, "a camera process (netvmo launch, node)");
   const int self = netcfg.index_of(o.camera_id);
   if (self < 0)
     throw InputError(netcfg.source + ": cameras: no camera " + std::to_string(o.camera_id));
@@ -147,7 +148,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
 
   // The same settings, rounds and front end as the in-process run (run_images).
   run::RunnerSettings rs = o.run.runner;
-  rs.tag_size = netcfg.target.size;
+  rs.tag_size = netcfg.target().size;
   obs::CameraObserver net(self, graph.neighbors(self), run::camera_observer_settings(rs, false));
   obs::CameraObserver ind(self, {}, run::camera_observer_settings(rs, true));
   const SE3 g_wi = netcfg.cameras[si].g_wi;
@@ -185,7 +186,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   };
 
   frontend::DetectorSettings ds = o.run.detector;
-  frontend::set_target(ds, netcfg.target);
+  frontend::set_target(ds, netcfg.target());
   const int workers = std::max(1, std::min<int>(o.run.workers, static_cast<int>(n)));
   ds.nthreads = std::max(1, ds.nthreads / workers);
   frontend::FrontEnd front_end(ds, o.run.tracking);
@@ -257,10 +258,10 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
     if (!cam.read_failed) {
       cam.obs = front_end.observe(image, provider->calibration(si), nullptr, &track);
       if (cam.obs.delta) {
-        const auto model = frontend::observation_model(netcfg.target, cam.obs);
+        const auto model = frontend::observation_model(netcfg.target(), cam.obs);
         const auto pose = frontend::pnp_pose(cam.obs.f_normalized, model);
         if (pose) cam.g_io_pnp = pose->g_io;
-        if (!netcfg.target.bundle.empty()) cam.points_o = model.points_o;
+        if (!netcfg.target().bundle.empty()) cam.points_o = model.points_o;
       }
     }
     obs::Measurement z;

@@ -122,20 +122,26 @@ int latest_at_or_before(const std::vector<double>& times, double t) {
 
 namespace {
 
-// What the synchronised run and the run on the union of timestamps share: the runner, one front
-// end per worker thread and each camera's tracking state.
+// What the synchronised run and the run on the union of timestamps share: one runner per target,
+// one front end per worker thread (every target decided in one pass) and each camera's tracking
+// state. Front-end results are stored [target][slot].
 struct Pipeline {
   Pipeline(sources::NetworkSource& provider, const ImageRunOptions& options,
            const obs::Graph& graph)
       : provider(provider),
         options(options),
         n(provider.network().cameras.size()),
-        runner(graph, believed_at_start(provider), runner_settings(provider, options)),
+        targets(provider.network().targets),
         workers(std::max(1, std::min<int>(options.workers, static_cast<int>(n)))),
         tracks(n) {
-    runner.set_transport(make_transport(options.transport, graph));
+    for (const auto& target : targets) {
+      RunnerSettings rs = options.runner;
+      rs.tag_size = target.size;
+      runners.push_back(std::make_unique<NetworkRunner>(graph, believed_at_start(provider), rs));
+      runners.back()->set_transport(make_transport(options.transport, graph));
+    }
     frontend::DetectorSettings ds = options.detector;
-    frontend::set_target(ds, provider.network().target);
+    frontend::set_targets(ds, targets);
     // Cameras run in parallel; each worker owns a detector whose libapriltag threads share the
     // remaining cores.
     ds.nthreads = std::max(1, ds.nthreads / workers);
@@ -146,31 +152,34 @@ struct Pipeline {
     for (size_t i = 0; i < p.network().cameras.size(); ++i) g.push_back(p.camera_believed(i, 0));
     return g;
   }
-  static RunnerSettings runner_settings(const sources::NetworkSource& p, const ImageRunOptions& o) {
-    RunnerSettings rs = o.runner;
-    rs.tag_size = p.network().target.size;
-    return rs;
+  // [target][slot] storage for `slots` front-end results.
+  std::vector<std::vector<CameraFrame>> frames_for(size_t slots) const {
+    return std::vector<std::vector<CameraFrame>>(targets.size(), std::vector<CameraFrame>(slots));
   }
-  // Camera i's image `frame` through worker w's front end (and PnP when detected). An unreadable
-  // image is returned as the error (with keep_going the camera is marked blind there).
-  std::exception_ptr observe(int w, size_t i, int frame, cv::Mat& image, CameraFrame& cam) {
-    cam = CameraFrame{};
+  // Camera i's image `frame` through worker w's front end (and PnP for each detected target)
+  // into cams[j][slot]. An unreadable image is returned as the error (with keep_going the camera
+  // is marked blind there).
+  std::exception_ptr observe(int w, size_t i, int frame, cv::Mat& image,
+                             std::vector<std::vector<CameraFrame>>& cams, size_t slot) {
+    for (auto& c : cams) c[slot] = CameraFrame{};
     try {
       image = provider.read(i, frame);
     } catch (const InputError&) {
       image.release();
-      cam.read_failed = options.keep_going;
+      for (auto& c : cams) c[slot].read_failed = options.keep_going;
       return std::current_exception();
     }
-    cam.obs = front_ends[static_cast<size_t>(w)].observe(image, provider.calibration(i), nullptr,
-                                                         &tracks[i]);
-    if (cam.obs.delta) {
+    auto observations = front_ends[static_cast<size_t>(w)].observe_targets(
+        image, provider.calibration(i), nullptr, &tracks[i]);
+    for (size_t j = 0; j < targets.size(); ++j) {
+      CameraFrame& cam = cams[j][slot];
+      cam.obs = std::move(observations[j]);
+      if (!cam.obs.delta) continue;
       // PnP on the corners of every accepted tag (a bundle's object points).
-      const auto& target = provider.network().target;
-      const auto m = frontend::observation_model(target, cam.obs);
+      const auto m = frontend::observation_model(targets[j], cam.obs);
       const auto pose = frontend::pnp_pose(cam.obs.f_normalized, m);
       if (pose) cam.g_io_pnp = pose->g_io;
-      if (!target.bundle.empty()) cam.points_o = m.points_o;
+      if (!targets[j].bundle.empty()) cam.points_o = m.points_o;
     }
     return nullptr;
   }
@@ -186,12 +195,14 @@ struct Pipeline {
                                 " blind at frame " + std::to_string(frame) + ")");
     }
   }
-  // After frame k's record: the hook, the front-end results kept for the outputs, progress.
-  void frame_done(int k, const std::vector<cv::Mat>& images, const std::vector<CameraFrame>& cams,
-                  const FrameRecord& record, const FrameHook& hook, ImageRunResult& result,
-                  Progress& progress) const {
-    if (hook) hook(k, images, cams, record);
-    if (options.runner.keep_history) result.frames.push_back(cams);
+  // After frame k's records: the hook, the front-end results kept for the outputs, progress.
+  void frame_done(int k, const std::vector<cv::Mat>& images,
+                  const std::vector<std::vector<CameraFrame>>& cams,
+                  const std::vector<const FrameRecord*>& records, const FrameHook& hook,
+                  ImageRunResult& result, Progress& progress) const {
+    if (hook) hook(k, images, cams, records);
+    if (options.runner.keep_history)
+      for (size_t j = 0; j < targets.size(); ++j) result.target(j).frames.push_back(cams[j]);
     progress.update(k + 1);
   }
   // Runs f(w) for every worker w, worker 0 on the calling thread.
@@ -206,7 +217,8 @@ struct Pipeline {
   sources::NetworkSource& provider;
   const ImageRunOptions& options;
   size_t n;
-  NetworkRunner runner;
+  const std::vector<io::TargetConfig>& targets;
+  std::vector<std::unique_ptr<NetworkRunner>> runners;  // one per target
   int workers;
   std::vector<frontend::FrontEnd> front_ends;
   std::vector<frontend::TrackState> tracks;  // camera i is always handled by worker i % workers
@@ -224,7 +236,7 @@ struct Event {
 void run_union(Pipeline& p, const FrameHook& hook, ImageRunResult& result) {
   sources::NetworkSource& provider = p.provider;
   const ImageRunOptions& options = p.options;
-  const size_t n = p.n;
+  const size_t n = p.n, T = p.targets.size();
   TimeGrid grid = time_grid(provider);
   if (options.max_frames) grid.frames = std::min(grid.frames, *options.max_frames);
   const double t_end = grid.time(grid.frames - 1);
@@ -247,7 +259,7 @@ void run_union(Pipeline& p, const FrameHook& hook, ImageRunResult& result) {
       if (!options.ignore_camera_velocity && t_next > t)
         V[i] = camera_velocity(g[i], provider.camera_believed_at(i, t_next), t_next - t);
     }
-    p.runner.set_camera_motion(g, V);
+    for (auto& r : p.runners) r->set_camera_motion(g, V);
   };
   // The network starts once every camera has taken its first image (the latest first image of
   // a camera that has any): earlier images only set their cameras' held measurements, so every
@@ -260,23 +272,25 @@ void run_union(Pipeline& p, const FrameHook& hook, ImageRunResult& result) {
       has_image[e.camera] = true;
       net_start = std::max(net_start, e.t);
     }
+  // held[j][i]: camera i's latest measurement of target j, and its front end's result.
+  std::vector<std::vector<CameraInput>> held(T, std::vector<CameraInput>(n));
+  auto held_cams = p.frames_for(n);
   // Between two times: pieces of at most one grid step, each with the sub-step rule.
-  const auto advance = [&](double from, double to, const std::vector<CameraInput>& held) {
+  const auto advance = [&](double from, double to) {
     const double span = to - std::max(from, net_start);
     if (!(span > 0)) return;
     const int pieces = std::max(1, static_cast<int>(std::ceil(span / grid.dt - 1e-9)));
-    for (int q = 0; q < pieces; ++q) p.runner.advance(span / pieces, held);
+    for (size_t j = 0; j < T; ++j)
+      for (int q = 0; q < pieces; ++q) p.runners[j]->advance(span / pieces, held[j]);
   };
 
-  std::vector<CameraInput> held(n);       // each camera's latest measurement
-  std::vector<CameraFrame> held_cams(n);  // and its front end's result
   std::vector<cv::Mat> held_images(n);
   std::vector<int> held_frame(n, -1);
   // The front end runs ahead in batches of events [fe_base, fe_done): each worker takes its
   // cameras' images in time order.
   const size_t batch = std::max<size_t>(2 * n, 8);
   std::vector<cv::Mat> images;
-  std::vector<CameraFrame> cams;
+  std::vector<std::vector<CameraFrame>> cams;
   std::vector<std::exception_ptr> errors;
   size_t next_event = 0, fe_base = 0, fe_done = 0;
   double now = events.empty() ? grid.t0 : std::min(grid.t0, events.front().t);
@@ -290,14 +304,14 @@ void run_union(Pipeline& p, const FrameHook& hook, ImageRunResult& result) {
         fe_base = fe_done;
         fe_done = std::min(events.size(), fe_base + batch);
         images.assign(fe_done - fe_base, cv::Mat());
-        cams.assign(fe_done - fe_base, CameraFrame{});
+        cams = p.frames_for(fe_done - fe_base);
         errors.assign(fe_done - fe_base, nullptr);
         const auto t_fe = Clock::now();
         p.in_parallel([&](int w) {
           for (size_t e = fe_base; e < fe_done; ++e)
             if (static_cast<int>(events[e].camera % static_cast<size_t>(p.workers)) == w)
               errors[e - fe_base] = p.observe(w, events[e].camera, events[e].frame,
-                                              images[e - fe_base], cams[e - fe_base]);
+                                              images[e - fe_base], cams, e - fe_base);
         });
         result.seconds_front_end += seconds_since(t_fe);
       }
@@ -305,33 +319,40 @@ void run_union(Pipeline& p, const FrameHook& hook, ImageRunResult& result) {
       const size_t b = next_event - fe_base, i = ev.camera;
       p.report(errors[b], i, ev.frame, result);
       const auto t_obs = Clock::now();
-      advance(now, ev.t, held);
+      advance(now, ev.t);
       now = std::max(now, ev.t);
       if (moving) motion_at(now, tk);
       // Only this camera's delta_i and measurement change (held until its next image); the
       // truth at its image time is for the exact error model.
-      held_cams[i] = cams[b];
-      held[i] = camera_input(held_cams[i], provider.target_truth_at(ev.t),
-                             provider.camera_truth_at(i, ev.t));
+      for (size_t j = 0; j < T; ++j) {
+        held_cams[j][i] = cams[j][b];
+        held[j][i] = camera_input(held_cams[j][i], provider.target_truth_at(ev.t, j),
+                                  provider.camera_truth_at(i, ev.t));
+        // estimates.csv: the camera's estimate at its image's time.
+        const auto est = p.runners[j]->estimate_world(i);
+        result.target(j).own_estimates.push_back({ev.frame, ev.t, i, held[j][i].delta,
+                                                  est.has_value(),
+                                                  est.value_or(obs::SE3::Identity())});
+      }
       held_images[i] = images[b];
       held_frame[i] = ev.frame;
-      // estimates.csv: the camera's estimate at its image's time.
-      const auto est = p.runner.estimate_world(i);
-      result.own_estimates.push_back(
-          {ev.frame, ev.t, i, held[i].delta, est.has_value(), est.value_or(obs::SE3::Identity())});
       result.seconds_observer += seconds_since(t_obs);
     }
     const auto t_obs = Clock::now();
-    advance(now, tk, held);
+    advance(now, tk);
     now = std::max(now, tk);
     if (moving) motion_at(now, k + 1 < grid.frames ? grid.time(k + 1) : now);
     std::vector<std::optional<obs::SE3>> true_wi(n);
     for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth_at(i, tk);
-    const auto target = provider.target_truth_at(tk);
-    const auto& record = p.runner.record(k, tk, camera_inputs(held_cams, target, true_wi), target);
+    std::vector<const FrameRecord*> records(T);
+    for (size_t j = 0; j < T; ++j) {
+      const auto target = provider.target_truth_at(tk, j);
+      records[j] =
+          &p.runners[j]->record(k, tk, camera_inputs(held_cams[j], target, true_wi), target);
+    }
     result.source_frames[static_cast<size_t>(k)] = held_frame;
     result.seconds_observer += seconds_since(t_obs);
-    p.frame_done(k, held_images, held_cams, record, hook, result, progress);
+    p.frame_done(k, held_images, held_cams, records, hook, result, progress);
   }
   progress.finish();
   result.seconds = seconds_since(t_start);
@@ -352,22 +373,26 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
                  options.runner.rounds);
 
   Pipeline p(provider, options, graph);
-  run::NetworkRunner& runner = p.runner;
+  const size_t T = p.targets.size();
   const bool moving = provider.cameras_move();
   std::vector<obs::SE3> g_wi = Pipeline::believed_at_start(provider);
   std::vector<std::optional<obs::SE3>> true_wi(n);
   std::vector<obs::Vec6> V_wi(n, obs::Vec6::Zero());
 
   ImageRunResult result;
+  result.other_targets.resize(T - 1);
   result.warnings = provider.warnings();
   const double dt = 1.0 / net.fps;
-  result.substeps = runner.substeps(dt);
-  result.step_factor = runner.step_factor(dt);
+  result.substeps = p.runners[0]->substeps(dt);
+  result.step_factor = p.runners[0]->step_factor(dt);
   if (auto w = step_factor_warning(result.substeps, result.step_factor))
     result.warnings.push_back(*w);
+  const auto histories = [&] {
+    for (size_t j = 0; j < T; ++j) result.target(j).history = p.runners[j]->history();
+  };
   if (own_clocks) {
     run_union(p, hook, result);
-    result.history = runner.history();
+    histories();
     return result;
   }
   int frames = provider.frame_count();
@@ -376,13 +401,14 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
   Progress progress("run", frames, options.progress);
   const auto t_start = Clock::now();
   std::vector<cv::Mat> images(n);
-  std::vector<CameraFrame> cams(n);
+  auto cams = p.frames_for(n);
   std::vector<std::exception_ptr> errors(n);
+  std::vector<const FrameRecord*> records(T);
   for (int k = 0; k < frames; ++k) {
     const auto t_fe = Clock::now();
     p.in_parallel([&](int w) {
       for (size_t i = static_cast<size_t>(w); i < n; i += static_cast<size_t>(p.workers))
-        errors[i] = p.observe(w, i, k, images[i], cams[i]);
+        errors[i] = p.observe(w, i, k, images[i], cams, i);
     });
     for (size_t i = 0; i < n; ++i) p.report(errors[i], i, k, result);
     result.seconds_front_end += seconds_since(t_fe);
@@ -395,17 +421,19 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
         if (!options.ignore_camera_velocity)
           V_wi[i] = camera_velocity(g_wi[i], provider.camera_believed(i, k + 1), dt);
       }
-      runner.set_camera_motion(g_wi, V_wi);
+      for (auto& r : p.runners) r->set_camera_motion(g_wi, V_wi);
     }
-    const auto target = provider.target_truth(k);
-    const auto in = camera_inputs(cams, target, true_wi);
-    const auto& record = runner.process(k, k * dt, dt, in, target);
+    for (size_t j = 0; j < T; ++j) {
+      const auto target = provider.target_truth(k, j);
+      records[j] =
+          &p.runners[j]->process(k, k * dt, dt, camera_inputs(cams[j], target, true_wi), target);
+    }
     result.seconds_observer += seconds_since(t_obs);
-    p.frame_done(k, images, cams, record, hook, result, progress);
+    p.frame_done(k, images, cams, records, hook, result, progress);
   }
   progress.finish();
   result.seconds = seconds_since(t_start);
-  result.history = runner.history();
+  histories();
   return result;
 }
 

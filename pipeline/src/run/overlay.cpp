@@ -11,7 +11,7 @@ namespace netvmo::run {
 namespace fs = std::filesystem;
 
 namespace {
-const cv::Scalar kDetected(60, 220, 60), kEstimate(220, 60, 220), kText(255, 255, 255);
+const cv::Scalar kText(255, 255, 255);
 
 void polygon(cv::Mat& img, const std::vector<cv::Point2d>& pts, const cv::Scalar& color) {
   constexpr int kShift = 4;  // sub-pixel drawing
@@ -23,36 +23,55 @@ void polygon(cv::Mat& img, const std::vector<cv::Point2d>& pts, const cv::Scalar
 }
 }  // namespace
 
+std::pair<cv::Scalar, cv::Scalar> target_colors(size_t j) {
+  static const std::pair<cv::Scalar, cv::Scalar> kPairs[] = {
+      {{60, 220, 60}, {220, 60, 220}},   // green, magenta
+      {{230, 220, 40}, {40, 140, 255}},  // cyan, orange
+      {{60, 220, 220}, {255, 90, 60}},   // yellow, blue
+      {{200, 200, 200}, {60, 60, 230}},  // light grey, red
+  };
+  return kPairs[j % 4];
+}
+
 cv::Mat draw_overlay(const cv::Mat& gray, int camera_id, const io::Calibration& calib,
-                     const obs::SE3& g_wi, const CameraFrame& cam, const run::CameraRecord& rec,
-                     double tag_size) {
+                     const obs::SE3& g_wi, const std::vector<OverlayLayer>& layers) {
   cv::Mat img;
   if (gray.empty())
     img = cv::Mat(calib.height, calib.width, CV_8UC3, cv::Scalar(40, 40, 40));
   else
     cv::cvtColor(gray, img, cv::COLOR_GRAY2BGR);
-  if (cam.obs.delta)
-    polygon(img, std::vector<cv::Point2d>(cam.obs.corners_px.begin(), cam.obs.corners_px.end()),
-            kDetected);
-  if (rec.initialized) {
-    const obs::SE3 g_bar = g_wi.inverse() * rec.est_w;  // the camera's own estimate g_bar_i
-    const auto model = obs::FeatureModel::square(tag_size);
-    bool in_front = true;
-    std::vector<cv::Point2d> xy;
-    for (const auto& p : model.points_o) {
-      const obs::Vec3 q = g_bar * p;
-      in_front = in_front && q.z() > 1e-3;
-      xy.emplace_back(q.x() / q.z(), q.y() / q.z());
+  const bool several = layers.size() > 1;
+  std::string label = "cam " + std::to_string(camera_id);
+  for (size_t j = 0; j < layers.size(); ++j) {
+    const CameraFrame& cam = *layers[j].cam;
+    const run::CameraRecord& rec = *layers[j].rec;
+    const auto [detected, estimate] = target_colors(j);
+    if (cam.obs.delta)
+      polygon(img, std::vector<cv::Point2d>(cam.obs.corners_px.begin(), cam.obs.corners_px.end()),
+              detected);
+    if (rec.initialized) {
+      const obs::SE3 g_bar = g_wi.inverse() * rec.est_w;  // the camera's own estimate g_bar_i
+      const auto model = obs::FeatureModel::square(layers[j].target->size);
+      bool in_front = true;
+      std::vector<cv::Point2d> xy;
+      for (const auto& p : model.points_o) {
+        const obs::Vec3 q = g_bar * p;
+        in_front = in_front && q.z() > 1e-3;
+        xy.emplace_back(q.x() / q.z(), q.y() / q.z());
+      }
+      if (in_front) polygon(img, io::denormalize_points(xy, calib), estimate);
     }
-    if (in_front) polygon(img, io::denormalize_points(xy, calib), kEstimate);
+    if (j == 0 && cam.read_failed) label += "  unreadable";
+    if (cam.read_failed) continue;
+    if (several) label += "  " + std::to_string(layers[j].target->id) + ":";
+    label += cam.obs.delta ? (several ? " seen" : "  detected") : (several ? " -" : "  no target");
   }
-  const std::string label = "cam " + std::to_string(camera_id) +
-                            (cam.read_failed ? "  unreadable"
-                             : cam.obs.delta ? "  detected"
-                                             : "  no target");
   cv::putText(img, label, {10, 24}, cv::FONT_HERSHEY_SIMPLEX, 0.7, kText, 2, cv::LINE_AA);
-  cv::putText(img, "green: detection  magenta: networked estimate", {10, img.rows - 12},
-              cv::FONT_HERSHEY_SIMPLEX, 0.45, kText, 1, cv::LINE_AA);
+  const std::string legend =
+      several ? "light: detection  dark: networked estimate  (one colour pair per target)"
+              : "green: detection  magenta: networked estimate";
+  cv::putText(img, legend, {10, img.rows - 12}, cv::FONT_HERSHEY_SIMPLEX, 0.45, kText, 1,
+              cv::LINE_AA);
   return img;
 }
 
@@ -63,8 +82,8 @@ OverlayWriter::OverlayWriter(const fs::path& dir, const sources::NetworkSource& 
 }
 
 void OverlayWriter::operator()(int /*frame*/, const std::vector<cv::Mat>& images,
-                               const std::vector<CameraFrame>& cams,
-                               const run::FrameRecord& record) {
+                               const std::vector<std::vector<CameraFrame>>& cams,
+                               const std::vector<const run::FrameRecord*>& records) {
   const auto& net = provider_.network();
   const size_t n = net.cameras.size();
   const int cols = std::max(1, std::min<int>(settings_.mosaic_columns, static_cast<int>(n)));
@@ -73,9 +92,11 @@ void OverlayWriter::operator()(int /*frame*/, const std::vector<cv::Mat>& images
   cv::Size tile;
   for (size_t i = 0; i < n; ++i) {
     const auto& calib = provider_.calibration(i);
+    std::vector<OverlayLayer> layers;
+    for (size_t j = 0; j < records.size(); ++j)
+      layers.push_back({&cams[j][i], &records[j]->cameras[i], &net.targets[j]});
     const cv::Mat img = draw_overlay(images[i], net.cameras[i].id, calib,
-                                     provider_.camera_believed(i, record.frame), cams[i],
-                                     record.cameras[i], net.target.size);
+                                     provider_.camera_believed(i, records[0]->frame), layers);
     if (settings_.video) {
       if (videos_.size() <= i) videos_.resize(n);
       if (!videos_[i].isOpened()) {

@@ -49,10 +49,11 @@ json vec3(const obs::Vec3& v) {
 }  // namespace
 
 json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& options,
-                 const ImageRunResult& result) {
+                 const ImageRunResult& result, size_t target) {
   const io::NetworkConfig& net = provider.network();
   const size_t n = net.cameras.size();
-  const auto& h = result.history;
+  const ImageRunResult& tr = result.target(target);
+  const auto& h = tr.history;
   json s;
   s["dataset"] = provider.name();
   s["frames"] = h.size();
@@ -101,7 +102,7 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
     for (size_t i = 0; i < n; ++i) {
       const auto& c = r.cameras[i];
       seen[i] += c.delta;
-      failed[i] += result.frames[k][i].read_failed;
+      failed[i] += tr.frames[k][i].read_failed;
       const std::optional<obs::SE3> est =
           c.initialized ? std::optional<obs::SE3>(c.est_w) : std::nullopt;
       pnp_seq[i].push_back(c.pnp_w);
@@ -191,6 +192,34 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
       {"observer_seconds", result.seconds_observer},
       {"network_frames_per_second", result.seconds > 0 ? h.size() / result.seconds : 0.0}};
   s["warnings"] = result.warnings;
+  s["target"] = net.targets.at(target).id;
+  return s;
+}
+
+namespace {
+// The keys of a summary that belong to one target (the others describe the whole run).
+const char* const kPerTargetKeys[] = {"target",
+                                      "cameras",
+                                      "target_max_step_deg",
+                                      "centralized_pnp_average",
+                                      "final",
+                                      "eps_p_last_quarter",
+                                      "eps_R_last_quarter"};
+}  // namespace
+
+json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& options,
+                 const ImageRunResult& result) {
+  json s = run_summary(provider, options, result, 0);
+  if (result.target_count() == 1) return s;
+  json targets = json::array();
+  for (size_t j = 0; j < result.target_count(); ++j) {
+    const json sj = j == 0 ? s : run_summary(provider, options, result, j);
+    json t;
+    for (const char* key : kPerTargetKeys) t[key] = sj[key];
+    targets.push_back(t);
+  }
+  for (const char* key : kPerTargetKeys) s.erase(key);
+  s["targets"] = targets;
   return s;
 }
 
@@ -199,13 +228,19 @@ json write_run_outputs(const fs::path& dir, const sources::NetworkSource& provid
   io::ensure_directory(dir);
   const io::NetworkConfig& net = provider.network();
   const size_t n = net.cameras.size();
-  const auto& h = result.history;
+  // Several targets: a `target` column (the primary tag's id) after t, rows target by target.
+  const bool several = result.target_count() > 1;
+  const auto target_cell = [&](size_t j) {
+    return several ? "," + std::to_string(net.targets[j].id) : std::string();
+  };
+  const std::string target_col = several ? ",target" : "";
   {
     io::AtomicFile f(dir / "estimates.csv");
-    f << "frame,t,camera,delta,px,py,pz,rx,ry,rz\n";
-    const auto row = [&](int frame, double t, size_t i, bool delta, bool initialized,
+    f << "frame,t" << target_col << ",camera,delta,px,py,pz,rx,ry,rz\n";
+    const auto row = [&](int frame, double t, size_t j, size_t i, bool delta, bool initialized,
                          const obs::SE3& est_w) {
-      f << frame << ',' << t << ',' << net.cameras[i].id << ',' << (delta ? 1 : 0);
+      f << frame << ',' << t << target_cell(j) << ',' << net.cameras[i].id << ','
+        << (delta ? 1 : 0);
       if (initialized) {
         const obs::Vec3 p = est_w.translation(), w = obs::rotvec(est_w);
         f << ',' << p.x() << ',' << p.y() << ',' << p.z() << ',' << w.x() << ',' << w.y() << ','
@@ -215,43 +250,50 @@ json write_run_outputs(const fs::path& dir, const sources::NetworkSource& provid
       }
       f << '\n';
     };
-    if (!result.own_estimates.empty()) {  // cameras on their own clocks: their own rows
-      for (const auto& e : result.own_estimates)
-        row(e.frame, e.t, e.camera, e.delta, e.initialized, e.est_w);
-    } else {
-      for (const auto& r : h)
-        for (size_t i = 0; i < n; ++i)
-          row(r.frame, r.t, i, r.cameras[i].delta, r.cameras[i].initialized, r.cameras[i].est_w);
+    for (size_t j = 0; j < result.target_count(); ++j) {
+      const ImageRunResult& tr = result.target(j);
+      if (!tr.own_estimates.empty()) {  // cameras on their own clocks: their own rows
+        for (const auto& e : tr.own_estimates)
+          row(e.frame, e.t, j, e.camera, e.delta, e.initialized, e.est_w);
+      } else {
+        for (const auto& r : tr.history)
+          for (size_t i = 0; i < n; ++i)
+            row(r.frame, r.t, j, i, r.cameras[i].delta, r.cameras[i].initialized,
+                r.cameras[i].est_w);
+      }
     }
     f.commit();
   }
   {
     io::AtomicFile f(dir / "energies.csv");
-    f << "frame,t,U_p,U_R\n";
-    for (const auto& r : h)
-      if (r.energies)
-        f << r.frame << ',' << r.t << ',' << r.energies->U_p << ',' << r.energies->U_R << '\n';
+    f << "frame,t" << target_col << ",U_p,U_R\n";
+    for (size_t j = 0; j < result.target_count(); ++j)
+      for (const auto& r : result.target(j).history)
+        if (r.energies)
+          f << r.frame << ',' << r.t << target_cell(j) << ',' << r.energies->U_p << ','
+            << r.energies->U_R << '\n';
     f.commit();
   }
   {
     io::AtomicFile f(dir / "errors.csv");
-    f << "frame,t";
+    f << "frame,t" << target_col;
     for (const auto& c : net.cameras)
       f << ",cam" << c.id << "_position_mm,cam" << c.id << "_orientation_deg";
     f << '\n';
-    for (const auto& r : h) {
-      if (!r.g_star) continue;
-      f << r.frame << ',' << r.t;
-      for (size_t i = 0; i < n; ++i) {
-        if (r.cameras[i].initialized) {
-          const auto e = pose_error(r.cameras[i].est_w, *r.g_star);
-          f << ',' << e.position * 1000.0 << ',' << e.orientation_deg;
-        } else {
-          f << ",,";
+    for (size_t j = 0; j < result.target_count(); ++j)
+      for (const auto& r : result.target(j).history) {
+        if (!r.g_star) continue;
+        f << r.frame << ',' << r.t << target_cell(j);
+        for (size_t i = 0; i < n; ++i) {
+          if (r.cameras[i].initialized) {
+            const auto e = pose_error(r.cameras[i].est_w, *r.g_star);
+            f << ',' << e.position * 1000.0 << ',' << e.orientation_deg;
+          } else {
+            f << ",,";
+          }
         }
+        f << '\n';
       }
-      f << '\n';
-    }
     f.commit();
   }
   json s = run_summary(provider, options, result);

@@ -18,7 +18,8 @@ namespace {
 // The sweep replays one input per static camera and frame at 1 / fps.
 void require_sweepable(const sources::NetworkSource& provider) {
   sources::require_static_cameras(provider, "netvmo sweep");
-  if (!provider.network().target.bundle.empty())
+  sources::require_single_target(provider, "netvmo sweep");
+  if (!provider.network().target().bundle.empty())
     throw InputError(provider.network().source +
                      ": target.bundle: netvmo sweep does not take tag bundles (its inputs cache "
                      "holds one tag's 8 features); use netvmo run");

@@ -23,13 +23,19 @@ class DatasetProvider final : public NetworkSource {
  public:
   DatasetProvider(const fs::path& dir, std::optional<int> only_camera, bool keep_going)
       : ds_(open_dataset(dir, only_camera, keep_going)) {
-    const fs::path target = dir / "target.csv", cams = dir / "truth_cameras.csv";
-    if (fs::exists(target) && fs::exists(cams)) {
-      for (const auto& r : io::read_target_csv(target)) {
-        target_[r.frame] = r.g_wo;
-        if (target_times_.empty() || r.t > target_times_.back()) {  // by time, for _at
-          target_times_.push_back(r.t);
-          target_poses_.push_back(r.g_wo);
+    const fs::path cams = dir / "truth_cameras.csv";
+    targets_.resize(ds_.network.targets.size());
+    if (fs::exists(dir / "target.csv") && fs::exists(cams)) {
+      for (size_t j = 0; j < targets_.size(); ++j) {
+        const fs::path file = dir / io::target_truth_file(ds_.network, j);
+        if (j > 0 && !fs::exists(file)) continue;  // that target's truth is not known
+        TargetTruth& tt = targets_[j];
+        for (const auto& r : io::read_target_csv(file)) {
+          tt.by_frame[r.frame] = r.g_wo;
+          if (tt.times.empty() || r.t > tt.times.back()) {  // by time, for _at
+            tt.times.push_back(r.t);
+            tt.poses.push_back(r.g_wo);
+          }
         }
       }
       // Per frame, or one static pose per camera (frame -1, older datasets).
@@ -57,9 +63,10 @@ class DatasetProvider final : public NetworkSource {
   const io::Calibration& calibration(size_t i) const override { return ds_.cameras.at(i).calib; }
   int frame_count() const override { return ds_.frame_count; }
   cv::Mat read(size_t i, int frame) override { return ds_.read(i, frame); }
-  std::optional<obs::SE3> target_truth(int frame) const override {
-    const auto it = target_.find(frame);
-    if (it == target_.end()) return std::nullopt;
+  std::optional<obs::SE3> target_truth(int frame, size_t target) const override {
+    const auto& by_frame = targets_.at(target).by_frame;
+    const auto it = by_frame.find(frame);
+    if (it == by_frame.end()) return std::nullopt;
     return it->second;
   }
   std::optional<obs::SE3> camera_truth(size_t i, int frame) const override {
@@ -79,8 +86,9 @@ class DatasetProvider final : public NetworkSource {
   }
   std::string name() const override { return ds_.dir.string(); }
   // target.csv's times have 6 decimals: a time within half of that is the row's.
-  std::optional<obs::SE3> target_truth_at(double t) const override {
-    return pose_at(target_times_, target_poses_, t, 5e-7);
+  std::optional<obs::SE3> target_truth_at(double t, size_t target) const override {
+    const TargetTruth& tt = targets_.at(target);
+    return pose_at(tt.times, tt.poses, t, 5e-7);
   }
   std::optional<obs::SE3> camera_truth_at(size_t i, double t) const override {
     if (i >= camera_truth_.size()) return std::nullopt;
@@ -104,9 +112,12 @@ class DatasetProvider final : public NetworkSource {
   }
 
   Dataset ds_;
-  std::map<int, obs::SE3> target_;
-  std::vector<double> target_times_;  ///< target.csv's rows in time order
-  std::vector<obs::SE3> target_poses_;
+  struct TargetTruth {
+    std::map<int, obs::SE3> by_frame;
+    std::vector<double> times;  ///< the file's rows in time order
+    std::vector<obs::SE3> poses;
+  };
+  std::vector<TargetTruth> targets_;  ///< per target of network.yaml
   /// Per camera: its true poses by frame, or (flag set) one static pose.
   std::vector<std::pair<std::vector<obs::SE3>, bool>> camera_truth_;
   bool moving_ = false;
@@ -197,6 +208,13 @@ void require_static_cameras(const NetworkSource& source, const std::string& what
     throw InputError(source.name() + ": cameras.csv: the camera poses change over time (or " +
                      "differ from network.yaml's), and " + what +
                      " handles static cameras at their network.yaml poses only (use netvmo run)");
+}
+
+void require_single_target(const NetworkSource& source, const std::string& what) {
+  const auto& targets = source.network().targets;
+  if (targets.size() > 1)
+    throw InputError(source.network().source + ": targets: " + std::to_string(targets.size()) +
+                     " targets, and " + what + " runs one target's observer only (use netvmo run)");
 }
 
 std::unique_ptr<NetworkSource> open_dataset_source(const fs::path& dir,

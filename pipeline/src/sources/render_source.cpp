@@ -24,8 +24,8 @@ class RenderProvider final : public NetworkSource {
   cv::Mat read(size_t i, int frame) override {
     return renderer_.render(static_cast<int>(i), frame);
   }
-  std::optional<obs::SE3> target_truth(int frame) const override {
-    return renderer_.target_pose(frame);
+  std::optional<obs::SE3> target_truth(int frame, size_t target) const override {
+    return renderer_.target_pose(frame, target);
   }
   std::optional<obs::SE3> camera_truth(size_t i, int frame) const override {
     return renderer_.camera_pose(static_cast<int>(i), frame);
@@ -38,8 +38,8 @@ class RenderProvider final : public NetworkSource {
     return std::any_of(cams.begin(), cams.end(), [](const auto& c) { return c.moving(); });
   }
   std::string name() const override { return "live rendering"; }
-  std::optional<obs::SE3> target_truth_at(double t) const override {
-    return renderer_.scene().target.motion.at(t);
+  std::optional<obs::SE3> target_truth_at(double t, size_t target) const override {
+    return renderer_.scene().targets.at(target).motion.at(t);
   }
   std::optional<obs::SE3> camera_truth_at(size_t i, double t) const override {
     return renderer_.scene().cameras.at(i).true_pose(t);

@@ -76,8 +76,8 @@ class Renderer {
   double traced_fraction(int camera_index);
   /// Ground truth of camera `camera_index` at `frame`.
   FrameTruth truth(int camera_index, int frame);
-  /// True target pose at frame k.
-  Pose target_pose(int frame) const;
+  /// True pose of target `target` (index in SceneDescription::targets) at frame k.
+  Pose target_pose(int frame, size_t target = 0) const;
   /// True pose of camera `camera_index` at frame k (it renders from there; static cameras:
   /// CameraSpec::g_wi_true).
   Pose camera_pose(int camera_index, int frame) const;

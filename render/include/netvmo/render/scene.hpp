@@ -91,7 +91,9 @@ struct Imaging {
 
 struct SceneDescription {
   std::vector<CameraSpec> cameras;
-  Target target;
+  /// The tagged bodies, at least one; the first is "the" target of single-target scenes. Tags
+  /// are told apart by id: no (family, id) on two of them.
+  std::vector<Target> targets{Target{}};
   std::vector<Body> occluders;
   std::vector<Light> lights{Light{}};
   Imaging imaging;
@@ -99,6 +101,9 @@ struct SceneDescription {
   int frames = 1;
   std::vector<std::pair<int, int>> edges;  ///< communication graph, camera ids
 
+  /// The first target.
+  const Target& target() const { return targets.at(0); }
+  Target& target() { return targets.at(0); }
   /// Throws std::invalid_argument with one line naming the problem.
   void validate() const;
   /// Whether every camera takes its images at the scene's clock (k / fps, no own fps or start).

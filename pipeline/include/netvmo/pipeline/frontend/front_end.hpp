@@ -43,6 +43,9 @@ Eigen::Matrix<double, 8, 1> normalized_features(const std::array<cv::Point2d, 4>
 
 /// The detector settings' tag ids for a target: family, primary id and bundle ids.
 void set_target(DetectorSettings& s, const io::TargetConfig& target);
+/// The same for several targets decided in one pass (DetectorSettings::tags_per_target; one
+/// target: as set_target). The targets share the first one's family.
+void set_targets(DetectorSettings& s, const std::vector<io::TargetConfig>& targets);
 
 /// The object points (object frame o) that go with an observation's f_normalized: for each
 /// accepted slot k, the 4 corners of that tag, g_ot(k) * (+-s_k/2, +-s_k/2, 0) in libapriltag's
@@ -56,6 +59,10 @@ obs::FeatureModel observation_model(const io::TargetConfig& target, const TagObs
 double narrowest_side(const std::array<cv::Point2d, 4>& corners);
 
 /// Tracking and acquisition: how each frame is searched (FrontEnd::observe with a TrackState).
+/// With several targets "the target" below is every target: the window covers every tag
+/// accepted in the last frame, and the whole image is searched whenever the window misses any
+/// target (so a target out of a camera's view costs that camera a full-frame search per frame,
+/// as a blind camera pays); the acquisition pass runs only while no target is seen.
 ///  - While a camera keeps detecting the target, the next frame is searched first in a window
 ///    around the last corners, at full resolution (decimate 1) when the last tag's narrowest
 ///    side was below `full_res_below_px`; if that fails and `shadow_retry`, the window again on
@@ -89,9 +96,8 @@ void validate(const TrackingSettings& t);
 
 /// One camera's tracking state (keep one per camera, pass it on every frame).
 struct TrackState {
-  std::optional<std::array<cv::Point2d, 4>> last;  ///< corners of the last detection
-  /// With a bundle: the corners of every tag accepted in the last detection (the window covers
-  /// them all; `last` is the first of them).
+  /// Corners of every tag accepted in the last frame (every tag of a bundle, of every target):
+  /// the window covers them all. Empty: the camera had no target in the last frame.
   std::vector<std::array<cv::Point2d, 4>> last_all;
   int frames_since_full = 0;
   int blind_frames = 0;  ///< consecutive frames without the target (acquisition period)
@@ -115,6 +121,13 @@ class FrontEnd {
   /// pass runs as described at TrackingSettings; without it, one full-frame search.
   TagObservation observe(const cv::Mat& gray, const io::Calibration& calib,
                          FrameDetections* all = nullptr, TrackState* track = nullptr);
+  /// The same for every target of the settings (DetectorSettings::tags_per_target), decided in
+  /// one pass per search: one observation per target, in order (observe() returns the first).
+  std::vector<TagObservation> observe_targets(const cv::Mat& gray, const io::Calibration& calib,
+                                              FrameDetections* all = nullptr,
+                                              TrackState* track = nullptr);
+  /// The number of targets observe_targets() reports.
+  size_t target_count() const;
   const TrackingSettings& tracking() const { return tracking_; }
 
   TagDetector& detector() { return detector_; }

@@ -52,6 +52,10 @@ struct DetectorSettings {
   /// The ids of the body's other tags (a tag bundle: network.yaml's target.bundle, in its
   /// order), each decided by the same rules as target_id. Empty (default): a single tag.
   std::vector<int> bundle_ids;
+  /// Several targets (network.yaml `targets:`), decided in the same pass: how many of the tags
+  /// [target_id, bundle_ids...] belong to each target, in order (target j's tags follow target
+  /// j - 1's; each target is decided as a body of its own). Empty (default): one target.
+  std::vector<int> tags_per_target;
   double min_decision_margin = 20.0;  ///< reject target detections with a lower decision margin
   int max_hamming = 1;                ///< reject target detections with more corrected bits
   // Refinement of the accepted target's corners
@@ -116,6 +120,14 @@ struct TagDecision {
   int index = -1;      ///< index into FrameDetections::all of the accepted detection, or -1
 };
 
+/// The decision about one target (a body of one or more tags) in one frame.
+struct TargetDecision {
+  TargetStatus status = TargetStatus::not_found;
+  std::string reason;    ///< empty when detected
+  size_t first_tag = 0;  ///< its tags are FrameDetections::tags[first_tag, first_tag + tag_count)
+  size_t tag_count = 1;
+};
+
 /// All tags decoded in a frame and the decision about the target. With a bundle
 /// (DetectorSettings::bundle_ids) the target is `detected` when at least one of its tags is;
 /// otherwise the status and reason are those of the tag that got furthest (duplicate_id, then
@@ -127,8 +139,11 @@ struct FrameDetections {
   std::string reason;     ///< why the target was rejected (empty when detected)
   int target_index = -1;  ///< index into `all` of the accepted primary tag, or -1
   /// One decision per tag of the body: the primary, then the bundle in order (empty when the
-  /// image was not searched).
+  /// image was not searched). Several targets: every target's tags, target after target.
   std::vector<TagDecision> tags;
+  /// One decision per target (DetectorSettings::tags_per_target; one entry for a single
+  /// target), each by the rules above over its own tags; `status` and `reason` are target 0's.
+  std::vector<TargetDecision> targets;
   /// The accepted target detection (refined corners), or nullptr.
   const TagDetection* target() const {
     return target_index >= 0 ? &all[static_cast<size_t>(target_index)] : nullptr;

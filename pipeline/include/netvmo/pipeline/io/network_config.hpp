@@ -5,6 +5,9 @@
 //   target: {family: tag36h11, id: 0, size: 0.2}   # size = side of the black border square, m
 //     bundle:                                 # optional: the body's other tags (same family)
 //       - {id: 1, size: 0.15, p: [x, y, z], r: [rx, ry, rz]}   # pose g_ot in the object frame
+//   targets:                                  # or, several tagged bodies (instead of target):
+//     - {family: tag36h11, id: 0, size: 0.2}  #   each a map as target (bundle included); one
+//     - {family: tag36h11, id: 5, size: 0.1}  #   family for all, no tag id on two targets
 //   cameras:                                  # believed camera poses g_wi in the world
 //     - {id: 1, p_wi: [x, y, z], r_wi: [rx, ry, rz]}   # r_wi: rotation vector of R_wi
 //       fps: 15                               # optional: this camera's own frame rate (> 0;
@@ -15,8 +18,8 @@
 // the key path; so are duplicate camera ids, non-positive ids, unknown ids or self-loops or
 // duplicates in edges, an unsupported tag family, and non-positive fps or size; in a bundle, an
 // id listed twice (the primary's included), a non-positive size, two overlapping tags
-// (tags_overlap). `frames` is the
-// only optional top-level key.
+// (tags_overlap); both `target` and `targets`, an empty `targets`, a tag id on two targets, or
+// targets of different families. `frames` is the only optional top-level key.
 #pragma once
 
 #include <filesystem>
@@ -73,11 +76,16 @@ struct CameraConfig {
 struct NetworkConfig {
   double fps = 0.0;
   std::optional<int> frames;  ///< optional frame count declared by the dataset
-  TargetConfig target;
+  /// The tagged bodies, at least one (`target:` in network.yaml gives exactly one). Each has
+  /// its own networked observer; a target is named by its primary tag's id.
+  std::vector<TargetConfig> targets{TargetConfig{}};
   std::vector<CameraConfig> cameras;
   std::vector<std::pair<int, int>> edges;  ///< camera ids
   std::string source;                      ///< file it was read from
 
+  /// The first (for a single-target dataset, the only) target.
+  const TargetConfig& target() const { return targets.at(0); }
+  TargetConfig& target() { return targets.at(0); }
   /// Index of a camera id in `cameras`, or -1.
   int index_of(int camera_id) const;
   /// The frame rate of camera `index`: its own `fps`, else the dataset's.

@@ -28,6 +28,7 @@
 
 #include "netvmo/observer/lie.hpp"
 #include "netvmo/pipeline/frontend/tag_detector.hpp"
+#include "netvmo/pipeline/io/network_config.hpp"
 #include "netvmo/render/renderer.hpp"
 
 namespace netvmo::io {
@@ -125,6 +126,11 @@ std::string format_timestamp_row(int camera, int frame, double t);
 /// One truth.csv line (without newline): times with 6 decimals, corners with 4 (a corner behind
 /// the camera is written empty).
 std::string format_truth_row(const render::FrameTruth& t);
+/// The ground-truth file of target `target` in a dataset folder: target.csv for the first,
+/// target_<id>.csv (id: its primary tag's; the same columns) for a later one of network.yaml's
+/// `targets:`.
+std::string target_truth_file(const NetworkConfig& net, size_t target);
+
 /// One target.csv line (without newline): position and rotation vector with 9 digits.
 std::string format_target_row(int frame, double t, const obs::SE3& g_wo);
 /// One truth_cameras.csv line (without newline).

@@ -44,10 +44,11 @@ struct CameraFrame {
   bool read_failed = false;  ///< the image could not be read (only with keep_going)
 };
 
-/// Called after each frame with the frame's images, the front-end results and the record.
-using FrameHook =
-    std::function<void(int frame, const std::vector<cv::Mat>& images,
-                       const std::vector<CameraFrame>& cams, const run::FrameRecord& record)>;
+/// Called after each frame with the frame's images, the front-end results [target][camera] and
+/// each target's record (one target unless network.yaml lists several).
+using FrameHook = std::function<void(int frame, const std::vector<cv::Mat>& images,
+                                     const std::vector<std::vector<CameraFrame>>& cams,
+                                     const std::vector<const run::FrameRecord*>& records)>;
 
 /// One camera's estimate after one of its own images: a row of estimates.csv when the cameras
 /// run on their own clocks.
@@ -60,6 +61,8 @@ struct EstimateRow {
   obs::SE3 est_w = obs::SE3::Identity();
 };
 
+/// A run's results. The per-target fields (history, frames, own_estimates) are the first
+/// target's; with several targets (network.yaml `targets:`) other_targets holds the others'.
 struct ImageRunResult {
   /// Every frame's record and front-end results; only the last record when
   /// runner.keep_history is false (then `frames` stays empty).
@@ -81,6 +84,13 @@ struct ImageRunResult {
   /// `netvmo run` on cameras on their own clocks: the observer advanced on the union of their
   /// image times (run_images); summary.json says so.
   bool union_of_timestamps = false;
+  /// Several targets: targets 1, 2, ... of network.yaml, each with its own history, frames and
+  /// own_estimates (their other fields are unused: the run's are this result's).
+  std::vector<ImageRunResult> other_targets;
+  /// Target j's per-target fields (0: this result).
+  ImageRunResult& target(size_t j) { return j == 0 ? *this : other_targets.at(j - 1); }
+  const ImageRunResult& target(size_t j) const { return j == 0 ? *this : other_targets.at(j - 1); }
+  size_t target_count() const { return 1 + other_targets.size(); }
 };
 
 /// The regular grid on which runs of cameras on their own clocks are evaluated (the energies,
@@ -136,7 +146,10 @@ int checked_rounds(double dt, double k_e, double k_s, int max_degree, int rounds
 /// V = log(g_k^-1 g_k1) / dt, so g_k exp(dt hat(V)) = g_k1 (zero when the poses are equal).
 obs::Vec6 camera_velocity(const obs::SE3& g_k, const obs::SE3& g_k1, double dt);
 
-/// Runs the whole network over the provider's frames.
+/// Runs the whole network over the provider's frames. Several targets (network.yaml
+/// `targets:`): the front end decides every target in one pass over each image (FrontEnd::
+/// observe_targets) and each target has its own networked observer (its own NetworkRunner with
+/// its tag size), delta_i, g* and metrics, all stepped on the same times.
 ///
 /// Cameras on their own clocks (sources::clock_mismatch: their own fps, or different times for
 /// the same frame index): the run is on the union of every camera's image times

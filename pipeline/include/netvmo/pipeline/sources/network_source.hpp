@@ -26,8 +26,9 @@ class NetworkSource {
   /// InputError naming the file when an image exists but cannot be read. Thread-safe for
   /// different cameras of the same frame.
   virtual cv::Mat read(size_t camera_index, int frame) = 0;
-  /// True target pose in the world at a frame, when known.
-  virtual std::optional<obs::SE3> target_truth(int frame) const = 0;
+  /// True pose in the world of target `target` (index in network().targets) at a frame, when
+  /// known.
+  virtual std::optional<obs::SE3> target_truth(int frame, size_t target = 0) const = 0;
   /// True pose of a camera in the world at a frame, when known.
   virtual std::optional<obs::SE3> camera_truth(size_t camera_index, int frame) const = 0;
   /// Believed pose g_wi of a camera at a frame (cameras.csv, the live renderer); by default
@@ -65,9 +66,11 @@ class NetworkSource {
   // Ground truth and believed poses at any time t [s] (cameras on their own clocks: the run's
   // regular grid falls between images), interpolated on the geodesic between the nearest
   // recorded poses (pose_at).
-  /// True target pose at time t, when known (dataset: target.csv's rows by their t).
-  virtual std::optional<obs::SE3> target_truth_at(double t) const {
+  /// True pose of target `target` at time t, when known (dataset: target.csv's rows, or
+  /// target_<id>.csv's for a later target, by their t).
+  virtual std::optional<obs::SE3> target_truth_at(double t, size_t target = 0) const {
     (void)t;
+    (void)target;
     return std::nullopt;
   }
   /// True pose of a camera at time t, when known (dataset: truth_cameras.csv by the times of the
@@ -112,11 +115,15 @@ std::optional<std::string> irregular_clock(const NetworkSource& source);
 /// static cameras only.
 void require_static_cameras(const NetworkSource& source, const std::string& what);
 
+/// Refuses (InputError, one line naming network.yaml's targets and `what`) a source with several
+/// targets: `what` runs one target's observer only.
+void require_single_target(const NetworkSource& source, const std::string& what);
+
 /// A dataset folder (sources/dataset.hpp documents the layout). Ground truth is read from
-/// target.csv (true target poses) and truth_cameras.csv (true camera poses per frame, or one
-/// per camera in older datasets) when both are present; believed camera poses per frame from
-/// cameras.csv when present. `only_camera`, `keep_going`: see
-/// open_dataset.
+/// target.csv (true poses of the first target; target_<id>.csv for each later target of
+/// network.yaml's `targets:`, id its primary tag's) and truth_cameras.csv (true camera poses per
+/// frame, or one per camera in older datasets) when both are present; believed camera poses per
+/// frame from cameras.csv when present. `only_camera`, `keep_going`: see open_dataset.
 std::unique_ptr<NetworkSource> open_dataset_source(const std::filesystem::path& dir,
                                                    std::optional<int> only_camera = {},
                                                    bool keep_going = false);
