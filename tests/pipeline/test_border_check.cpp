@@ -1,7 +1,8 @@
 // The border / quiet-zone check of the accepted target on synthesized images with exactly
 // known corners: a quad with one side on an occluder's outline (dark or bright occluder) or on
 // the image border is rejected as border_mismatch with the failing side in the reason, while
-// clean, blurred and shadowed tags are kept.
+// clean, blurred and shadowed tags are kept, also blurred and gamma-encoded as by a camera (the
+// blur discount of the thickness test).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -26,11 +27,7 @@ DetectorSettings with_check(bool on) {
   return s;
 }
 
-double max_corner_error(const std::array<cv::Point2d, 4>& a, const std::array<cv::Point2d, 4>& b) {
-  double e = 0.0;
-  for (size_t k = 0; k < 4; ++k) e = std::max(e, cv::norm(a[k] - b[k]));
-  return e;
-}
+using testing::max_corner_error;
 
 /// Multiplies the image by `factor` on the left of the directed line through `p` at angle
 /// `angle` (4x4 supersampled, so the shadow edge is a sharp, pixel-integrated straight edge).
@@ -220,20 +217,15 @@ TEST(BorderCheck, PointSampledTagsKept) {
   EXPECT_GT(worst_point_sampled, DetectorSettings{}.border_max_thickness_error);  // not vacuous
 }
 
-/// A camera's picture of a print: the tag rendered in linear light with black ink at 5 % of the
-/// white (12 of 230), blurred by a Gaussian of `sigma` px, gamma-encoded as sRGB roughly is
-/// (v^(1/2.2)), then sensor noise sigma 2 (seeded).
+/// A camera's picture of a print (testing::render_camera_picture): black ink at 5 % of the
+/// white (12 of 230), blurred by a Gaussian of `sigma` px in linear light, gamma-encoded as
+/// sRGB roughly is (v^(1/2.2)), then sensor noise sigma 2 (seeded).
 cv::Mat camera_picture(const io::Calibration& calib, const obs::SE3& g, double sigma,
                        testing::SynthOptions opt, unsigned seed) {
   opt.black = 12.0;
-  cv::Mat lin;
-  testing::render_tags(calib, {{0, kSize, g, {}}}, opt).convertTo(lin, CV_64F, 1.0 / 255.0);
-  cv::GaussianBlur(lin, lin, cv::Size(0, 0), sigma);
-  cv::pow(lin, 1.0 / 2.2, lin);
-  cv::Mat img;
-  lin.convertTo(img, CV_8U, 255.0);
-  add_noise(img, 2.0, seed);
-  return img;
+  opt.noise_sigma = 2.0;
+  opt.seed = seed;
+  return testing::render_camera_picture(calib, {{0, kSize, g, {}}}, opt, sigma);
 }
 
 // The tone curve of a camera moves every edge of a blurred print towards the dark side (0.42
@@ -278,14 +270,8 @@ TEST(BorderCheck, BlurredTagThinnedByTheToneCurveKeptWrongSideRejected) {
     // The same picture, one side of the quad moved along its outward normal.
     for (size_t k = 0; k < 4; ++k) {
       if (std::isnan(bd.thickness_error[k])) continue;  // no white data cell next to it
-      const cv::Point2d a0 = c[k], a1 = c[(k + 1) % 4], centre = 0.25 * (c[0] + c[1] + c[2] + c[3]);
-      cv::Point2d n(a1.y - a0.y, a0.x - a1.x);
-      n /= cv::norm(n);
-      if (n.dot(0.5 * (a0 + a1) - centre) < 0) n = -n;
       for (double d : {-1.5, -1.0, 1.0, 1.5}) {
-        auto w = c;
-        w[k] += d * n;
-        w[(k + 1) % 4] += d * n;
+        const auto w = testing::move_side(c, k, d);
         if (max_corner_error(w, truth) <= 1.0) continue;
         ++wrong_quads;
         const BorderCheck bw = check_border(img, w, pattern, 8, dflt, &calib);

@@ -563,22 +563,28 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
   // A camera's tone curve moves every edge of a blurred print alike: gamma encoding puts a
   // blurred edge a fraction of the blur toward the dark side (0.42 sigma per edge for sRGB and
   // black ink at 5 % of the white), so a correct border looks thinner on all four sides. The
-  // thinning that every measured side (at least 3) shares, that of the least thin side, is
-  // discounted up to border_blur_allowance x the measured blur. A side on an occluder's outline
+  // thinning that every side shares (at least 3, and every side with a white data cell next to
+  // it measured), that of the least thin side, is discounted up to border_blur_allowance x the
+  // measured blur. A side on an occluder's outline
   // is thinner alone (or with its neighbour, towards one corner): the other sides do not share
   // its error, so it is judged as before. A border thicker on every side is not discounted.
   const double spread = median(spreads);
   out.edge_blur = std::isnan(spread) ? 0.0 : std::sqrt(std::max(0.0, spread * spread - 0.25));
   {
-    int measured = 0, thinner = 0;
+    int planned = 0, measured = 0, thinner = 0;
     double least = -std::numeric_limits<double>::infinity();  // the least thin side
-    for (double t : out.thickness_error) {
+    for (size_t k = 0; k < 4; ++k) {
+      const double t = out.thickness_error[k];
+      planned += edge_t[k].size() >= 4;
       if (std::isnan(t)) continue;
       ++measured;
       thinner += t < 0.0;
       least = std::max(least, t);
     }
-    if (measured >= 3 && thinner == measured)
+    // Every side the bitmap lets us measure must have been measured: a side whose inner edge
+    // is not found where one cell inside it should be (a side moved off the border) is no
+    // evidence of a thinning shared by all sides.
+    if (measured >= 3 && measured == planned && thinner == measured)
       out.common_offset = std::max(least, -s.border_blur_allowance * out.edge_blur);
   }
 

@@ -72,11 +72,12 @@ struct DetectorSettings {
   /// a corner more than 1 px off (README, front end).
   double border_max_thickness_error = 0.6;
   /// Blur allowance of the thickness test [px of offset per px of measured blur]: when every
-  /// measured side (at least 3) looks thinner than a cell, the thinning of the least thin one
-  /// is discounted from all sides, up to this x BorderCheck::edge_blur. 1.0 covers a
-  /// gamma-encoded camera: encoding (v^(1/2.2)) an edge blurred by a Gaussian of sigma s moves
-  /// it 0.42 s (black ink at 5 % of the white) to 0.47 s (3 %) toward the dark side, so a
-  /// correct border looks 0.83-0.94 s thinner on all sides. 0: the fixed limit alone.
+  /// measured side (at least 3, and every side with a white data cell next to it) looks thinner
+  /// than a cell, the thinning of the least thin one is discounted from all sides, up to this x
+  /// BorderCheck::edge_blur. 1.0 covers a gamma-encoded camera: encoding (v^(1/2.2)) an edge
+  /// blurred by a Gaussian of sigma s moves it 0.42 s (black ink at 5 % of the white) to 0.47 s
+  /// (3 %) toward the dark side, so a correct border looks 0.83-0.94 s thinner on all sides.
+  /// 0: the fixed limit alone.
   double border_blur_allowance = 1.0;
 };
 
@@ -219,8 +220,8 @@ struct BorderCheck {
   /// so heavy blur on small cells is underestimated (a smaller allowance). 0 when unmeasured.
   double edge_blur = 0.0;
   /// The offset discounted from every side's thickness error (<= 0): when all measured sides
-  /// (at least 3) look thinner, the error of the least thin one, but no lower than
-  /// -border_blur_allowance x edge_blur; otherwise 0.
+  /// (at least 3, and every side with a white data cell next to it) look thinner, the error of
+  /// the least thin one, but no lower than -border_blur_allowance x edge_blur; otherwise 0.
   double common_offset = 0.0;
 };
 
@@ -252,12 +253,13 @@ cv::Mat tag_pattern(const std::string& family, int id);
 ///    first and last measured point: the side's thickness error e_k (the one of larger
 ///    magnitude). A camera's tone curve moves every edge of a blurred print toward the dark
 ///    side, so a correct border looks thinner on all four sides: when at least 3 sides are
-///    measured and all are thinner (e_k < 0), the common offset c is the error of the least
-///    thin one, but no lower than -border_blur_allowance x `edge_blur` (the measured Gaussian
-///    blur of the inner edges beyond the pixel's own); otherwise c = 0 (a border thicker on
-///    every side is not discounted). The side fails when |e_k - c| >
-///    border_max_thickness_error (needs 4 points), 0.5 px more in a point-sampled image
-///    (`aliased`). A side fitted to an occluder's outline that hides part of the border cell
+///    measured, every side with a white data cell next to it among them (a side whose inner edge
+///    is not found is no evidence), and all are thinner (e_k < 0), the common offset c is the
+///    error of the least thin one, but no lower than -border_blur_allowance x `edge_blur` (the
+///    measured Gaussian blur of the inner edges beyond the pixel's own); otherwise c = 0 (a
+///    border thicker on every side is not discounted). The side fails when
+///    |e_k - c| > border_max_thickness_error (needs 4 points), 0.5 px more in a point-sampled
+///    image (`aliased`). A side fitted to an occluder's outline that hides part of the border cell
 ///    row makes the border look thinner towards the wrong corner, whatever the occluder's
 ///    brightness; the other sides do not share that error, so c stays near 0.
 /// Families without a black border ring inside a white one (tagStandard41h12, ...) are not
