@@ -290,6 +290,12 @@ void add_detect(CLI::App& app, int& exit_code) {
                   "this from one cell inside it [px], 0 to 10")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 10.0));
+  cmd->add_option("--border-blur-allowance", o->det.border_blur_allowance,
+                  "Border check: the thinning every side shares is discounted up to this x the "
+                  "measured edge blur (a camera's tone curve thins a blurred border; 0: the "
+                  "fixed limit alone), 0 to 10")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 10.0));
   cmd->add_option("--refine", o->refinement,
                   "Corner refinement of the target: none, subpix (cv::cornerSubPix) or edges "
                   "(lines fitted to the border edges)")

@@ -11,6 +11,7 @@
 #include <memory>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 #include <random>
 #include <stdexcept>
@@ -154,6 +155,44 @@ cv::Mat render_tags(const Calibration& calib, const std::vector<SynthTag>& tags,
       out.at<uchar>(r, col) = cv::saturate_cast<uchar>(v);
     }
   }
+  return out;
+}
+
+cv::Mat render_camera_picture(const Calibration& calib, const std::vector<SynthTag>& tags,
+                              const SynthOptions& opt, double blur_sigma, double gamma) {
+  SynthOptions linear = opt;
+  linear.noise_sigma = 0.0;
+  cv::Mat v;
+  render_tags(calib, tags, linear).convertTo(v, CV_64F, 1.0 / 255.0);
+  if (blur_sigma > 0.0) cv::GaussianBlur(v, v, cv::Size(0, 0), blur_sigma);
+  cv::pow(v, 1.0 / gamma, v);
+  v *= 255.0;
+  if (opt.noise_sigma > 0.0) {
+    std::mt19937_64 rng(opt.seed);
+    std::normal_distribution<double> noise(0.0, opt.noise_sigma);
+    for (int r = 0; r < v.rows; ++r)
+      for (int c = 0; c < v.cols; ++c) v.at<double>(r, c) += noise(rng);
+  }
+  cv::Mat out;
+  v.convertTo(out, CV_8U);  // rounds and saturates
+  return out;
+}
+
+double max_corner_error(const std::array<cv::Point2d, 4>& a, const std::array<cv::Point2d, 4>& b) {
+  double e = 0.0;
+  for (size_t k = 0; k < 4; ++k) e = std::max(e, cv::norm(a[k] - b[k]));
+  return e;
+}
+
+std::array<cv::Point2d, 4> move_side(const std::array<cv::Point2d, 4>& quad, size_t k, double d) {
+  const cv::Point2d a = quad[k], b = quad[(k + 1) % 4];
+  const cv::Point2d centre = 0.25 * (quad[0] + quad[1] + quad[2] + quad[3]);
+  cv::Point2d n(b.y - a.y, a.x - b.x);
+  n /= cv::norm(n);
+  if (n.dot(0.5 * (a + b) - centre) < 0) n = -n;
+  auto out = quad;
+  out[k] += d * n;
+  out[(k + 1) % 4] += d * n;
   return out;
 }
 

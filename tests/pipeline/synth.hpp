@@ -45,10 +45,23 @@ struct SynthOptions {
 cv::Mat render_tags(const io::Calibration& calib, const std::vector<SynthTag>& tags,
                     const SynthOptions& opt = {});
 
+/// A camera's picture of the tags: render_tags() without noise, taken as linear light, blurred
+/// by a Gaussian of `blur_sigma` px (0: none), encoded as v^(1/gamma) (2.2 about as sRGB; 1:
+/// linear), then Gaussian noise of opt.noise_sigma (seeded with opt.seed) and 8-bit rounding.
+cv::Mat render_camera_picture(const io::Calibration& calib, const std::vector<SynthTag>& tags,
+                              const SynthOptions& opt, double blur_sigma, double gamma = 2.2);
+
 /// The true corners of a tag (obs::FeatureModel::square order) in OpenCV pixels, with
 /// distortion (cv::projectPoints).
 std::array<cv::Point2d, 4> project_corners(const io::Calibration& calib, const obs::SE3& g_io,
                                            double size);
+
+/// Largest distance between corresponding corners of two quads [px].
+double max_corner_error(const std::array<cv::Point2d, 4>& a, const std::array<cv::Point2d, 4>& b);
+
+/// The quad with side k (corner k to corner k+1) moved by `d` px along its outward normal
+/// (away from the quad's centre; negative: inwards), both its corners alike.
+std::array<cv::Point2d, 4> move_side(const std::array<cv::Point2d, 4>& quad, size_t k, double d);
 
 /// A 640x480 calibration (fx 610, fy 605, cx 321.7, cy 238.4), optionally with moderate
 /// distortion (k1 -0.12, k2 0.05, p1 4e-4, p2 -3e-4, k3 0).

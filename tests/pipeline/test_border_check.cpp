@@ -1,7 +1,8 @@
 // The border / quiet-zone check of the accepted target on synthesized images with exactly
 // known corners: a quad with one side on an occluder's outline (dark or bright occluder) or on
 // the image border is rejected as border_mismatch with the failing side in the reason, while
-// clean, blurred and shadowed tags are kept.
+// clean, blurred and shadowed tags are kept, also blurred and gamma-encoded as by a camera (the
+// blur discount of the thickness test).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -26,11 +27,7 @@ DetectorSettings with_check(bool on) {
   return s;
 }
 
-double max_corner_error(const std::array<cv::Point2d, 4>& a, const std::array<cv::Point2d, 4>& b) {
-  double e = 0.0;
-  for (size_t k = 0; k < 4; ++k) e = std::max(e, cv::norm(a[k] - b[k]));
-  return e;
-}
+using testing::max_corner_error;
 
 /// Multiplies the image by `factor` on the left of the directed line through `p` at angle
 /// `angle` (4x4 supersampled, so the shadow edge is a sharp, pixel-integrated straight edge).
@@ -57,6 +54,21 @@ void add_noise(cv::Mat& img, double sigma, unsigned seed) {
       img.at<uchar>(r, c) = cv::saturate_cast<uchar>(img.at<uchar>(r, c) + n(rng));
 }
 
+/// An occluder of gray `level` covering the image left of the tag's left side + `edge_cells`
+/// cells, the tag 1.5 m ahead and rolled by `roll`: its pose, true corners and the image options.
+struct OccluderCase {
+  double level, roll, edge_cells;
+  obs::SE3 pose() const { return testing::facing_pose(1.5, 0.0, 0.0, {0.0, 0.0, roll}); }
+  testing::SynthOptions options(const std::array<cv::Point2d, 4>& truth) const {
+    const double left = 0.5 * (truth[0].x + truth[3].x), cell = cv::norm(truth[1] - truth[0]) / 8;
+    testing::SynthOptions opt;
+    opt.occluder_level = level;
+    opt.occluders = {cv::Rect(0, 0, static_cast<int>(std::lround(left + edge_cells * cell)), 480)};
+    return opt;
+  }
+};
+constexpr OccluderCase kOccluderCases[] = {{20, 0.03, -0.4}, {90, 0.06, -0.4}, {200, 0.06, 0.2}};
+
 // An occluder covers the tag's left side, its straight edge a few degrees off the side, so
 // libapriltag fits the left side to the occluder's outline (a corner 1.8-3.7 px off) and
 // still decodes the tag. Without the check the quad is accepted; with it the frame is
@@ -66,18 +78,11 @@ void add_noise(cv::Mat& img, double sigma, unsigned seed) {
 // thinner border.
 TEST(BorderCheck, QuadOnAnOccludersOutlineRejected) {
   const auto calib = testing::test_calibration();
-  struct Case {
-    double level, roll, edge_cells;  // occluder gray level, tag roll, its edge from the left side
-  };
-  for (const Case& c : {Case{20, 0.03, -0.4}, Case{90, 0.06, -0.4}, Case{200, 0.06, 0.2}}) {
-    const obs::SE3 g = testing::facing_pose(1.5, 0.0, 0.0, {0.0, 0.0, c.roll});
+  for (const OccluderCase& c : kOccluderCases) {
+    const obs::SE3 g = c.pose();
     const auto truth = testing::project_corners(calib, g, kSize);
-    const double left = 0.5 * (truth[0].x + truth[3].x), cell = cv::norm(truth[1] - truth[0]) / 8;
-    testing::SynthOptions opt;
+    testing::SynthOptions opt = c.options(truth);
     opt.noise_sigma = 2.0;
-    opt.occluder_level = c.level;
-    opt.occluders = {
-        cv::Rect(0, 0, static_cast<int>(std::lround(left + c.edge_cells * cell)), 480)};
     const cv::Mat img = testing::render_tags(calib, {{0, kSize, g, {}}}, opt);
     const std::string what = "occluder level " + std::to_string(c.level);
 
@@ -210,6 +215,91 @@ TEST(BorderCheck, PointSampledTagsKept) {
       }
   std::printf("point-sampled: largest inner-edge offset %.2f px\n", worst_point_sampled);
   EXPECT_GT(worst_point_sampled, DetectorSettings{}.border_max_thickness_error);  // not vacuous
+}
+
+/// A camera's picture of a print (testing::render_camera_picture): black ink at 5 % of the
+/// white (12 of 230), blurred by a Gaussian of `sigma` px in linear light, gamma-encoded as
+/// sRGB roughly is (v^(1/2.2)), then sensor noise sigma 2 (seeded).
+cv::Mat camera_picture(const io::Calibration& calib, const obs::SE3& g, double sigma,
+                       testing::SynthOptions opt, unsigned seed) {
+  opt.black = 12.0;
+  opt.noise_sigma = 2.0;
+  opt.seed = seed;
+  return testing::render_camera_picture(calib, {{0, kSize, g, {}}}, opt, sigma);
+}
+
+// The tone curve of a camera moves every edge of a blurred print towards the dark side (0.42
+// sigma per edge for sRGB and 5 % black ink), so a correct border looks thinner on all four
+// sides: on these tags (cells of 5-6 px) blurred by sigma 1 px and gamma-encoded, 0.55-0.8 px,
+// and the fixed 0.6 px limit (border_blur_allowance 0) rejects correct quads. The default
+// discounts the thinning all sides share, up to the measured blur: every correct quad is
+// kept, while the same quads with one measured side moved 1 or 1.5 px (in or out), and a quad
+// on a bright or dark occluder's outline in the same picture, are still rejected.
+TEST(BorderCheck, BlurredTagThinnedByTheToneCurveKeptWrongSideRejected) {
+  const auto calib = testing::test_calibration();
+  const std::vector<obs::SE3> poses = {testing::facing_pose(2.5, 0.1, -0.05, {0.2, -0.1, 0.5}),
+                                       testing::facing_pose(3.0, -0.15, 0.1, {-0.2, 0.25, -1.0}),
+                                       testing::facing_pose(2.5, -0.2, -0.1, {0.1, 0.3, 2.2}),
+                                       testing::facing_pose(3.0, 0.2, 0.05, {0.3, 0.1, -2.6})};
+  DetectorSettings fixed = with_check(true);
+  fixed.border_blur_allowance = 0.0;
+  const DetectorSettings dflt = with_check(true);
+  const cv::Mat pattern = tag_pattern("tag36h11", 0);
+  int fixed_rejects = 0, wrong_quads = 0;
+  for (size_t p = 0; p < poses.size(); ++p) {
+    const std::string what = "pose " + std::to_string(p);
+    const auto truth = testing::project_corners(calib, poses[p], kSize);
+    const cv::Mat img = camera_picture(calib, poses[p], 1.0, {}, static_cast<unsigned>(300 + p));
+    const auto a = TagDetector(with_check(false)).detect(img, &calib);
+    ASSERT_EQ(a.status, TargetStatus::detected) << what;
+    const auto& c = a.target()->corners;
+    ASSERT_LT(max_corner_error(c, truth), 1.0) << what << ": not a correct quad";
+    const BorderCheck bf = check_border(img, c, pattern, 8, fixed, &calib);
+    const BorderCheck bd = check_border(img, c, pattern, 8, dflt, &calib);
+    std::printf(
+        "%s: corners %.2f px off, thickness errors %.2f %.2f %.2f %.2f, blur %.2f px, "
+        "discounted %.2f; fixed limit: %s\n",
+        what.c_str(), max_corner_error(c, truth), bd.thickness_error[0], bd.thickness_error[1],
+        bd.thickness_error[2], bd.thickness_error[3], bd.edge_blur, bd.common_offset,
+        bf.ok ? "kept" : bf.reason.c_str());
+    fixed_rejects += !bf.ok;
+    EXPECT_TRUE(bd.ok) << what << ": " << bd.reason;
+    EXPECT_LT(bd.common_offset, 0.0) << what;
+    EXPECT_EQ(TagDetector(dflt).detect(img, &calib).status, TargetStatus::detected) << what;
+
+    // The same picture, one side of the quad moved along its outward normal.
+    for (size_t k = 0; k < 4; ++k) {
+      if (std::isnan(bd.thickness_error[k])) continue;  // no white data cell next to it
+      for (double d : {-1.5, -1.0, 1.0, 1.5}) {
+        const auto w = testing::move_side(c, k, d);
+        if (max_corner_error(w, truth) <= 1.0) continue;
+        ++wrong_quads;
+        const BorderCheck bw = check_border(img, w, pattern, 8, dflt, &calib);
+        EXPECT_FALSE(bw.ok) << what << ", side " << k << " moved " << d << " px";
+      }
+    }
+  }
+  EXPECT_GT(fixed_rejects, 0) << "the fixed limit kept every tag: the test shows nothing";
+  EXPECT_GT(wrong_quads, 20);
+  std::printf("fixed limit rejected %d of %zu correct quads; %d wrong quads checked\n",
+              fixed_rejects, poses.size(), wrong_quads);
+
+  // A quad on an occluder's outline (the cases of QuadOnAnOccludersOutlineRejected), blurred
+  // and encoded the same way.
+  for (const OccluderCase& oc : kOccluderCases) {
+    const obs::SE3 g = oc.pose();
+    const auto truth = testing::project_corners(calib, g, kSize);
+    const cv::Mat img = camera_picture(calib, g, 1.0, oc.options(truth), 400);
+    const std::string what = "occluder level " + std::to_string(oc.level);
+    const auto unchecked = TagDetector(with_check(false)).detect(img, &calib);
+    ASSERT_EQ(unchecked.status, TargetStatus::detected) << what;
+    const double err = max_corner_error(unchecked.target()->corners, truth);
+    std::printf("%s: without the check a corner is %.2f px off\n", what.c_str(), err);
+    ASSERT_GT(err, 1.0) << what << ": libapriltag did not fit the occluder's edge";
+    const auto checked = TagDetector(dflt).detect(img, &calib);
+    EXPECT_EQ(checked.status, TargetStatus::border_mismatch) << what;
+    std::printf("  with it: %s\n", checked.reason.c_str());
+  }
 }
 
 // Families without a black border ring inside a white one are not checked.

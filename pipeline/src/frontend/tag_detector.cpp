@@ -63,6 +63,8 @@ void validate(const DetectorSettings& s) {
   if (!(s.border_max_failed_fraction >= 0.0 && s.border_max_failed_fraction <= 1.0))
     bad("border_max_failed_fraction must be in 0..1");
   if (!(s.border_max_thickness_error > 0.0)) bad("border_max_thickness_error must be > 0");
+  if (!(s.border_blur_allowance >= 0.0 && s.border_blur_allowance <= 10.0))
+    bad("border_blur_allowance must be in 0..10");
 }
 
 inline double sample_bilinear(const cv::Mat& g, double x, double y) {
@@ -108,6 +110,29 @@ bool edge_offset(const cv::Mat& g, cv::Point2d p, cv::Point2d n, double w, doubl
   }
   s_out = s0;
   return true;
+}
+
+/// Spread of a dark-to-bright edge along the unit normal n through p (p on the edge): the
+/// standard deviation of the intensity differences within +-w, sampled every 0.25 px with
+/// bilinear interpolation [px]. For a step blurred by a Gaussian of sigma s, integrated over the
+/// pixel (variance 1/12 px^2) and interpolated bilinearly (variance 1/6 px^2), it is
+/// sqrt(s^2 + 0.25) until the window truncates it. NaN where the differences do not rise.
+double edge_spread(const cv::Mat& g, cv::Point2d p, cv::Point2d n, double w) {
+  constexpr double h = 0.25;
+  const int m = static_cast<int>(std::ceil(w / h));
+  double sum_g = 0.0, sum_sg = 0.0, sum_ssg = 0.0;
+  double prev = sample_bilinear(g, p.x - m * h * n.x, p.y - m * h * n.y);
+  for (int j = -m + 1; j <= m; ++j) {
+    const double cur = sample_bilinear(g, p.x + j * h * n.x, p.y + j * h * n.y);
+    const double d = cur - prev, s = (j - 0.5) * h;
+    sum_g += d;
+    sum_sg += d * s;
+    sum_ssg += d * s * s;
+    prev = cur;
+  }
+  if (!(sum_g > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  const double c = sum_sg / sum_g;
+  return std::sqrt(std::max(0.0, sum_ssg / sum_g - c * c));
 }
 
 bool refine_edge_lines(const cv::Mat& g, std::array<cv::Point2d, 4>& c, int border_cells,
@@ -461,7 +486,7 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
   // every edge position is quantised to the pixel grid by up to 0.5 px, so the border's two
   // edges may disagree by up to 1 px on a correct quad.
   int near_side = 0, intermediate = 0;
-  std::vector<double> near, offsets, ts;
+  std::vector<double> near, offsets, ts, spreads;
   for (int k = 0; k < 4; ++k) {
     const size_t ks = static_cast<size_t>(k);
     // Contrast samples.
@@ -537,11 +562,41 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
       }
       offsets.push_back(sv);
       ts.push_back(edge_t[ks][i]);
+      const double spread = edge_spread(gray, e + sv * nin, nin, 0.5 * cell);
+      if (!std::isnan(spread)) spreads.push_back(spread);
     }
     out.thickness_error[ks] = end_offset(ts, offsets);
   }
   out.aliased = near_side >= 16 && intermediate < 0.1 * near_side;
   out.thickness_limit = s.border_max_thickness_error + (out.aliased ? 0.5 : 0.0);
+
+  // A camera's tone curve moves every edge of a blurred print alike: gamma encoding puts a
+  // blurred edge a fraction of the blur toward the dark side (0.42 sigma per edge for sRGB and
+  // black ink at 5 % of the white), so a correct border looks thinner on all four sides. The
+  // thinning that every side shares (at least 3, and every side with a white data cell next to
+  // it measured), that of the least thin side, is discounted up to border_blur_allowance x the
+  // measured blur. A side on an occluder's outline
+  // is thinner alone (or with its neighbour, towards one corner): the other sides do not share
+  // its error, so it is judged as before. A border thicker on every side is not discounted.
+  const double spread = median(spreads);
+  out.edge_blur = std::isnan(spread) ? 0.0 : std::sqrt(std::max(0.0, spread * spread - 0.25));
+  {
+    int planned = 0, measured = 0, thinner = 0;
+    double least = -std::numeric_limits<double>::infinity();  // the least thin side
+    for (size_t k = 0; k < 4; ++k) {
+      const double t = out.thickness_error[k];
+      planned += edge_t[k].size() >= 4;
+      if (std::isnan(t)) continue;
+      ++measured;
+      thinner += t < 0.0;
+      least = std::max(least, t);
+    }
+    // Every side the bitmap lets us measure must have been measured: a side whose inner edge
+    // is not found where one cell inside it should be (a side moved off the border) is no
+    // evidence of a thinning shared by all sides.
+    if (measured >= 3 && measured == planned && thinner == measured)
+      out.common_offset = std::max(least, -s.border_blur_allowance * out.edge_blur);
+  }
 
   // A side fails on either test; the reason names the side that fails worst (relative to its
   // threshold), which is the one on the occluder's outline when the others only inherit part
@@ -554,9 +609,10 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
     const double contrast_excess =
         std::max(failed / std::max(1.0, s.border_max_failed_fraction * m),
                  out.outside[ks] > 0 ? 1.0 + static_cast<double>(out.outside[ks]) / m : 0.0);
-    const double thickness_excess = std::isnan(out.thickness_error[ks])
-                                        ? 0.0
-                                        : std::abs(out.thickness_error[ks]) / out.thickness_limit;
+    const double thickness_excess =
+        std::isnan(out.thickness_error[ks])
+            ? 0.0
+            : std::abs(out.thickness_error[ks] - out.common_offset) / out.thickness_limit;
     // A quiet zone cut by the image border cannot be verified: a tag is only accepted with its
     // quiet zone in the image (else a partly visible neighbour, e.g. on another face of a cube,
     // could pass and hide the target as a duplicate).
@@ -577,11 +633,18 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
                     "side %d (corners %d-%d): quiet zone not brighter than the border at %d of "
                     "%d samples",
                     k, k, (k + 1) % 4, failed, m);
-    else
+    else if (out.common_offset == 0.0)
       std::snprintf(buf, sizeof buf,
                     "side %d (corners %d-%d): black border %.2f px %s than one cell", k, k,
                     (k + 1) % 4, std::abs(out.thickness_error[ks]),
                     out.thickness_error[ks] < 0 ? "thinner" : "thicker");
+    else
+      std::snprintf(buf, sizeof buf,
+                    "side %d (corners %d-%d): black border %.2f px %s than one cell (%.2f px "
+                    "of it on every side discounted for blur)",
+                    k, k, (k + 1) % 4, std::abs(out.thickness_error[ks]),
+                    out.thickness_error[ks] < 0 ? "thinner" : "thicker",
+                    std::abs(out.common_offset));
     out.reason = buf;
   }
   return out;

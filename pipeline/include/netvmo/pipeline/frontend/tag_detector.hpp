@@ -75,6 +75,14 @@ struct DetectorSettings {
   /// rendered frames: at most 0.49 px on fully visible tags, at least 0.68 px on quads with
   /// a corner more than 1 px off (README, front end).
   double border_max_thickness_error = 0.6;
+  /// Blur allowance of the thickness test [px of offset per px of measured blur]: when every
+  /// measured side (at least 3, and every side with a white data cell next to it) looks thinner
+  /// than a cell, the thinning of the least thin one is discounted from all sides, up to this x
+  /// BorderCheck::edge_blur. 1.0 covers a gamma-encoded camera: encoding (v^(1/2.2)) an edge
+  /// blurred by a Gaussian of sigma s moves it 0.42 s (black ink at 5 % of the white) to 0.47 s
+  /// (3 %) toward the dark side, so a correct border looks 0.83-0.94 s thinner on all sides.
+  /// 0: the fixed limit alone.
+  double border_blur_allowance = 1.0;
 };
 
 /// One decoded tag.
@@ -220,6 +228,16 @@ struct BorderCheck {
   /// The limit the thickness errors were held to: border_max_thickness_error, plus 0.5 px
   /// when `aliased` (the border's two edges may then disagree by up to 1 px on a correct quad).
   double thickness_limit = 0.0;
+  /// Gaussian sigma of the blur of the border's inner edges beyond the pixel's own [px]:
+  /// sqrt(spread^2 - 0.25) of the median spread of the intensity differences across the
+  /// measured inner-edge points (window +-0.5 cell; 0.25 px^2 is the spread of a sharp edge
+  /// integrated over the pixel and interpolated bilinearly). The window truncates the spread,
+  /// so heavy blur on small cells is underestimated (a smaller allowance). 0 when unmeasured.
+  double edge_blur = 0.0;
+  /// The offset discounted from every side's thickness error (<= 0): when all measured sides
+  /// (at least 3, and every side with a white data cell next to it) look thinner, the error of
+  /// the least thin one, but no lower than -border_blur_allowance x edge_blur; otherwise 0.
+  double common_offset = 0.0;
 };
 
 /// The tag's bitmap as libapriltag prints it (apriltag_to_image): total_width x total_width
@@ -247,11 +265,18 @@ cv::Mat tag_pattern(const std::string& family, int id);
 ///    the edge refinement (window 0.45 cell, at most 4 px), kept only where the centroid in
 ///    half that window agrees to 0.2 px (no second edge, such as a shadow boundary, nearby).
 ///    A line through the offsets (robust least squares along the side) is evaluated at the
-///    first and last measured point; the side fails when either is further than
-///    border_max_thickness_error px from one cell inside the side (needs 4 points), 0.5 px more
-///    in a point-sampled image (`aliased`). A side fitted to an occluder's outline that hides
-///    part of the border cell row makes the border look thinner towards the wrong corner,
-///    whatever the occluder's brightness.
+///    first and last measured point: the side's thickness error e_k (the one of larger
+///    magnitude). A camera's tone curve moves every edge of a blurred print toward the dark
+///    side, so a correct border looks thinner on all four sides: when at least 3 sides are
+///    measured, every side with a white data cell next to it among them (a side whose inner edge
+///    is not found is no evidence), and all are thinner (e_k < 0), the common offset c is the
+///    error of the least thin one, but no lower than -border_blur_allowance x `edge_blur` (the
+///    measured Gaussian blur of the inner edges beyond the pixel's own); otherwise c = 0 (a
+///    border thicker on every side is not discounted). The side fails when
+///    |e_k - c| > border_max_thickness_error (needs 4 points), 0.5 px more in a point-sampled
+///    image (`aliased`). A side fitted to an occluder's outline that hides part of the border cell
+///    row makes the border look thinner towards the wrong corner, whatever the occluder's
+///    brightness; the other sides do not share that error, so c stays near 0.
 /// Families without a black border ring inside a white one (tagStandard41h12, ...) are not
 /// checked (`checked` false).
 BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners,
