@@ -22,7 +22,6 @@ InProcessVmo::InProcessVmo(const Graph& graph) : n_(graph.size()) {
   moving_.resize(n);
   wi_room_.resize(n);
   sees_.resize(n);
-  V_.resize(n);
   u_.resize(n);
   round0_.resize(n);
   incarnation_.resize(n);
@@ -44,7 +43,6 @@ bool InProcessVmo::gather(const CameraObserver& c, int i) {
   g_bar_[k] = kernel::pose_of(c.st_.g_bar);
   g_wi_[k] = kernel::pose_of(c.g_wi_);
   wi_room_[k] = kernel::check_has_room(g_wi_[k]);
-  V_[k] = c.V_wi_;
   moving_[k] = !c.V_wi_.isZero(0.0);
   init_[k] = c.st_.initialized;
   u_[k] = c.st_.u;
@@ -84,8 +82,9 @@ bool InProcessVmo::step(int i, int cur, const Measurement& z, double h, bool pub
     Vec6 visual;
     if (sees_[k]) visual = model_->error(kernel::to_se3(g_bar_[k]), z, s_->features);
     u_[k] = kernel::vmo_input(*s_, mutual, sees_[k] ? &visual : nullptr);
+    // Static camera (V_wi = 0): frames with a moving camera never reach this loop (run()).
     static const Vec6 still = Vec6::Zero();
-    g_bar_[k] = kernel::integrate(g_bar_[k], moving_[k] ? V_[k] : still, u_[k], h, &unit);
+    g_bar_[k] = kernel::integrate(g_bar_[k], still, u_[k], h, &unit);
   }
   if (!publish) return true;
   auto& next = pub_[1 - cur][k];

@@ -66,7 +66,7 @@ class InProcessVmo {
   std::vector<unsigned char> pub_init_[2];  ///< the published `initialized` flag
   std::vector<unsigned char> init_, moving_, sees_, refused_;
   std::vector<unsigned char> wi_room_;  ///< kernel::check_has_room(g_wi)
-  std::vector<Vec6> V_, u_;
+  std::vector<Vec6> u_;
   std::vector<std::uint64_t> round0_, incarnation_;
 };
 

@@ -33,6 +33,22 @@ inline std::string slurp(const std::filesystem::path& p) {
   return s.str();
 }
 
+/// Writes `text` to `file` (replacing it) and returns the path.
+inline std::filesystem::path write_text(const std::filesystem::path& file,
+                                        const std::string& text) {
+  std::ofstream(file) << text;
+  return file;
+}
+
+/// `text` with the first occurrence of `from` replaced by `to` (a test's variant of a valid
+/// file); fails the test when `from` does not occur.
+inline std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << "'" << from << "' not in the text";
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
 struct CliResult {
   int code = -1;
   std::string out, err;

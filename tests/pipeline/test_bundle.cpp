@@ -30,15 +30,11 @@ const char* kBundleNetwork =
     "edges: []\n";
 
 fs::path write_network(const fs::path& dir, const std::string& text) {
-  const fs::path f = dir / "network.yaml";
-  std::ofstream(f) << text;
-  return f;
+  return test::write_text(dir / "network.yaml", text);
 }
 
 std::string with(const std::string& from, const std::string& to) {
-  std::string s = kBundleNetwork;
-  s.replace(s.find(from), from.size(), to);
-  return s;
+  return test::replaced(kBundleNetwork, from, to);
 }
 
 // The wedge of datasets/tag_bundle.yaml: the primary tag and a second one turned 45 degrees

@@ -26,15 +26,11 @@ const char* kTwoTargets =
     "edges: []\n";
 
 fs::path write_network(const fs::path& dir, const std::string& text) {
-  const fs::path f = dir / "network.yaml";
-  std::ofstream(f) << text;
-  return f;
+  return test::write_text(dir / "network.yaml", text);
 }
 
 std::string with(const std::string& from, const std::string& to) {
-  std::string s = kTwoTargets;
-  s.replace(s.find(from), from.size(), to);
-  return s;
+  return test::replaced(kTwoTargets, from, to);
 }
 }  // namespace
 

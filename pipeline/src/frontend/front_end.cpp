@@ -161,7 +161,7 @@ std::vector<TagObservation> FrontEnd::observe_targets(const cv::Mat& gray,
       const bool first = searches == 0;
       searches |= what;
       FrameDetections d = detector_.detect(gray, region, &calib, opt);
-      if (d.status == TargetStatus::detected || all_found(d)) found_by = what;
+      if (all_found(d)) found_by = what;
       if (first)
         dets = std::move(d);
       else
