@@ -250,7 +250,10 @@ void add_detect(CLI::App& app, int& exit_code) {
   cmd->add_option("--sigma", o->det.quad_sigma, "libapriltag quad_sigma (Gaussian blur, 0 to 10)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 10.0));
-  cmd->add_option("--threads", o->det.nthreads, "libapriltag nthreads (1 to 64)")
+  cmd->add_option(
+         "--threads", o->det.nthreads,
+         "libapriltag nthreads (1 to 64; > 1 uses libapriltag 3.3's worker pool, which has "
+         "a known race: DetectorSettings::nthreads)")
       ->capture_default_str()
       ->check(CLI::Range(1, 64));
   cmd->add_option("--refine-edges", o->det.refine_edges, "libapriltag refine_edges (true/false)")

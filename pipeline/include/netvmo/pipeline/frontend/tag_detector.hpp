@@ -38,7 +38,14 @@ struct DetectorSettings {
   std::string family = "tag36h11";  ///< tag family (see render::tag_families())
   double quad_decimate = 2.0;       ///< decimation of the image for quad search (>= 1)
   double quad_sigma = 0.0;          ///< Gaussian blur sigma applied before quad search
-  int nthreads = 2;                 ///< worker threads of libapriltag
+  /// Worker threads of libapriltag. 1: the detection runs on the calling thread. libapriltag
+  /// 3.3.0 (Debian 12) has a race in its worker pool: a worker woken spuriously may read a task
+  /// from an array that workerpool_add_task is reallocating, and call through a stale pointer
+  /// (AprilRobotics/apriltag pull request 339, merged after 3.3.0). Seen once here as a SEGV in
+  /// a libapriltag thread under AddressSanitizer. netvmo runs cameras in parallel itself (one
+  /// detector per worker, ImageRunOptions::workers), so 1 costs `netvmo run` nothing; > 1 only
+  /// speeds up a single camera's detection, with that risk.
+  int nthreads = 1;
   bool refine_edges = true;         ///< libapriltag's edge refinement of the quads
   double decode_sharpening = 0.25;  ///< sharpening of the decoded bit samples
   int bits_corrected = 2;           ///< error bits the decoder may correct (libapriltag default)
