@@ -11,6 +11,7 @@
 #   render datasets/paper5_render.yaml: every image, calibration, network.yaml and truth file
 #   run on that rendered dataset (each build on its own rendering):
 #       estimates.csv, energies.csv, errors.csv, summary.json without its "timing" block
+#   detect on that rendered dataset: detections.csv
 #   (not the output folders' .lock files: they hold the writer's pid)
 # Exit status 0 when everything is identical; a CSV file whose every field is the same number
 # written differently (e.g. -0 and 0) counts as identical and is listed; otherwise the
@@ -65,8 +66,12 @@ else
   new_name="working tree $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo '+changes')"
 fi
 echo "compare_outputs: reference $(git rev-parse --short "$ref"), against $new_name, $frames frames"
+launcher=()
+if command -v ccache >/dev/null; then  # a compiler cache, where the machine has one
+  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+fi
 build() {  # build SRC_DIR BUILD_DIR
-  cmake -S "$1" -B "$2" -DNETVMO_BUILD_TESTS=OFF -DNETVMO_BUILD_BENCHMARKS=OFF >/dev/null
+  cmake -S "$1" -B "$2" -DNETVMO_BUILD_TESTS=OFF -DNETVMO_BUILD_BENCHMARKS=OFF "${launcher[@]}" >/dev/null
   cmake --build "$2" -j2 --target netvmo >/dev/null
 }
 echo "compare_outputs: building the reference"
@@ -82,6 +87,7 @@ produce() {  # produce NETVMO NAME: outputs in $work/NAME, produced under one co
   done
   "$bin" render "$top/datasets/paper5_render.yaml" --out "$out/dataset" --frames "$frames" --quiet >/dev/null
   "$bin" run "$out/dataset" --out "$out/run" --no-overlays --no-plots >/dev/null 2>&1
+  "$bin" detect "$out/dataset" --out "$out/detect" --quiet >/dev/null
   # Wall-clock timings differ from run to run; everything else must not.
   awk '/^  "timing": \{/ {skip = 1} !skip {print} skip && /^  \},?$/ {skip = 0}' \
     "$out/run/summary.json" > "$out/run/summary.notiming.json"

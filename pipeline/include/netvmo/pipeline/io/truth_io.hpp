@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "netvmo/observer/lie.hpp"
-#include "netvmo/pipeline/frontend/tag_detector.hpp"
+#include "netvmo/pipeline/frontend/detections.hpp"
 #include "netvmo/pipeline/io/network_config.hpp"
 #include "netvmo/render/renderer.hpp"
 

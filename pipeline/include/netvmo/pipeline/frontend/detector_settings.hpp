@@ -1,0 +1,75 @@
+// The front end's detector settings: libapriltag's, the target decision's, the refinement's and
+// the border check's, as one plain struct with documented defaults.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "netvmo/pipeline/frontend/refine.hpp"
+
+namespace netvmo::frontend {
+
+/// Detector settings. Defaults documented next to each field.
+struct DetectorSettings {
+  // libapriltag (apriltag_detector_t) settings
+  std::string family = "tag36h11";  ///< tag family (see render::tag_families())
+  double quad_decimate = 2.0;       ///< decimation of the image for quad search (>= 1)
+  double quad_sigma = 0.0;          ///< Gaussian blur sigma applied before quad search
+  /// Worker threads of libapriltag. 1: the detection runs on the calling thread. libapriltag
+  /// 3.3.0 (Debian 12) has a race in its worker pool: a worker woken spuriously may read a task
+  /// from an array that workerpool_add_task is reallocating, and call through a stale pointer
+  /// (AprilRobotics/apriltag pull request 339, merged after 3.3.0). Seen once here as a SEGV in
+  /// a libapriltag thread under AddressSanitizer. netvmo runs cameras in parallel itself (one
+  /// detector per worker, ImageRunOptions::workers), so 1 costs `netvmo run` nothing; > 1 only
+  /// speeds up a single camera's detection, with that risk.
+  int nthreads = 1;
+  bool refine_edges = true;         ///< libapriltag's edge refinement of the quads
+  double decode_sharpening = 0.25;  ///< sharpening of the decoded bit samples
+  int bits_corrected = 2;           ///< error bits the decoder may correct (libapriltag default)
+  /// libapriltag qtp.min_white_black_diff: local contrast (gray levels) below which a region is
+  /// not thresholded. libapriltag's default is 5; 20 skips the quad fitting of sensor-noise
+  /// clusters (about 5x faster on 640x480 frames with noise sigma 2, see the README's front-end
+  /// benchmark) and still finds tags whose black/white contrast is 40 gray levels or more (tested).
+  int min_white_black_diff = 20;
+  // Acceptance of the target tag
+  int target_id = 0;  ///< the target's (primary) tag id
+  /// The ids of the body's other tags (a tag bundle: network.yaml's target.bundle, in its
+  /// order), each decided by the same rules as target_id. Empty (default): a single tag.
+  std::vector<int> bundle_ids;
+  /// Several targets (network.yaml `targets:`), decided in the same pass: how many of the tags
+  /// [target_id, bundle_ids...] belong to each target, in order (target j's tags follow target
+  /// j - 1's; each target is decided as a body of its own). Empty (default): one target.
+  std::vector<int> tags_per_target;
+  double min_decision_margin = 20.0;  ///< reject target detections with a lower decision margin
+  int max_hamming = 1;                ///< reject target detections with more corrected bits
+  // Refinement of the accepted target's corners
+  Refinement refinement = Refinement::edge_lines;
+  // Border / quiet-zone consistency check of the accepted target's refined corners (see
+  // check_border()): a quad with a side on an occluder's outline, a shadow edge or the image
+  // border is rejected as TargetStatus::border_mismatch.
+  bool border_check = true;
+  /// A contrast sample passes when (quiet zone - border) >= this x (local white - border).
+  /// 0.2 keeps a quiet zone in deep shadow next to a lit border (0.3 of the lit white, as the
+  /// renderer's ambient-only shadows); an occluder close to the black ink fails it.
+  double border_min_contrast = 0.2;
+  /// A side fails when more than this fraction of its contrast samples fail.
+  double border_max_failed_fraction = 0.2;
+  /// A side fails when the inner edge of its black border (measured where the adjacent data
+  /// cell is white) lies further than this from one cell inside the side [px]. Measured on
+  /// rendered frames: at most 0.49 px on fully visible tags, at least 0.68 px on quads with
+  /// a corner more than 1 px off (README, front end).
+  double border_max_thickness_error = 0.6;
+  /// Blur allowance of the thickness test [px of offset per px of measured blur]: when every
+  /// measured side (at least 3, and every side with a white data cell next to it) looks thinner
+  /// than a cell, the thinning of the least thin one is discounted from all sides, up to this x
+  /// BorderCheck::edge_blur. 1.0 covers a gamma-encoded camera: encoding (v^(1/2.2)) an edge
+  /// blurred by a Gaussian of sigma s moves it 0.42 s (black ink at 5 % of the white) to 0.47 s
+  /// (3 %) toward the dark side, so a correct border looks 0.83-0.94 s thinner on all sides.
+  /// 0: the fixed limit alone.
+  double border_blur_allowance = 1.0;
+};
+
+/// Throws InputError naming the first field out of its range.
+void validate(const DetectorSettings& s);
+
+}  // namespace netvmo::frontend

@@ -1,0 +1,388 @@
+#include "netvmo/pipeline/frontend/border_check.hpp"
+
+#include <apriltag/apriltag.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+
+#include "netvmo/pipeline/error.hpp"
+#include "netvmo/render/tag_family.hpp"
+#include "sampling.hpp"
+
+namespace netvmo::frontend {
+
+namespace {
+
+using detail::edge_offset;
+using detail::edge_spread;
+using detail::inside;
+using detail::median;
+using detail::sample_bilinear;
+
+/// Offsets r_i of the inner border edge measured at positions t_i along a side (cells): the
+/// line r(t) = a + b t fitted to them (least squares, then again without the points further
+/// than max(0.3 px, 3 robust sigmas) from it), evaluated at the first and the last measured
+/// position; returns the one of larger magnitude. A side that is shifted or tilted against the
+/// true border edge makes r constant or growing towards the wrong corner. Not extrapolated to
+/// the corners: with 2x2 supersampled or aliased images a short stretch of edge carries up to
+/// ~0.25 px of quantisation error, which extrapolation would amplify. With the points spanning
+/// less than 2 cells, their median. NaN for fewer than 4 points.
+double end_offset(const std::vector<double>& t, const std::vector<double>& r) {
+  const size_t k = r.size();
+  if (k < 4) return std::numeric_limits<double>::quiet_NaN();
+  const auto [tmin, tmax] = std::minmax_element(t.begin(), t.end());
+  if (*tmax - *tmin < 2.0) return median(r);
+  std::vector<char> use(k, 1);
+  double a = 0.0, b = 0.0;
+  for (int pass = 0; pass < 2; ++pass) {
+    double s0 = 0, st = 0, stt = 0, sr = 0, str = 0;
+    for (size_t i = 0; i < k; ++i)
+      if (use[i]) {
+        s0 += 1, st += t[i], stt += t[i] * t[i], sr += r[i], str += t[i] * r[i];
+      }
+    const double det = s0 * stt - st * st;
+    if (s0 < 3 || !(det > 1e-9)) break;
+    b = (s0 * str - st * sr) / det;
+    a = (sr - b * st) / s0;
+    std::vector<double> res(k);
+    for (size_t i = 0; i < k; ++i) res[i] = std::abs(r[i] - a - b * t[i]);
+    const double cut = std::max(0.3, 3.0 * 1.4826 * median(res));
+    for (size_t i = 0; i < k; ++i) use[i] = res[i] <= cut;
+  }
+  const double r0 = a + b * *tmin, r1 = a + b * *tmax;
+  return std::abs(r0) >= std::abs(r1) ? r0 : r1;
+}
+
+/// Object square in cell units -> image pixels: the homography of the corners, in undistorted
+/// (ideal) pixels when the calibration has distortion, then re-distorted.
+class SquareToImage {
+ public:
+  SquareToImage(const std::array<cv::Point2d, 4>& corners, int n, const io::Calibration* calib)
+      : calib_(calib && calib->has_distortion() ? calib : nullptr) {
+    std::vector<cv::Point2d> ideal(corners.begin(), corners.end());
+    if (calib_) {
+      ideal = io::normalize_points(ideal, *calib_);
+      for (auto& p : ideal) {
+        const cv::Vec3d q = calib_->K * cv::Vec3d(p.x, p.y, 1.0);
+        p = cv::Point2d(q[0] / q[2], q[1] / q[2]);
+      }
+    }
+    // Corner k of the object square in cell coordinates (X right, Y down the printed tag,
+    // the black square is [0, n]^2): c0 bottom-left, c1 bottom-right, c2 top-right, c3 top-left.
+    const double N = n;
+    const double src[4][2] = {{0, N}, {N, N}, {N, 0}, {0, 0}};
+    // H with h33 = 1 from the four correspondences (8 x 8 linear system, in double).
+    cv::Matx<double, 8, 8> A;
+    cv::Matx<double, 8, 1> b;
+    for (int k = 0; k < 4; ++k) {
+      const double x = src[k][0], y = src[k][1];
+      const double u = ideal[static_cast<size_t>(k)].x, v = ideal[static_cast<size_t>(k)].y;
+      const double r0[8] = {x, y, 1, 0, 0, 0, -x * u, -y * u};
+      const double r1[8] = {0, 0, 0, x, y, 1, -x * v, -y * v};
+      for (int j = 0; j < 8; ++j) {
+        A(2 * k, j) = r0[j];
+        A(2 * k + 1, j) = r1[j];
+      }
+      b(2 * k) = u;
+      b(2 * k + 1) = v;
+    }
+    cv::Matx<double, 8, 1> h;
+    ok_ = cv::solve(A, b, h, cv::DECOMP_LU);
+    for (int j = 0; j < 8; ++j) H_(j / 3, j % 3) = h(j);
+    H_(2, 2) = 1.0;
+  }
+  bool ok() const { return ok_; }
+  std::vector<cv::Point2d> map(const std::vector<cv::Point2d>& obj) const {
+    std::vector<cv::Point2d> out;
+    out.reserve(obj.size());
+    for (const auto& p : obj) {
+      const cv::Vec3d q = H_ * cv::Vec3d(p.x, p.y, 1.0);
+      out.emplace_back(q[0] / q[2], q[1] / q[2]);
+    }
+    if (calib_) {
+      const cv::Matx33d Kinv = calib_->K.inv();
+      for (auto& p : out) {
+        const cv::Vec3d q = Kinv * cv::Vec3d(p.x, p.y, 1.0);
+        p = cv::Point2d(q[0] / q[2], q[1] / q[2]);
+      }
+      out = io::denormalize_points(out, *calib_);
+    }
+    return out;
+  }
+
+ private:
+  const io::Calibration* calib_;
+  cv::Matx33d H_ = cv::Matx33d::zeros();
+  bool ok_ = false;
+};
+
+}  // namespace
+
+cv::Mat tag_pattern(const std::string& family, int id) {
+  const render::TagFamily* f = render::find_tag_family(family);
+  if (!f) throw InputError("unsupported tag family '" + family + "'");
+  apriltag_family_t* fam = f->create();
+  cv::Mat out;
+  if (id >= 0 && static_cast<uint32_t>(id) < fam->ncodes) {
+    image_u8_t* im = apriltag_to_image(fam, id);
+    out = cv::Mat(im->height, im->width, CV_8UC1);
+    for (int r = 0; r < im->height; ++r)
+      for (int c = 0; c < im->width; ++c) out.at<uchar>(r, c) = im->buf[r * im->stride + c];
+    // libapriltag 3.3 does not export image_u8_destroy; it is free(buf) + free(im).
+    std::free(im->buf);
+    std::free(im);
+  }
+  f->destroy(fam);
+  return out;
+}
+
+BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners,
+                         const cv::Mat& pattern, int border_cells, const DetectorSettings& s,
+                         const io::Calibration* calib) {
+  CV_Assert(gray.type() == CV_8UC1);
+  BorderCheck out;
+  const int n = border_cells;
+  if (pattern.empty() || n < 3 || pattern.rows != pattern.cols || pattern.rows < n + 2) return out;
+  const int off = (pattern.rows - n) / 2;    // bitmap index of the black square's first cell
+  auto white_at = [&](double X, double Y) {  // object cell coordinates -> bitmap colour
+    const int c = static_cast<int>(std::floor(X)) + off, r = static_cast<int>(std::floor(Y)) + off;
+    return pattern.at<uchar>(r, c) > 127;
+  };
+  // Only for a black border ring inside a white ring (not the reversed-border families).
+  for (int i = 0; i < n; ++i)
+    if (white_at(i + 0.5, 0.5) || white_at(0.5, i + 0.5) || white_at(i + 0.5, n - 0.5) ||
+        white_at(n - 0.5, i + 0.5) || !white_at(i + 0.5, -0.5) || !white_at(-0.5, i + 0.5) ||
+        !white_at(i + 0.5, n + 0.5) || !white_at(n + 0.5, i + 0.5))
+      return out;
+  const SquareToImage map(corners, n, calib);
+  if (!map.ok()) return out;
+  out.checked = true;
+
+  // Side k runs from corner k to corner k+1: start S, direction D, outward normal O (cells).
+  const double N = n;
+  const cv::Point2d S[4] = {{0, N}, {N, N}, {N, 0}, {0, 0}};
+  const cv::Point2d D[4] = {{1, 0}, {0, -1}, {-1, 0}, {0, 1}};
+  const cv::Point2d O[4] = {{0, 1}, {1, 0}, {0, -1}, {-1, 0}};
+  constexpr int kPerCell = 4;  // contrast samples per cell along a side
+  const int m = kPerCell * n;  // contrast samples per side
+  constexpr double kThicknessT[] = {0.2, 0.35, 0.5, 0.65, 0.8};  // along a white data cell
+
+  // Every object point, mapped in one batch: white data cell centres, then per side its
+  // contrast pairs (quiet zone, border) and its inner-edge triples (edge, outer, inner).
+  std::vector<cv::Point2d> obj;
+  std::vector<cv::Point2d> white_cells;
+  for (int r = 1; r < n - 1; ++r)
+    for (int c = 1; c < n - 1; ++c)
+      if (white_at(c + 0.5, r + 0.5)) white_cells.emplace_back(c + 0.5, r + 0.5);
+  if (white_cells.empty()) {
+    out.checked = false;
+    return out;
+  }
+  obj.insert(obj.end(), white_cells.begin(), white_cells.end());
+  std::array<std::vector<double>, 4> edge_t;  // positions along side k of inner-edge points
+  for (int k = 0; k < 4; ++k) {
+    for (int j = 0; j < m; ++j) {
+      const cv::Point2d p = S[k] + ((j + 0.5) / kPerCell) * D[k];
+      obj.push_back(p + 0.5 * O[k]);
+      obj.push_back(p - 0.5 * O[k]);
+    }
+    for (int i = 1; i < n - 1; ++i) {
+      const cv::Point2d centre = S[k] + (i + 0.5) * D[k] - 1.5 * O[k];
+      if (!white_at(centre.x, centre.y)) continue;
+      for (double t : kThicknessT) {
+        const cv::Point2d e = S[k] + (i + t) * D[k] - 1.0 * O[k];
+        edge_t[static_cast<size_t>(k)].push_back(i + t);
+        obj.push_back(e);
+        obj.push_back(e + 0.5 * O[k]);
+        obj.push_back(e - 0.5 * O[k]);
+      }
+    }
+  }
+  const std::vector<cv::Point2d> img = map.map(obj);
+  size_t at = 0;
+  std::vector<double> white_level(white_cells.size());
+  for (size_t i = 0; i < white_cells.size(); ++i) {
+    const cv::Point2d p = img[at++];
+    white_level[i] = inside(gray, p) ? sample_bilinear(gray, p.x, p.y)
+                                     : std::numeric_limits<double>::quiet_NaN();
+  }
+  std::vector<double> all_white;
+  for (double w : white_level)
+    if (!std::isnan(w)) all_white.push_back(w);
+  const double global_white = median(all_white);
+
+  // Pixels whose centre lies within 0.5 px of a side: in an image integrated over the pixel
+  // area (a camera, a supersampled rendering, any blur) those the edge crosses have
+  // intermediate values (14-99 % of them on the rendered and synthesized tags); in a
+  // point-sampled (aliased) image, such as a 1-sample-per-pixel rendering, none do (0-5 %), and
+  // every edge position is quantised to the pixel grid by up to 0.5 px, so the border's two
+  // edges may disagree by up to 1 px on a correct quad.
+  int near_side = 0, intermediate = 0;
+  std::vector<double> near, offsets, ts, spreads;
+  for (int k = 0; k < 4; ++k) {
+    const size_t ks = static_cast<size_t>(k);
+    // Contrast samples.
+    int failed = 0, outside = 0;
+    for (int j = 0; j < m; ++j) {
+      const cv::Point2d q = img[at++], b = img[at++];
+      const cv::Point2d b_obj = S[k] + ((j + 0.5) / kPerCell) * D[k] - 0.5 * O[k];
+      near.clear();
+      for (size_t i = 0; i < white_cells.size(); ++i)
+        if (!std::isnan(white_level[i]) && cv::norm(white_cells[i] - b_obj) <= 2.5)
+          near.push_back(white_level[i]);
+      const double white = near.empty() ? global_white : median(near);
+      const bool in_image = inside(gray, q) && inside(gray, b);
+      outside += !in_image;
+      bool pass = in_image && !std::isnan(white);
+      if (pass) {
+        const double vq = sample_bilinear(gray, q.x, q.y), vb = sample_bilinear(gray, b.x, b.y);
+        pass = white - vb > 0.0 && vq - vb >= s.border_min_contrast * (white - vb);
+        const double len = cv::norm(q - b);
+        if (pass && len > 0.0) {
+          const cv::Point2d mid = 0.5 * (q + b), n = (q - b) / len;
+          const int cx = cvRound(mid.x), cy = cvRound(mid.y);
+          for (int y = cy - 1; y <= cy + 1; ++y)
+            for (int x = cx - 1; x <= cx + 1; ++x) {
+              if (x < 0 || y < 0 || x >= gray.cols || y >= gray.rows) continue;
+              if (std::abs((cv::Point2d(x, y) - mid).dot(n)) > 0.5) continue;
+              const double f = (gray.at<uchar>(y, x) - vb) / (vq - vb);
+              ++near_side;
+              intermediate += f >= 0.15 && f <= 0.85;
+            }
+        }
+      }
+      failed += !pass;
+    }
+    out.samples[ks] = m;
+    out.failed[ks] = failed;
+    out.outside[ks] = outside;
+    // Inner edge of the border next to white data cells.
+    offsets.clear();
+    ts.clear();
+    for (size_t i = 0; i < edge_t[ks].size(); ++i) {
+      const cv::Point2d e = img[at++], outer = img[at++], inner = img[at++];
+      const double cell = cv::norm(inner - outer);  // one cell across the edge, in pixels
+      if (!(cell > 0.0)) continue;
+      const cv::Point2d nin = (inner - outer) / cell;  // inward: border (dark) -> data (bright)
+      const double w = std::clamp(std::min(0.45 * cell, cell - 1.2), 1.0, 4.0);
+      if (!inside(gray, e - 1.2 * cell * nin) || !inside(gray, e + 1.2 * cell * nin)) continue;
+      // Sub-pixel step near the expected position, kept only where the centroid in half the
+      // window agrees to 0.2 px: another edge in the window (a shadow boundary running along
+      // the border) pulls the wide centroid more.
+      auto clean_step = [&](double from, double win, double& s_out) {
+        double sw = 0.0, sh = 0.0;
+        if (!edge_offset(gray, e + from * nin, nin, win, sw)) return false;
+        if (!edge_offset(gray, e + (from + sw) * nin, nin, std::max(1.0, 0.5 * win), sh) ||
+            std::abs(sh) > 0.2)
+          return false;
+        s_out = from + sw;
+        return true;
+      };
+      double sv = 0.0;
+      if (!clean_step(0.0, w, sv)) {
+        // A quad off by more than the window: the steepest dark-to-bright rise within 0.8
+        // cell, measured with a window that stays clear of the fitted side (one cell out).
+        const double reach = 0.8 * cell;
+        double best = 0.0, start = 0.0;
+        for (double x = -reach; x <= reach; x += 0.25) {
+          const cv::Point2d a = e + (x - 0.5) * nin, b = e + (x + 0.5) * nin;
+          const double rise = sample_bilinear(gray, b.x, b.y) - sample_bilinear(gray, a.x, a.y);
+          if (rise > best) best = rise, start = x;
+        }
+        const double win = std::clamp(start + cell - 1.0, 1.0, w);
+        if (!clean_step(start, win, sv)) continue;
+      }
+      offsets.push_back(sv);
+      ts.push_back(edge_t[ks][i]);
+      const double spread = edge_spread(gray, e + sv * nin, nin, 0.5 * cell);
+      if (!std::isnan(spread)) spreads.push_back(spread);
+    }
+    out.thickness_error[ks] = end_offset(ts, offsets);
+  }
+  out.aliased = near_side >= 16 && intermediate < 0.1 * near_side;
+  out.thickness_limit = s.border_max_thickness_error + (out.aliased ? 0.5 : 0.0);
+
+  // A camera's tone curve moves every edge of a blurred print alike: gamma encoding puts a
+  // blurred edge a fraction of the blur toward the dark side (0.42 sigma per edge for sRGB and
+  // black ink at 5 % of the white), so a correct border looks thinner on all four sides. The
+  // thinning that every side shares (at least 3, and every side with a white data cell next to
+  // it measured), that of the least thin side, is discounted up to border_blur_allowance x the
+  // measured blur. A side on an occluder's outline
+  // is thinner alone (or with its neighbour, towards one corner): the other sides do not share
+  // its error, so it is judged as before. A border thicker on every side is not discounted.
+  const double spread = median(spreads);
+  out.edge_blur = std::isnan(spread) ? 0.0 : std::sqrt(std::max(0.0, spread * spread - 0.25));
+  {
+    int planned = 0, measured = 0, thinner = 0;
+    double least = -std::numeric_limits<double>::infinity();  // the least thin side
+    for (size_t k = 0; k < 4; ++k) {
+      const double t = out.thickness_error[k];
+      planned += edge_t[k].size() >= 4;
+      if (std::isnan(t)) continue;
+      ++measured;
+      thinner += t < 0.0;
+      least = std::max(least, t);
+    }
+    // Every side the bitmap lets us measure must have been measured: a side whose inner edge
+    // is not found where one cell inside it should be (a side moved off the border) is no
+    // evidence of a thinning shared by all sides.
+    if (measured >= 3 && measured == planned && thinner == measured)
+      out.common_offset = std::max(least, -s.border_blur_allowance * out.edge_blur);
+  }
+
+  // A side fails on either test; the reason names the side that fails worst (relative to its
+  // threshold), which is the one on the occluder's outline when the others only inherit part
+  // of its error through the homography.
+  char buf[200];
+  double worst = 0.0;  // how far the worst failing side exceeds its threshold (ratio)
+  for (int k = 0; k < 4; ++k) {
+    const size_t ks = static_cast<size_t>(k);
+    const int failed = out.failed[ks];
+    const double contrast_excess =
+        std::max(failed / std::max(1.0, s.border_max_failed_fraction * m),
+                 out.outside[ks] > 0 ? 1.0 + static_cast<double>(out.outside[ks]) / m : 0.0);
+    const double thickness_excess =
+        std::isnan(out.thickness_error[ks])
+            ? 0.0
+            : std::abs(out.thickness_error[ks] - out.common_offset) / out.thickness_limit;
+    // A quiet zone cut by the image border cannot be verified: a tag is only accepted with its
+    // quiet zone in the image (else a partly visible neighbour, e.g. on another face of a cube,
+    // could pass and hide the target as a duplicate).
+    const bool contrast_fails = failed > s.border_max_failed_fraction * m || out.outside[ks] > 0;
+    const bool thickness_fails = thickness_excess > 1.0;
+    if (!contrast_fails && !thickness_fails) continue;
+    out.ok = false;
+    const double excess =
+        std::max(contrast_fails ? contrast_excess : 0.0, thickness_fails ? thickness_excess : 0.0);
+    if (excess <= worst) continue;
+    worst = excess;
+    if (out.outside[ks] > 0 && (!thickness_fails || contrast_excess >= thickness_excess))
+      std::snprintf(buf, sizeof buf,
+                    "side %d (corners %d-%d): quiet zone outside the image at %d of %d samples", k,
+                    k, (k + 1) % 4, out.outside[ks], m);
+    else if (contrast_fails && (!thickness_fails || contrast_excess >= thickness_excess))
+      std::snprintf(buf, sizeof buf,
+                    "side %d (corners %d-%d): quiet zone not brighter than the border at %d of "
+                    "%d samples",
+                    k, k, (k + 1) % 4, failed, m);
+    else if (out.common_offset == 0.0)
+      std::snprintf(buf, sizeof buf,
+                    "side %d (corners %d-%d): black border %.2f px %s than one cell", k, k,
+                    (k + 1) % 4, std::abs(out.thickness_error[ks]),
+                    out.thickness_error[ks] < 0 ? "thinner" : "thicker");
+    else
+      std::snprintf(buf, sizeof buf,
+                    "side %d (corners %d-%d): black border %.2f px %s than one cell (%.2f px "
+                    "of it on every side discounted for blur)",
+                    k, k, (k + 1) % 4, std::abs(out.thickness_error[ks]),
+                    out.thickness_error[ks] < 0 ? "thinner" : "thicker",
+                    std::abs(out.common_offset));
+    out.reason = buf;
+  }
+  return out;
+}
+
+}  // namespace netvmo::frontend
