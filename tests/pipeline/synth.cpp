@@ -5,6 +5,7 @@
 #include <apriltag/apriltag.h>
 
 #include <unistd.h>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -87,6 +88,32 @@ const std::vector<cv::Point2d>& subsample_rays(const Calibration& c, int ss) {
   return cache.back()->rays;
 }
 
+/// Whether the print is white at bitmap coordinates (cx, cy) (inside the bitmap), with the black
+/// grown by `spread` cells (Euclidean dilation; negative: the white grown, i.e. an erosion). The
+/// bordered families' outermost bitmap ring is white, so the black never spreads beyond it.
+bool printed_white(const cv::Mat& bits, double cx, double cy, double spread) {
+  const int c = static_cast<int>(cx), r = static_cast<int>(cy);
+  const bool white = bits.at<uchar>(r, c) > 127;
+  if (spread == 0.0) return white;
+  // Grown colour: the opposite of this cell's when a cell of the growing colour lies within
+  // |spread| (cells outside the bitmap are the white quiet zone).
+  const bool grow_black = spread > 0.0;
+  if (white != grow_black) return white;  // the cell already has the growing colour
+  const double reach = std::abs(spread);
+  for (int dr = -1; dr <= 1; ++dr)
+    for (int dc = -1; dc <= 1; ++dc) {
+      if (!dr && !dc) continue;
+      const int rr = r + dr, cc = c + dc;
+      const bool inside = rr >= 0 && cc >= 0 && rr < bits.rows && cc < bits.cols;
+      const bool w = !inside || bits.at<uchar>(rr, cc) > 127;
+      if (w == white) continue;  // not the growing colour
+      const double ex = std::max({0.0, cc - cx, cx - (cc + 1)});
+      const double ey = std::max({0.0, rr - cy, cy - (rr + 1)});
+      if (ex * ex + ey * ey <= reach * reach) return !white;
+    }
+  return white;
+}
+
 }  // namespace
 
 cv::Mat render_tags(const Calibration& calib, const std::vector<SynthTag>& tags,
@@ -139,9 +166,7 @@ cv::Mat render_tags(const Calibration& calib, const std::vector<SynthTag>& tags,
             if (cx < -wq || cy < -wq || cx >= p.bm.total + wq || cy >= p.bm.total + wq) continue;
             best = lambda;
             if (cx >= 0 && cy >= 0 && cx < p.bm.total && cy < p.bm.total)
-              value = p.bm.bits.at<uchar>(static_cast<int>(cy), static_cast<int>(cx)) > 127
-                          ? opt.white
-                          : opt.black;
+              value = printed_white(p.bm.bits, cx, cy, opt.ink_spread) ? opt.white : opt.black;
             else
               value = opt.white;
           }
@@ -164,6 +189,25 @@ cv::Mat render_camera_picture(const Calibration& calib, const std::vector<SynthT
   linear.noise_sigma = 0.0;
   cv::Mat v;
   render_tags(calib, tags, linear).convertTo(v, CV_64F, 1.0 / 255.0);
+  if (opt.motion_blur != cv::Point2d(0.0, 0.0)) {
+    // The line from -motion/2 to +motion/2, 16 samples per px of length, each splatted
+    // bilinearly into the kernel: a box of the motion's length along its direction.
+    const double len = cv::norm(opt.motion_blur);
+    const int half = static_cast<int>(std::ceil(0.5 * len)) + 1;
+    cv::Mat k = cv::Mat::zeros(2 * half + 1, 2 * half + 1, CV_64F);
+    const int steps = std::max(2, static_cast<int>(std::ceil(16 * len)));
+    for (int i = 0; i < steps; ++i) {
+      const cv::Point2d q = ((i + 0.5) / steps - 0.5) * opt.motion_blur + cv::Point2d(half, half);
+      const int x0 = static_cast<int>(std::floor(q.x)), y0 = static_cast<int>(std::floor(q.y));
+      const double ax = q.x - x0, ay = q.y - y0;
+      k.at<double>(y0, x0) += (1 - ax) * (1 - ay);
+      k.at<double>(y0, x0 + 1) += ax * (1 - ay);
+      k.at<double>(y0 + 1, x0) += (1 - ax) * ay;
+      k.at<double>(y0 + 1, x0 + 1) += ax * ay;
+    }
+    k /= cv::sum(k)[0];
+    cv::filter2D(v, v, -1, k, cv::Point(-1, -1), 0.0, cv::BORDER_REPLICATE);
+  }
   if (blur_sigma > 0.0) cv::GaussianBlur(v, v, cv::Size(0, 0), blur_sigma);
   cv::pow(v, 1.0 / gamma, v);
   v *= 255.0;

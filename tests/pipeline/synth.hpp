@@ -39,6 +39,12 @@ struct SynthOptions {
   std::uint64_t seed = 1;
   std::vector<cv::Rect> occluders;  ///< image rectangles painted with `occluder_level`
   double occluder_level = 90.0;
+  /// Ink spread of the print [cells]: the black grows by this much on every edge (negative:
+  /// shrinks), its corners rounded (a Euclidean dilation of the black cells); |value| < 0.5.
+  double ink_spread = 0.0;
+  /// render_camera_picture: motion over the exposure [px], the image displacement of the scene
+  /// during the exposure (a line kernel in linear light, before the tone curve); 0: none.
+  cv::Point2d motion_blur{0.0, 0.0};
 };
 
 /// 8-bit gray image of the tags seen by a camera.

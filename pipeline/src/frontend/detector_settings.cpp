@@ -46,6 +46,10 @@ void validate(const DetectorSettings& s) {
   if (!(s.border_max_thickness_error > 0.0)) bad("border_max_thickness_error must be > 0");
   if (!(s.border_blur_allowance >= 0.0 && s.border_blur_allowance <= 10.0))
     bad("border_blur_allowance must be in 0..10");
+  if (!(s.border_max_edge_bias >= 0.0 && s.border_max_edge_bias <= 0.5))
+    bad("border_max_edge_bias must be in 0..0.5 (cells)");
+  if (!(s.border_scatter_allowance >= 0.0 && s.border_scatter_allowance <= 20.0))
+    bad("border_scatter_allowance must be in 0..20");
 }
 
 }  // namespace netvmo::frontend

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <opencv2/core.hpp>
 #include <string>
 
@@ -32,6 +33,9 @@ struct BorderCheck {
   /// The limit the thickness errors were held to: border_max_thickness_error, plus 0.5 px
   /// when `aliased` (the border's two edges may then disagree by up to 1 px on a correct quad).
   double thickness_limit = 0.0;
+  /// Per side, the limit its error after the print's model is held to: thickness_limit, or
+  /// border_scatter_allowance x edge_bias_scatter across the side where that is larger.
+  std::array<double, 4> side_limit{};
   /// Gaussian sigma of the blur of the border's inner edges beyond the pixel's own [px]:
   /// sqrt(spread^2 - 0.25) of the median spread of the intensity differences across the
   /// measured inner-edge points (window +-0.5 cell; 0.25 px^2 is the spread of a sharp edge
@@ -42,6 +46,25 @@ struct BorderCheck {
   /// (at least 3, and every side with a white data cell next to it) look thinner, the error of
   /// the least thin one, but no lower than -border_blur_allowance x edge_blur; otherwise 0.
   double common_offset = 0.0;
+  /// The print's edge bias along the tag's X and Y axes [px]: how far every black/white edge
+  /// of the print is imaged toward the white (> 0: the black looks larger, as with ink spread
+  /// or bloom around bright paper; < 0: smaller, as a camera's tone curve makes a blurred edge,
+  /// about 0.42 sigma per edge). Measured on the tag's own data cells (only with
+  /// DetectorSettings::border_edge_bias): along each data row (X) and column (Y), each pair of
+  /// adjacent runs of white and black cells between interior transitions gives one estimate
+  /// with the local scale error eliminated (check_border()); the median of an axis's
+  /// estimates, NaN where it has fewer than 4. The test uses their local values.
+  std::array<double, 2> edge_bias{std::numeric_limits<double>::quiet_NaN(),
+                                  std::numeric_limits<double>::quiet_NaN()};
+  std::array<int, 2> edge_bias_pairs{};  ///< the estimates behind edge_bias
+  /// Their robust scatter [px]: 1.4826 x the median absolute deviation from edge_bias, how
+  /// sharply this image shows the print's edges (0.03 px on a clean rendering).
+  std::array<double, 2> edge_bias_scatter{};
+  /// Per side: the thickness error a correct quad has, discounted before the limit: where both
+  /// axes' biases were measured (and every side the bitmap lets us measure), the part of
+  /// thickness_error that 2 b (1 - 1/n) explains, b the local bias across the side at each
+  /// inner-edge point; otherwise common_offset.
+  std::array<double, 4> expected_thickness_error{};
 };
 
 /// The tag's bitmap as libapriltag prints it (apriltag_to_image): total_width x total_width
@@ -70,17 +93,34 @@ cv::Mat tag_pattern(const std::string& family, int id);
 ///    half that window agrees to 0.2 px (no second edge, such as a shadow boundary, nearby).
 ///    A line through the offsets (robust least squares along the side) is evaluated at the
 ///    first and last measured point: the side's thickness error e_k (the one of larger
-///    magnitude). A camera's tone curve moves every edge of a blurred print toward the dark
-///    side, so a correct border looks thinner on all four sides: when at least 3 sides are
-///    measured, every side with a white data cell next to it among them (a side whose inner edge
-///    is not found is no evidence), and all are thinner (e_k < 0), the common offset c is the
-///    error of the least thin one, but no lower than -border_blur_allowance x `edge_blur` (the
-///    measured Gaussian blur of the inner edges beyond the pixel's own); otherwise c = 0 (a
-///    border thicker on every side is not discounted). The side fails when
-///    |e_k - c| > border_max_thickness_error (needs 4 points), 0.5 px more in a point-sampled
-///    image (`aliased`). A side fitted to an occluder's outline that hides part of the border cell
-///    row makes the border look thinner towards the wrong corner, whatever the occluder's
-///    brightness; the other sides do not share that error, so c stays near 0.
+///    magnitude). What a correct side's e_k is depends on how the print is imaged: every
+///    black/white edge of it appears displaced toward the white by a bias b (ink spread and
+///    bloom: b > 0; a camera's tone curve on a blurred print: b < 0, about 0.42 sigma per edge;
+///    motion blur: along its direction only, so b is measured per tag axis). The sides are
+///    fitted to the outer edges, so the quad is the true one dilated by b and the cell it
+///    predicts 2 b / n too large, while the inner edge lies b further in: a correct side's
+///    inner-edge offsets are 2 b (1 - 1/n). The print's model (DetectorSettings::
+///    border_edge_bias) measures b on the tag's own data cells, independently of where the
+///    sides are: along every data row and column the interior black/white transitions are
+///    located (edge_offset), consecutive transitions bound runs of k cells whose measured
+///    length differs from the mapped one by d = 2 b p + k eps (p = +1 for a black run, -1 for a
+///    white one, eps the homography's local scale error per cell), and each pair of adjacent
+///    runs gives b = (d1/k1 - d2/k2) / (2 p1 (1/k1 + 1/k2)) with eps eliminated. Per axis
+///    (sides 0 and 2 use the Y axis's estimates, 1 and 3 the X axis's), after leaving out those
+///    further than 3 robust sigmas from the median (`edge_bias`), the local bias at each
+///    inner-edge point is their mean weighted by a Gaussian of 1.5 cells in distance on the tag
+///    (perspective grows the cells, and an ink spread in pixels with them, toward the near
+///    side), clamped to border_max_edge_bias cells; 2 b (1 - 1/n) is taken off each offset
+///    before the line fit, and the side fails when the resulting |e_k| exceeds
+///    border_max_thickness_error (needs 4 points), 0.5 px
+///    more in a point-sampled image (`aliased`). A side fitted to an occluder's outline, or
+///    moved off the border, adds its own error, which the other sides and the cells do not
+///    share. Where b is not measured on both axes (fewer than 4 pairs, or the model off) or a
+///    side the bitmap lets us measure was not measured, the
+///    shared-thinning discount applies instead: when at least 3 sides are measured, every side
+///    with a white data cell next to it among them, and all are thinner (e_k < 0), the common
+///    offset c is the error of the least thin one, but no lower than -border_blur_allowance x
+///    `edge_blur`, otherwise c = 0, and the side fails when |e_k - c| exceeds the limit.
 /// Families without a black border ring inside a white one (tagStandard41h12, ...) are not
 /// checked (`checked` false).
 BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners,

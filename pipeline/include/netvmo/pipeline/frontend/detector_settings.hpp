@@ -67,6 +67,21 @@ struct DetectorSettings {
   /// (3 %) toward the dark side, so a correct border looks 0.83-0.94 s thinner on all sides.
   /// 0: the fixed limit alone.
   double border_blur_allowance = 1.0;
+  /// Measure the print's edge bias on the tag's own cells (BorderCheck::edge_bias) and hold
+  /// each side's thickness error to the limit around the error a correct quad then has,
+  /// 2 b (1 - 1/n), instead of around 0 (ink spread, the tone curve under blur and motion blur
+  /// move every edge of the print alike; a side off the border moves alone). Where the bias
+  /// cannot be measured on both axes (fewer than 4 pairs of runs), the shared-thinning
+  /// discount (border_blur_allowance) applies. false: that discount alone.
+  bool border_edge_bias = true;
+  /// The largest edge bias believed [cells] (ink spread beyond a quarter cell would merge the
+  /// cells of the code); a larger measured bias is clamped to it.
+  double border_max_edge_bias = 0.25;
+  /// With the print's model: a side's limit is at least this x the scatter of the edge-bias
+  /// estimates across it (BorderCheck::edge_bias_scatter), the irregularity of this print's
+  /// edges as imaged, which its border shares (0.03 px on clean renderings, 0.04-0.3 px on real
+  /// photos). 0: the fixed limit alone.
+  double border_scatter_allowance = 4.0;
 };
 
 /// Throws InputError naming the first field out of its range.
