@@ -12,12 +12,15 @@
 #include <cstdio>
 #include <cstring>
 #include <map>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <set>
 
 #include "choices.hpp"
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/frontend/front_end.hpp"
+#include "netvmo/pipeline/frontend/photo_recall.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
 #include "netvmo/pipeline/io/output_dir.hpp"
 #include "netvmo/pipeline/io/truth_io.hpp"
@@ -38,8 +41,11 @@ struct DetectOptions {
   TrackingSettings tracking;
   std::string refinement = to_string(DetectorSettings{}.refinement);
   bool no_border_check = false;
+  bool no_edge_bias = false;
   bool keep_going = false;
   bool quiet = false;
+  bool photos = false;  ///< DATASET is a folder of photos (run_detect_photos)
+  PhotoRecallSettings recall;
 };
 
 struct CameraStats {
@@ -90,6 +96,7 @@ struct TruthTally {
 int run_detect(DetectOptions o) {
   o.det.refinement = parse_refinement(o.refinement);
   o.det.border_check = !o.no_border_check;
+  o.det.border_edge_bias = !o.no_edge_bias;
   io::check_output_apart(o.out, o.dataset);
   io::OutputDir out(o.out, "detect");
   Dataset ds = open_dataset(o.dataset, {}, o.keep_going);
@@ -226,6 +233,120 @@ int run_detect(DetectOptions o) {
   return 0;
 }
 
+/// netvmo detect --photos DIR: every image below DIR (sorted; a folder's calib.yaml, an OpenCV
+/// calibration, is its photos' camera) against libapriltag's own detections (photo_recall.hpp):
+/// OUT/photos.csv, a line per folder and the totals with every loss by reason.
+int run_detect_photos(DetectOptions o) {
+  o.det.refinement = parse_refinement(o.refinement);
+  o.det.border_check = !o.no_border_check;
+  o.det.border_edge_bias = !o.no_edge_bias;
+  const fs::path root(o.dataset);
+  if (!fs::is_directory(root)) throw InputError(o.dataset + ": not a folder of photos");
+  std::vector<fs::path> files;
+  for (const auto& e : fs::recursive_directory_iterator(root)) {
+    if (!e.is_regular_file()) continue;
+    std::string ext = e.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+    if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".pgm" || ext == ".bmp" ||
+        ext == ".tif" || ext == ".tiff")
+      files.push_back(e.path());
+  }
+  std::sort(files.begin(), files.end());
+  if (files.empty()) throw InputError(o.dataset + ": no images (.png, .jpg, .pgm, .bmp, .tif)");
+  io::check_output_apart(o.out, o.dataset);
+  io::OutputDir out(o.out, "detect");
+  io::AtomicFile csv(out.path() / "photos.csv");
+  csv << "file,id,hamming,libapriltag_margin,narrowest_px,fully_visible,eligible,status,"
+         "corner_difference_px,reason,check_e0,check_e1,check_e2,check_e3,expected_e0,"
+         "expected_e1,expected_e2,expected_e3,edge_bias_x,edge_bias_y,edge_blur,scatter_x,scatter_"
+         "y,check_reason\n";
+  std::map<fs::path, io::Calibration> calibs;  // a folder's calib.yaml
+  std::map<fs::path, PhotoRecall> by_folder;
+  PhotoRecall total;
+  std::vector<std::string> unreadable;
+  for (const fs::path& f : files) {
+    const fs::path folder = f.parent_path();
+    cv::Mat gray = cv::imread(f.string(), cv::IMREAD_GRAYSCALE);
+    if (gray.empty()) {
+      unreadable.push_back(f.string() + ": cannot be decoded as an image");
+      if (o.keep_going)
+        std::fprintf(stderr, "netvmo detect: warning: %s\n", unreadable.back().c_str());
+      continue;
+    }
+    io::Calibration calib = nominal_calibration(gray.cols, gray.rows);
+    if (const fs::path cf = folder / "calib.yaml"; fs::exists(cf)) {
+      if (!calibs.count(folder)) calibs[folder] = load_calibration_opencv(cf);
+      calib = calibs[folder];
+      if (calib.width != gray.cols || calib.height != gray.rows)
+        throw InputError(f.string() + ": " + std::to_string(gray.cols) + "x" +
+                         std::to_string(gray.rows) + " image, but " + cf.string() + " is for " +
+                         std::to_string(calib.width) + "x" + std::to_string(calib.height));
+    }
+    const auto results = evaluate_photo(gray, calib, o.det, o.tracking, o.recall);
+    by_folder[folder].add(results);
+    total.add(results);
+    const std::string rel = fs::relative(f, root).string();
+    for (const auto& t : results) {
+      char buf[160];
+      std::snprintf(buf, sizeof buf, "%d,%d,%.2f,%.2f,%d,%d,%s,", t.ref.id, t.ref.hamming,
+                    t.ref.margin, t.ref.narrowest, t.ref.fully_visible, t.eligible,
+                    to_string(t.status));
+      csv << rel << "," << buf;
+      if (t.status == TargetStatus::detected) {
+        std::snprintf(buf, sizeof buf, "%.3f", t.corner_difference);
+        csv << buf;
+      }
+      std::string reason = t.reason, check_reason = t.check.reason;
+      std::replace(reason.begin(), reason.end(), ',', ';');
+      std::replace(check_reason.begin(), check_reason.end(), ',', ';');
+      csv << "," << reason;
+      // The frame check on libapriltag's own (refined) quad.
+      const BorderCheck& b = t.check;
+      std::snprintf(
+          buf, sizeof buf, ",%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,",
+          b.thickness_error[0], b.thickness_error[1], b.thickness_error[2], b.thickness_error[3],
+          b.expected_thickness_error[0], b.expected_thickness_error[1],
+          b.expected_thickness_error[2], b.expected_thickness_error[3], b.edge_bias[0],
+          b.edge_bias[1], b.edge_blur, b.edge_bias_scatter[0], b.edge_bias_scatter[1]);
+      csv << buf << check_reason << "\n";
+    }
+  }
+  csv.commit();
+  out.commit();
+  const auto print = [](const std::string& name, const PhotoRecall& r) {
+    std::vector<double> d = r.corner_differences;
+    std::sort(d.begin(), d.end());
+    std::printf("%-32s %6d %6d %8d %6d %7.1f%%", name.c_str(), r.photos, r.references, r.eligible,
+                r.kept, 100.0 * r.recall());
+    if (d.empty())
+      std::printf(" %8s %8s", "-", "-");
+    else
+      std::printf(" %8.2f %8.2f", d[d.size() / 2], d.back());
+    std::string lost;
+    for (const auto& [st, n] : r.lost)
+      lost += (lost.empty() ? " " : ", ") + std::string(to_string(st)) + " " + std::to_string(n);
+    std::printf("%s\n", lost.empty() ? " -" : lost.c_str());
+  };
+  std::printf("netvmo detect --photos: %s -> %s (%zu images, family %s)\n", o.dataset.c_str(),
+              (fs::path(o.out) / "photos.csv").string().c_str(), files.size(),
+              o.det.family.c_str());
+  std::printf("eligible: libapriltag hamming 0, fully visible, narrowest side >= %g px, id once\n",
+              o.recall.min_side_px);
+  std::printf("%-32s %6s %6s %8s %6s %8s %8s %8s %s\n", "folder", "photos", "tags", "eligible",
+              "kept", "recall", "med_px", "max_px", "lost (by reason)");
+  for (const auto& [folder, r] : by_folder) {
+    const std::string rel = fs::relative(folder, root).string();
+    print(rel.empty() || rel == "." ? "." : rel, r);
+  }
+  print("all", total);
+  if (!unreadable.empty() && !o.keep_going)
+    throw InputError(unreadable.front() + " (" + std::to_string(unreadable.size()) +
+                     " unreadable image(s) in total, left out of photos.csv; fix the files or "
+                     "pass --keep-going)");
+  return 0;
+}
+
 }  // namespace
 
 void add_detect(CLI::App& app, int& exit_code) {
@@ -241,8 +362,20 @@ void add_detect(CLI::App& app, int& exit_code) {
       "tag family and target id come from network.yaml; a target with a tag bundle has one\n"
       "row per frame, camera and tag of the body, each with that tag's own decision.");
   cmd->add_option("dataset", o->dataset,
-                  "Dataset folder (network.yaml, calib/, cam_<id>/ or cam_<id>.<ext>)")
+                  "Dataset folder (network.yaml, calib/, cam_<id>/ or cam_<id>.<ext>), or with "
+                  "--photos a folder of photos")
       ->required();
+  cmd->add_flag("--photos", o->photos,
+                "DATASET is a folder of photos (searched recursively; a folder's calib.yaml is "
+                "its camera): every tag libapriltag decodes in a photo is a reference, and the "
+                "front end's recall of the fully visible ones is printed with every loss by "
+                "reason; OUT/photos.csv has a row per reference tag");
+  cmd->add_option("--family", o->det.family, "With --photos: the tag family")
+      ->capture_default_str();
+  cmd->add_option("--min-side", o->recall.min_side_px,
+                  "With --photos: reference tags narrower than this are not counted [px]")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 10000.0));
   cmd->add_option("--out,-o", o->out, "Output folder (created)")->required();
   cmd->add_option("--decimate", o->det.quad_decimate, "libapriltag quad_decimate (1 to 8)")
       ->capture_default_str()
@@ -294,11 +427,22 @@ void add_detect(CLI::App& app, int& exit_code) {
       ->capture_default_str()
       ->check(CLI::Range(0.0, 10.0));
   cmd->add_option("--border-blur-allowance", o->det.border_blur_allowance,
-                  "Border check: the thinning every side shares is discounted up to this x the "
-                  "measured edge blur (a camera's tone curve thins a blurred border; 0: the "
-                  "fixed limit alone), 0 to 10")
+                  "Border check, where the print's edge bias cannot be measured: the thinning "
+                  "every side shares is discounted up to this x the measured edge blur (a "
+                  "camera's tone curve thins a blurred border; 0: the fixed limit alone), 0 to "
+                  "10")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 10.0));
+  cmd->add_flag("--no-edge-bias", o->no_edge_bias,
+                "Border check: do not measure the print's edge bias on the tag's cells (ink "
+                "spread, the tone curve under blur, motion blur); hold each side's thickness "
+                "error around 0 (with the shared-thinning discount) instead");
+  cmd->add_option("--border-scatter-allowance", o->det.border_scatter_allowance,
+                  "Border check with the print's model: a side's limit is at least this x the "
+                  "scatter of the print's edges measured on its cells (0: the fixed limit), 0 to "
+                  "20")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 20.0));
   cmd->add_option("--refine", o->refinement,
                   "Corner refinement of the target: none, subpix (cv::cornerSubPix) or edges "
                   "(lines fitted to the border edges)")
@@ -308,7 +452,10 @@ void add_detect(CLI::App& app, int& exit_code) {
   cmd->add_flag("--keep-going", o->keep_going,
                 "Unreadable frames are warnings (camera blind there) instead of an error exit");
   cmd->add_flag("--quiet,-q", o->quiet, "No progress line");
-  cmd->callback([o, &exit_code] { exit_code = guarded("detect", [o] { return run_detect(*o); }); });
+  cmd->callback([o, &exit_code] {
+    exit_code =
+        guarded("detect", [o] { return o->photos ? run_detect_photos(*o) : run_detect(*o); });
+  });
 }
 
 }  // namespace netvmo::tools

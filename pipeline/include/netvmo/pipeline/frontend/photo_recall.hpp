@@ -1,0 +1,77 @@
+// The front end judged against libapriltag on real photos: every tag libapriltag itself decodes
+// in a photo is a reference, and the front end should keep every fully visible one (README,
+// real photos; `netvmo detect --photos`).
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <map>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "netvmo/pipeline/frontend/front_end.hpp"
+#include "netvmo/pipeline/io/calibration.hpp"
+
+namespace netvmo::frontend {
+
+/// One tag as libapriltag decodes it with its own settings (the reference).
+struct ReferenceTag {
+  int id = -1;
+  int hamming = 0;
+  double margin = 0.0;
+  std::array<cv::Point2d, 4> corners{};  ///< OpenCV pixels, libapriltag order
+  double narrowest = 0.0;                ///< shortest side [px]
+  /// The black square and a one-cell quiet zone around it lie inside the image.
+  bool fully_visible = false;
+};
+
+/// libapriltag's detections of `family` in an 8-bit gray image, with libapriltag's defaults but
+/// for a full-resolution quad search (quad_decimate 1, quad_sigma 0, refine_edges on,
+/// decode_sharpening 0.25, min_white_black_diff 5, 2 corrected bits, 1 thread).
+std::vector<ReferenceTag> reference_detections(const cv::Mat& gray, const std::string& family);
+
+/// How a reference tag fared in the front end.
+struct PhotoTagResult {
+  ReferenceTag ref;
+  /// Counted in the recall: hamming 0, fully visible, narrowest side >= min_side_px, and its
+  /// id decoded once in the photo (two tags of one id are duplicate_id by design).
+  bool eligible = false;
+  TargetStatus status = TargetStatus::not_found;
+  std::string reason;                       ///< the front end's reason (empty when detected)
+  double corner_difference = 0.0;           ///< largest corner distance to libapriltag's [px]
+  std::array<cv::Point2d, 4> corners_px{};  ///< the front end's corners when detected
+  /// The frame check on libapriltag's own quad after the front end's refinement (whatever the
+  /// front end decided): where a loss comes from.
+  BorderCheck check;
+};
+
+/// Settings of evaluate_photo().
+struct PhotoRecallSettings {
+  double min_side_px = 20.0;  ///< reference tags narrower than this are not counted
+};
+
+/// The front end (`settings` with the target ids replaced by the reference's, every id a
+/// target of its own, decided in one pass from a camera with no history: the full-frame
+/// search and the acquisition pass) on one photo, against libapriltag's detections of the same
+/// family. `calib` undistorts the refinement and the check where the photo's camera is known.
+std::vector<PhotoTagResult> evaluate_photo(const cv::Mat& gray, const io::Calibration& calib,
+                                           const DetectorSettings& settings,
+                                           const TrackingSettings& tracking,
+                                           const PhotoRecallSettings& recall = {});
+
+/// A calibration for a photo whose camera is unknown: no distortion, f = the larger image side,
+/// the principal point at the centre (only the front end's corners are used).
+io::Calibration nominal_calibration(int width, int height);
+
+/// Totals over photos: eligible reference tags kept, and every loss by status.
+struct PhotoRecall {
+  int photos = 0, references = 0, eligible = 0, kept = 0;
+  std::map<TargetStatus, int> lost;        ///< eligible tags lost, by status
+  std::vector<double> corner_differences;  ///< of the kept eligible tags [px]
+  void add(const std::vector<PhotoTagResult>& photo);
+  double recall() const { return eligible ? static_cast<double>(kept) / eligible : 1.0; }
+};
+
+}  // namespace netvmo::frontend

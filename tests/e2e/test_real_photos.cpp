@@ -1,0 +1,138 @@
+// The front end on real photos (docs/frontend.md, "Real photos"): every fully visible tag that
+// libapriltag itself decodes with hamming 0 is a reference, and the front end should keep it.
+//  - RealPhotos.DeskPhoto...: a real photo every CI machine has: Debian's visp-images-data
+//    (installed by tools/install_deps.sh; read where the package puts it, not copied into the
+//    project), ViSP's AprilTag.pgm, a 640x480 photo of a printed sheet of twelve 53 mm
+//    tag36h11 tags (ids 8-19) on a desk, seen about 55 degrees off the sheet's normal, with
+//    ViSP's own pose estimates of each tag beside it (ground_truth_pose.txt; the camera
+//    parameters and tag size are those of ViSP's regression test of that file).
+//  - RealPhotos.Corpus: the corpus of datasets/real_photos/MANIFEST.md, assembled by
+//    tools/real_photos.sh, where it is: $NETVMO_REAL_PHOTOS, else real_photos/ in the shared
+//    folder beside the checkout. Skipped, with that reason, where it is not.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <opencv2/imgcodecs.hpp>
+
+#include "netvmo/pipeline/frontend/photo_recall.hpp"
+#include "netvmo/pipeline/frontend/pnp.hpp"
+
+namespace netvmo {
+namespace {
+namespace fs = std::filesystem;
+using namespace frontend;
+
+const fs::path kVispPhotoDir = "/usr/share/visp-images-data/ViSP-images/AprilTag";
+
+/// ViSP's pose estimates of the desk photo's tags: id -> (t, theta u) of cMo.
+std::map<int, std::pair<obs::Vec3, obs::Vec3>> read_visp_poses(const fs::path& file) {
+  std::map<int, std::pair<obs::Vec3, obs::Vec3>> out;
+  std::ifstream in(file);
+  std::string label;
+  while (in >> label) {
+    const auto at = label.rfind('_');
+    if (at == std::string::npos) break;
+    const int id = std::stoi(label.substr(at + 1));
+    obs::Vec3 t, r;
+    in >> t.x() >> t.y() >> t.z() >> r.x() >> r.y() >> r.z();
+    out[id] = {t, r};
+  }
+  return out;
+}
+
+TEST(RealPhotos, DeskPhotoEveryTagKeptAndPosesAgreeWithVisp) {
+  const fs::path photo = kVispPhotoDir / "AprilTag.pgm";
+  if (!fs::exists(photo))
+    GTEST_SKIP() << photo << " missing: Debian's visp-images-data is not installed "
+                 << "(tools/install_deps.sh installs it)";
+  const cv::Mat gray = cv::imread(photo.string(), cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(gray.empty());
+  // The camera of ViSP's regression test of this photo (no distortion); tags of 53 mm.
+  io::Calibration calib = nominal_calibration(gray.cols, gray.rows);
+  calib.K = cv::Matx33d(615.1674805, 0, 312.1889954, 0, 615.1675415, 243.4373779, 0, 0, 1);
+  constexpr double kTagSize = 0.053;
+  const auto results = evaluate_photo(gray, calib, DetectorSettings{}, TrackingSettings{});
+  const auto visp = read_visp_poses(kVispPhotoDir / "ground_truth_pose.txt");
+  ASSERT_EQ(results.size(), 12u) << "libapriltag's own detections";
+  int eligible = 0, compared = 0;
+  double worst_dp = 0.0, worst_normal = 0.0;
+  for (const PhotoTagResult& t : results) {
+    const std::string what = "id " + std::to_string(t.ref.id);
+    ASSERT_TRUE(t.eligible) << what << ": hamming " << t.ref.hamming << ", narrowest "
+                            << t.ref.narrowest << " px";
+    ++eligible;
+    EXPECT_EQ(t.status, TargetStatus::detected) << what << ": " << t.reason;
+    if (t.status != TargetStatus::detected) continue;
+    EXPECT_LT(t.corner_difference, 1.0) << what << ": corners far from libapriltag's";
+    const auto pose =
+        pnp_pose(normalized_features(t.corners_px, calib), obs::FeatureModel::square(kTagSize));
+    ASSERT_TRUE(pose) << what;
+    const auto it = visp.find(t.ref.id);
+    ASSERT_NE(it, visp.end()) << what;
+    // The tag's centre in the camera, and its normal (the frames' axes may be named
+    // differently: the normal is compared up to its sign).
+    const obs::Vec3 dp = pose->g_io.translation() - it->second.first;
+    const obs::Vec3 n_ours = pose->g_io.linear().col(2);
+    const obs::Vec3 n_visp = obs::exp_so3(it->second.second).col(2);
+    const double normal_deg = std::acos(std::min(1.0, std::abs(n_ours.dot(n_visp)))) * 180 / M_PI;
+    std::printf(
+        "%s: corners %.2f px from libapriltag's; position %.1f mm, normal %.2f deg from "
+        "ViSP's estimate\n",
+        what.c_str(), t.corner_difference, 1e3 * dp.norm(), normal_deg);
+    EXPECT_LT(dp.norm(), 0.01) << what;
+    EXPECT_LT(normal_deg, 3.0) << what;
+    worst_dp = std::max(worst_dp, dp.norm());
+    worst_normal = std::max(worst_normal, normal_deg);
+    ++compared;
+  }
+  EXPECT_EQ(eligible, 12);
+  EXPECT_EQ(compared, 12);
+  std::printf("%d of 12 kept; largest difference to ViSP's poses %.1f mm, %.2f deg\n", compared,
+              1e3 * worst_dp, worst_normal);
+}
+
+fs::path corpus_dir() {
+  if (const char* env = std::getenv("NETVMO_REAL_PHOTOS")) return env;
+  return fs::path(NETVMO_SOURCE_DIR).parent_path() / "shared" / "real_photos";
+}
+
+// Recall against libapriltag on every eligible tag of the corpus, with every loss listed.
+// The figure the front end reaches (docs/frontend.md) is asserted not to fall: 92 % of the
+// 395 eligible tags measured when the model of the print was introduced (the goal, 99 %, is
+// not reached: the losses are listed); no kept tag's corners more than 1.6 px from
+// libapriltag's.
+TEST(RealPhotos, Corpus) {
+  const fs::path dir = corpus_dir();
+  if (!fs::is_directory(dir))
+    GTEST_SKIP() << dir << " missing: assemble the corpus with tools/real_photos.sh "
+                 << "(datasets/real_photos/MANIFEST.md) and point NETVMO_REAL_PHOTOS at it";
+  PhotoRecall total;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    const std::string ext = e.path().extension().string();
+    if (!e.is_regular_file() || (ext != ".png" && ext != ".jpg" && ext != ".JPG")) continue;
+    const cv::Mat gray = cv::imread(e.path().string(), cv::IMREAD_GRAYSCALE);
+    ASSERT_FALSE(gray.empty()) << e.path();
+    io::Calibration calib = nominal_calibration(gray.cols, gray.rows);
+    if (fs::exists(e.path().parent_path() / "calib.yaml"))
+      calib = io::load_calibration_opencv(e.path().parent_path() / "calib.yaml");
+    const auto results = evaluate_photo(gray, calib, DetectorSettings{}, TrackingSettings{});
+    for (const auto& t : results)
+      if (t.eligible && t.status != TargetStatus::detected)
+        std::printf("lost: %s id %d (%.0f px): %s\n", e.path().filename().string().c_str(),
+                    t.ref.id, t.ref.narrowest, t.reason.c_str());
+    total.add(results);
+  }
+  ASSERT_GT(total.eligible, 0);
+  std::printf("%d photos, %d eligible tags, %d kept (%.1f %%)\n", total.photos, total.eligible,
+              total.kept, 100.0 * total.recall());
+  EXPECT_GE(total.recall(), 0.92);
+  for (double d : total.corner_differences) EXPECT_LT(d, 1.65);
+}
+
+}  // namespace
+}  // namespace netvmo
