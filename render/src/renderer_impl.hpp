@@ -157,6 +157,7 @@ struct Packet {
   alignas(64) int svalid[kPacket];
   int pix[kPacket];  // pixel of the lane in its tile, -1: none
   float rad[kPacket], alb[kPacket], contrib[kPacket];
+  float gloss[kPacket], shininess[kPacket];  // specular term of a glossy tag print (0: matte)
   Eigen::Vector3f p[kPacket], n[kPacket];
 };
 

@@ -44,6 +44,8 @@ void shade_surface(const Shading& sh, const Eigen::Vector3f& O, Packet& pk, int 
   const Eigen::Vector3f pl = wl * P;
   pk.alb[j] = float(gi.tag ? gi.tag->albedo(pl.x(), pl.y())
                            : gi.material.eval(pl.cast<double>(), (wl.linear() * n).cast<double>()));
+  pk.gloss[j] = gi.tag ? float(gi.tag->spec().print.gloss) : 0.0f;
+  pk.shininess[j] = gi.tag ? float(gi.tag->spec().print.shininess) : 1.0f;
   pk.p[j] = P;
   pk.n[j] = n;
   pk.rad[j] = pk.alb[j] * sh.ambient;
@@ -72,6 +74,12 @@ bool light_lane(const LightF& L, Packet& pk, int j) {
   const float c = pk.n[j].dot(l);
   if (c <= 0) return false;
   pk.contrib[j] = pk.alb[j] * e * c;
+  if (pk.gloss[j] > 0) {  // Blinn-Phong: h halves the directions to the light and the viewer
+    const Eigen::Vector3f view =
+        -Eigen::Vector3f(pk.rh.ray.dir_x[j], pk.rh.ray.dir_y[j], pk.rh.ray.dir_z[j]).normalized();
+    const float nh = pk.n[j].dot((l + view).normalized());
+    if (nh > 0) pk.contrib[j] += pk.gloss[j] * e * std::pow(nh, pk.shininess[j]);
+  }
   if (!L.shadows) {
     pk.rad[j] += pk.contrib[j];
     return false;

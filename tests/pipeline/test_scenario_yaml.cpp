@@ -175,4 +175,37 @@ TEST(RenderScenario, BadValuesAreRejected) {
             std::string::npos);
 }
 
+// The realistic camera model's keys (docs/realistic_camera.md): out of their physical range each
+// gives one line naming the file and the key.
+void expect_rejected(const std::string& name, const std::string& from, const std::string& to,
+                     const std::string& key) {
+  const auto f = write_scenario(name, replaced(kMinimal, from, to));
+  const std::string msg = load_error(f);
+  EXPECT_NE(msg.find(f.string()), std::string::npos) << msg;
+  EXPECT_NE(msg.find(key), std::string::npos) << msg;
+  EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+}
+
+TEST(RenderScenario, PrintKeys) {
+  const auto tag = [](const std::string& print) { return "size: 0.15, print: " + print + "}"; };
+  auto s = netvmo::io::load_render_scenario(write_scenario(
+      "print.yaml", replaced(kMinimal, "size: 0.15}", tag("{ink_spread: -0.1, gloss: 0.3}"))));
+  EXPECT_DOUBLE_EQ(s.target().tag.print.ink_spread, -0.1);
+  EXPECT_DOUBLE_EQ(s.target().tag.print.gloss, 0.3);
+  s = netvmo::io::load_render_scenario(
+      write_scenario("print_preset.yaml", replaced(kMinimal, "size: 0.15}", tag("realistic"))));
+  EXPECT_TRUE(s.target().tag.print == netvmo::render::PrintModel::realistic());
+  s = netvmo::io::load_render_scenario(write_scenario(
+      "print_scene.yaml",
+      replaced(kMinimal, "{spp: 1, seed: 5}", "{spp: 1, seed: 5, camera_model: realistic}")));
+  EXPECT_TRUE(s.target().tag.print == netvmo::render::PrintModel::realistic());
+  expect_rejected("ink.yaml", "size: 0.15}", tag("{ink_spread: 0.6}"),
+                  "target.tag.print.ink_spread");
+  expect_rejected("gloss.yaml", "size: 0.15}", tag("{gloss: -1}"), "target.tag.print.gloss");
+  expect_rejected("shiny.yaml", "size: 0.15}", tag("{shininess: 0}"), "target.tag.print.shininess");
+  expect_rejected("preset.yaml", "size: 0.15}", tag("glossy"), "target.tag.print");
+  expect_rejected("model.yaml", "{spp: 1, seed: 5}", "{spp: 1, camera_model: fancy}",
+                  "imaging.camera_model");
+}
+
 }  // namespace

@@ -172,9 +172,40 @@ render::Trajectory read_motion(const Value& v) {
   return tr;
 }
 
-render::TagSpec read_tag(const Value& v) {
+// A preset name: clean (the defaults) or realistic.
+bool read_preset(const Value& v) {
+  const std::string p = v.string();
+  if (p != "clean" && p != "realistic")
+    v.fail("unknown preset '" + p + "' (use clean or realistic)");
+  return p == "realistic";
+}
+
+// print: clean | realistic | {preset: clean|realistic, ink_spread, gloss, shininess}
+render::PrintModel read_print(const Value& v, bool realistic) {
+  if (v.node().IsScalar())
+    return read_preset(v) ? render::PrintModel::realistic() : render::PrintModel();
+  MapReader m = v.map();
+  if (const auto p = m.find("preset")) realistic = read_preset(*p);
+  render::PrintModel pm = realistic ? render::PrintModel::realistic() : render::PrintModel();
+  if (const auto x = m.find("ink_spread")) {
+    pm.ink_spread = x->number();
+    if (!(std::abs(pm.ink_spread) <= 0.5))
+      x->fail("must be between -0.5 and 0.5 (a fraction of a cell, signed)");
+  }
+  if (const auto x = m.find("gloss")) pm.gloss = unit_interval(*x);
+  if (const auto x = m.find("shininess")) {
+    pm.shininess = x->number();
+    if (!(pm.shininess >= 1 && pm.shininess <= 10000)) x->fail("must be between 1 and 10000");
+  }
+  m.finish();
+  return pm;
+}
+
+// A tag; `realistic`: the scene's camera_model preset (the print's default).
+render::TagSpec read_tag(const Value& v, bool realistic) {
   MapReader m = v.map();
   render::TagSpec tag;
+  if (realistic) tag.print = render::PrintModel::realistic();
   tag.family = m.get_or("family", tag.family);
   if (const auto id = m.find("id")) tag.id = id->integer();
   tag.size = positive(m.get("size"));
@@ -184,6 +215,7 @@ render::TagSpec read_tag(const Value& v) {
   }
   if (const auto w = m.find("white")) tag.white_albedo = unit_interval(*w);
   if (const auto b = m.find("black")) tag.black_albedo = unit_interval(*b);
+  if (const auto p = m.find("print")) tag.print = read_print(*p, realistic);
   m.finish();
   try {
     render::TagTexture check(tag);  // family and id range, from libapriltag itself
@@ -239,8 +271,11 @@ render::Light read_light(const Value& v) {
   return l;
 }
 
-void read_imaging(const Value& v, render::Imaging& im) {
+// Returns whether imaging.camera_model is realistic (the default of every camera and tag).
+bool read_imaging(const Value& v, render::Imaging& im) {
   MapReader m = v.map();
+  bool realistic = false;
+  if (const auto x = m.find("camera_model")) realistic = read_preset(*x);
   if (const auto x = m.find("spp")) {
     im.spp = x->integer();
     if (im.spp < 1 || im.spp > 1024) x->fail("must be between 1 and 1024");
@@ -275,18 +310,19 @@ void read_imaging(const Value& v, render::Imaging& im) {
     if (im.visibility_grid < 1 || im.visibility_grid > 256) x->fail("must be between 1 and 256");
   }
   m.finish();
+  return realistic;
 }
 
 // One `target:` map (or `targets:` entry): tag, extra tags, shapes and motion.
-render::Target read_target(const Value& v, const std::filesystem::path& base_dir) {
+render::Target read_target(const Value& v, const std::filesystem::path& base_dir, bool realistic) {
   MapReader t = v.map();
   render::Target target;
-  target.tag = read_tag(t.get("tag"));
+  target.tag = read_tag(t.get("tag"), realistic);
   if (const auto extra = t.find("extra_tags"))
     for (const auto& e : extra->sequence()) {
       MapReader em = e.map();
       render::PlacedTag pt;
-      pt.tag = read_tag(em.get("tag"));
+      pt.tag = read_tag(em.get("tag"), realistic);
       pt.g_ot = read_pose(em.get("pose"));
       em.finish();
       if (auto why = tags_overlap(target.tag.size, obs::SE3::Identity(), pt.tag.size, pt.g_ot))
@@ -313,7 +349,8 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
   const Value frames = root.get("frames");
   s.frames = frames.integer();
   if (s.frames < 1) frames.fail("must be at least 1");
-  if (const auto im = root.find("imaging")) read_imaging(*im, s.imaging);
+  bool realistic = false;  // imaging.camera_model: realistic
+  if (const auto im = root.find("imaging")) realistic = read_imaging(*im, s.imaging);
 
   s.lights.clear();
   if (const auto ls = root.find("lights"))
@@ -324,7 +361,7 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
     const Value list = root.get("targets");
     s.targets.clear();
     for (const auto& t : list.sequence()) {
-      s.targets.push_back(read_target(t, base_dir));
+      s.targets.push_back(read_target(t, base_dir, realistic));
       if (s.targets.back().tag.family != s.targets[0].tag.family)
         t.fail("tag.family " + s.targets.back().tag.family +
                ": every target's tag must be of the first target's family (" +
@@ -332,7 +369,7 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
     }
     if (s.targets.empty()) list.fail("at least one target is required");
   } else {
-    s.targets = {read_target(root.get("target"), base_dir)};
+    s.targets = {read_target(root.get("target"), base_dir, realistic)};
   }
 
   const Value cams = root.get("cameras");
