@@ -39,7 +39,8 @@ struct FrameJob {
         chunk(std::lcm(block * block * spp, kPacket)),
         shading(make_shading(I, scene)),
         cache(*I.radiance[size_t(ci)]),
-        out(out) {
+        out(out),
+        develop(scene.cameras[size_t(ci)].sensor.image_effects()) {
     const CameraSpec& cam = scene.cameras[size_t(ci)];
     g_wc = cam.true_pose(t);  // the camera's true pose at this frame's time
     R = g_wc.linear().cast<float>();
@@ -65,6 +66,7 @@ struct FrameJob {
   std::vector<MovedBody> moved;        // Partial: the bodies that moved since the cached image
   mutable std::atomic<int> traced{0};  // packets traced
   cv::Mat& out;
+  bool develop;  // SensorModel::image_effects(): the whole image goes through develop_image
   Pose g_wc;
   Eigen::Matrix3f R;  // camera -> world
   Eigen::Vector3f O;  // camera centre
@@ -262,6 +264,7 @@ void render_tile(const FrameJob& f, int tile, TileWorker& w) {
     }
     if (traced) copy_radiance(f, t, w, true);
   }
+  if (f.develop) return;  // the realistic sensor works on the whole image (develop_image)
   expose_tile(f.im, f.scale, tile_seed(f.im.seed, f.camera_id, f.frame, tile), w.acc, t.x0, t.y0,
               t.w, t.h, f.out);
 }
@@ -307,6 +310,10 @@ cv::Mat Renderer::render(int ci, int frame) {
   const int nthreads = std::max(1, std::min(f.ntiles, f.im.threads > 0 ? f.im.threads : hw));
   std::atomic<int> next{0};
   run_threads(nthreads, [&]() { render_tiles(f, next); });
+  if (f.develop) {
+    const CameraSpec& cam = scene_.cameras[size_t(ci)];
+    develop_image(cam.sensor, f.im, Kc, f.scale, cam.id, frame, f.cache.acc, out);
+  }
   f.cache.key = std::move(key);
   f.cache.camera = f.g_wc.matrix();
   f.cache.traced_fraction = double(f.traced) / double(std::max(1, packets));

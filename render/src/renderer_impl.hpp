@@ -204,6 +204,13 @@ std::uint64_t tile_seed(std::uint64_t seed, int camera_id, int frame, int tile);
 void expose_tile(const Imaging& im, double scale, std::uint64_t seed, const std::vector<float>& acc,
                  int x0, int y0, int w, int h, cv::Mat& out);
 
+/// The realistic sensor (SensorModel::image_effects()): the whole image's summed radiance `acc`
+/// (row-major, `scale` * acc = the linear signal S [DN]) -> vignetting -> Gaussian PSF -> full
+/// well and bloom -> read and shot noise (tile by tile, from tile_seed(seed, camera id, frame,
+/// tile) as expose_tile) -> gain -> tone curve -> 8 bits in `out`.
+void develop_image(const SensorModel& sm, const Imaging& im, const Intrinsics& K, double scale,
+                   int camera_id, int frame, const std::vector<float>& acc, cv::Mat& out);
+
 /// Runs `worker` on `nthreads` threads (the calling one included) and joins them.
 template <class Worker>
 void run_threads(int nthreads, Worker&& worker) {

@@ -208,4 +208,44 @@ TEST(RenderScenario, PrintKeys) {
                   "imaging.camera_model");
 }
 
+TEST(RenderScenario, SensorKeys) {
+  const std::string cam = "fx: 70, fy: 70}";
+  const auto with = [&](const std::string& sensor) { return cam + "\n    sensor: " + sensor; };
+  auto s = netvmo::io::load_render_scenario(write_scenario(
+      "sensor.yaml",
+      replaced(kMinimal, cam,
+               with("{gain: 2, gamma: 2.4, full_well: 200, bloom: 0.5, vignetting: cos4, "
+                    "psf_sigma: 0.7, jpeg_quality: 75, exposure_time: 0.01, line_delay: 3e-5, "
+                    "f_number: 2, focus_distance: 1.5, focal_length_mm: 8}"))));
+  const auto& sm = s.cameras[0].sensor;
+  EXPECT_DOUBLE_EQ(sm.gain, 2);
+  EXPECT_EQ(sm.tone, netvmo::render::SensorModel::Tone::Gamma);
+  EXPECT_DOUBLE_EQ(sm.gamma, 2.4);
+  EXPECT_EQ(sm.vignetting, netvmo::render::SensorModel::Vignetting::Cos4);
+  EXPECT_EQ(sm.jpeg_quality, 75);
+  EXPECT_DOUBLE_EQ(sm.line_delay, 3e-5);
+  EXPECT_DOUBLE_EQ(sm.focal_length_m(70), 8e-3);
+  EXPECT_FALSE(s.cameras[1].sensor.image_effects());
+  s = netvmo::io::load_render_scenario(write_scenario(
+      "sensor_scene.yaml",
+      replaced(kMinimal, "{spp: 1, seed: 5}", "{spp: 1, seed: 5, camera_model: realistic}")));
+  EXPECT_EQ(s.cameras[1].sensor.jpeg_quality,
+            netvmo::render::SensorModel::realistic().jpeg_quality);
+  const std::string k = "cameras[0].sensor.";
+  expect_rejected("s1.yaml", cam, with("{exposure_time: -0.001}"), k + "exposure_time");
+  expect_rejected("s2.yaml", cam, with("{f_number: 0.3, focal_length_mm: 6}"), k + "f_number");
+  expect_rejected("s3.yaml", cam, with("{jpeg_quality: 101}"), k + "jpeg_quality");
+  expect_rejected("s4.yaml", cam, with("{gamma: 0}"), k + "gamma");
+  expect_rejected("s5.yaml", cam, with("{gain: -1}"), k + "gain");
+  expect_rejected("s6.yaml", cam, with("{bloom: 2}"), k + "bloom");
+  expect_rejected("s7.yaml", cam, with("{psf_sigma: -1}"), k + "psf_sigma");
+  expect_rejected("s8.yaml", cam, with("{tone: log}"), k + "tone");
+  expect_rejected("s9.yaml", cam, with("{vignetting: cos3}"), k + "vignetting");
+  expect_rejected("s10.yaml", cam, with("{f_number: 2}"), "cameras[0].sensor");
+  expect_rejected("s11.yaml", cam, with("{focus_distance: -2}"), k + "focus_distance");
+  expect_rejected("s12.yaml", cam, with("{line_delay: 1}"), k + "line_delay");
+  expect_rejected("s13.yaml", cam, with("{shutter: 1}"), k + "shutter");
+  expect_rejected("s14.yaml", cam, with("fancy"), "cameras[0].sensor");
+}
+
 }  // namespace

@@ -79,5 +79,113 @@ TEST(RealisticPrint, GlossAddsTheBlinnPhongTerm) {
   EXPECT_NEAR(d, expected, 1.0);
 }
 
+// A quiet-zone pixel of the fronto-parallel tag: albedo 0.85 lit by ambient 0.3 plus the light
+// 0.7 along the normal, S = 255 * 0.85 = 216.75 DN on the linear scale.
+constexpr int kWhiteU = 252, kWhiteV = 239;
+constexpr double kWhiteS = 216.75;
+
+std::uint8_t white_dn(const SensorModel& sm) {
+  SceneDescription s = fronto_scene(4);
+  s.cameras[0].sensor = sm;
+  Renderer r(s);
+  return r.render(0, 0).at<std::uint8_t>(kWhiteV, kWhiteU);
+}
+
+TEST(RealisticSensor, ToneCurveMapsAKnownRadianceToItsDn) {
+  SensorModel sm;
+  EXPECT_EQ(white_dn(sm), 217);  // clean: round(216.75)
+  sm.tone = SensorModel::Tone::Srgb;
+  const double v = kWhiteS / 255;
+  EXPECT_EQ(white_dn(sm), std::lround(255 * (1.055 * std::pow(v, 1 / 2.4) - 0.055)));
+  sm.tone = SensorModel::Tone::Gamma;
+  sm.gamma = 1.8;
+  EXPECT_EQ(white_dn(sm), std::lround(255 * std::pow(v, 1 / 1.8)));
+  sm.tone = SensorModel::Tone::Linear;
+  sm.gain = 0.5;
+  EXPECT_EQ(white_dn(sm), std::lround(0.5 * kWhiteS));
+  sm.gain = 1;
+  sm.full_well = 150;  // saturates at the full well
+  EXPECT_EQ(white_dn(sm), 150);
+}
+
+// Only the background (radiance 0.5, S = 127.5 DN) in view: the tag is behind the camera.
+cv::Mat background_image(const SensorModel& sm) {
+  SceneDescription s = fronto_scene(1);
+  s.target().motion = Trajectory::fixed(testing::facing_pose(Vec3(0, 0, -5), Vec3::Zero()));
+  s.cameras[0].sensor = sm;
+  Renderer r(s);
+  return r.render(0, 0);
+}
+
+TEST(RealisticSensor, VignettingFallsAsSpecifiedAtTheCorner) {
+  SensorModel sm;
+  sm.vignetting = SensorModel::Vignetting::Cos4;
+  cv::Mat img = background_image(sm);
+  const double xn = -319.5 / 600, yn = -239.5 / 600, q = 1 + xn * xn + yn * yn;
+  EXPECT_NEAR(img.at<std::uint8_t>(0, 0), 127.5 / (q * q), 0.51);
+  EXPECT_NEAR(img.at<std::uint8_t>(240, 320), 127.5, 0.51);
+  sm.vignetting = SensorModel::Vignetting::Poly;
+  sm.vignetting_poly = {-0.3, 0.05, 0};
+  img = background_image(sm);
+  const double rho2 = (319.5 * 319.5 + 239.5 * 239.5) / (400.0 * 400.0);
+  EXPECT_NEAR(img.at<std::uint8_t>(479, 639), 127.5 * (1 - 0.3 * rho2 + 0.05 * rho2 * rho2), 0.51);
+}
+
+// 10 % to 90 % rise [px] of the edge profile of the mean of rows [r0, r1) between columns u0, u1.
+double rise_width(const cv::Mat& img, int u0, int u1, int r0, int r1) {
+  const double a = column_mean(img, u0, r0, r1), b = column_mean(img, u1, r0, r1);
+  auto crossing = [&](double level) {
+    for (int u = u0; u < u1; ++u) {
+      const double p = column_mean(img, u, r0, r1), q = column_mean(img, u + 1, r0, r1);
+      if ((p - level) * (q - level) <= 0 && p != q) return u + (p - level) / (p - q);
+    }
+    return std::nan("");
+  };
+  return std::abs(crossing(a + 0.9 * (b - a)) - crossing(a + 0.1 * (b - a)));
+}
+
+TEST(RealisticSensor, PsfBlursAnEdgeByItsSigma) {
+  SceneDescription s = fronto_scene();
+  s.cameras[0].sensor.psf_sigma = 2.0;
+  Renderer r(s);
+  // A Gaussian of sigma 2 px convolved with the 1 px pixel box: sigma^2 + 1/12, and the 10-90 %
+  // rise of a blurred step is 2 * 1.2816 sigma.
+  const double expected = 2 * 1.2816 * std::sqrt(4.0 + 1.0 / 12);
+  EXPECT_NEAR(rise_width(r.render(0, 0), int(kLeftEdge) - 8, int(kLeftEdge) + 8, 200, 280),
+              expected, 0.15 * expected);
+}
+
+TEST(RealisticSensor, BloomSpillsIntoTheNeighbours) {
+  SceneDescription s = fronto_scene(4);
+  s.cameras[0].sensor.full_well = 150;
+  Renderer none(s);
+  s.cameras[0].sensor.bloom = 0.8;
+  Renderer bloom(s);
+  const cv::Mat a = none.render(0, 0), b = bloom.render(0, 0);
+  // The first black column inside the tag's left edge gets charge from the white quiet zone;
+  // a black pixel in the middle of the border cell, 7 px from any white, much less.
+  const int near_u = int(kLeftEdge) + 1, far_u = int(kLeftEdge) + 8;
+  EXPECT_GT(column_mean(b, near_u, 200, 280), column_mean(a, near_u, 200, 280) + 5);
+  EXPECT_LT(column_mean(b, far_u, 200, 280) - column_mean(a, far_u, 200, 280),
+            0.5 * (column_mean(b, near_u, 200, 280) - column_mean(a, near_u, 200, 280)));
+  EXPECT_EQ(b.at<std::uint8_t>(kWhiteV, kWhiteU - 5), 150);  // saturated white stays at the well
+}
+
+TEST(RealisticSensor, SameSeedSameBytesOtherSeedOtherBytes) {
+  auto image = [](std::uint64_t seed, int threads) {
+    SceneDescription s = fronto_scene(4);
+    s.cameras[0].sensor = SensorModel::realistic();
+    s.target().tag.print = PrintModel::realistic();
+    s.imaging.noise = true;
+    s.imaging.seed = seed;
+    s.imaging.threads = threads;
+    Renderer r(s);
+    return r.render(0, 0);
+  };
+  const cv::Mat a = image(3, 2), b = image(3, 1), c = image(4, 2);
+  EXPECT_EQ(cv::countNonZero(a != b), 0);
+  EXPECT_GT(cv::countNonZero(a != c), 1000);
+}
+
 }  // namespace
 }  // namespace netvmo::render

@@ -201,6 +201,83 @@ render::PrintModel read_print(const Value& v, bool realistic) {
   return pm;
 }
 
+// sensor: clean | realistic | {preset: clean|realistic, gain, tone, gamma, full_well, bloom,
+// vignetting, vignetting_poly, psf_sigma, jpeg_quality, exposure_time, line_delay, f_number,
+// focus_distance, focal_length_mm, pixel_pitch_um} (render::SensorModel)
+render::SensorModel read_sensor(const Value& v, bool realistic) {
+  using SM = render::SensorModel;
+  if (v.node().IsScalar()) return read_preset(v) ? SM::realistic() : SM();
+  MapReader m = v.map();
+  if (const auto p = m.find("preset")) realistic = read_preset(*p);
+  SM sm = realistic ? SM::realistic() : SM();
+  auto in_range = [](const Value& x, double lo, double hi, const std::string& why) {
+    const double d = x.number();
+    if (!(d >= lo && d <= hi)) x.fail(why);
+    return d;
+  };
+  if (const auto x = m.find("gain")) sm.gain = positive(*x);
+  if (const auto x = m.find("tone")) {
+    const std::string t = x->string();
+    if (t == "linear")
+      sm.tone = SM::Tone::Linear;
+    else if (t == "srgb")
+      sm.tone = SM::Tone::Srgb;
+    else if (t == "gamma")
+      sm.tone = SM::Tone::Gamma;
+    else
+      x->fail("unknown tone curve '" + t + "' (use linear, srgb or gamma)");
+  }
+  if (const auto x = m.find("gamma")) {
+    sm.gamma = x->number();
+    if (!(sm.gamma > 0 && sm.gamma <= 10)) x->fail("must be > 0 and <= 10");
+    if (!m.has("tone")) sm.tone = SM::Tone::Gamma;
+  }
+  if (const auto x = m.find("full_well"))
+    sm.full_well = in_range(*x, 0, 1e6, "must be >= 0 [DN of the linear signal] (0 = none)");
+  if (const auto x = m.find("bloom")) sm.bloom = unit_interval(*x);
+  if (const auto x = m.find("vignetting")) {
+    const std::string t = x->string();
+    if (t == "none")
+      sm.vignetting = SM::Vignetting::None;
+    else if (t == "cos4")
+      sm.vignetting = SM::Vignetting::Cos4;
+    else if (t == "poly")
+      sm.vignetting = SM::Vignetting::Poly;
+    else
+      x->fail("unknown vignetting '" + t + "' (use none, cos4 or poly)");
+  }
+  if (const auto x = m.find("vignetting_poly")) {
+    const auto a = x->vec<3>();
+    for (int i = 0; i < 3; ++i) sm.vignetting_poly[size_t(i)] = a[i];
+    if (!m.has("vignetting")) sm.vignetting = SM::Vignetting::Poly;
+  }
+  if (const auto x = m.find("psf_sigma")) sm.psf_sigma = in_range(*x, 0, 20, "must be 0..20 [px]");
+  if (const auto x = m.find("jpeg_quality")) {
+    sm.jpeg_quality = x->integer();
+    if (sm.jpeg_quality < 0 || sm.jpeg_quality > 100)
+      x->fail("must be between 1 and 100 (0 = PNG)");
+  }
+  if (const auto x = m.find("exposure_time"))
+    sm.exposure_time = in_range(*x, 0, 10, "must be between 0 and 10 [s]");
+  if (const auto x = m.find("line_delay"))
+    sm.line_delay = in_range(*x, -0.01, 0.01, "must be within +-0.01 [s per row]");
+  if (const auto x = m.find("f_number")) {
+    sm.f_number = x->number();
+    if (!(sm.f_number == 0 || (sm.f_number >= 0.5 && sm.f_number <= 1000)))
+      x->fail("must be 0 (pinhole) or between 0.5 and 1000");
+  }
+  if (const auto x = m.find("focus_distance"))
+    sm.focus_distance = in_range(*x, 1e-3, 1e6, "must be positive [m]");
+  if (const auto x = m.find("focal_length_mm"))
+    sm.focal_length_mm = in_range(*x, 0, 1e4, "must be >= 0 [mm]");
+  if (const auto x = m.find("pixel_pitch_um"))
+    sm.pixel_pitch_um = in_range(*x, 0, 1e3, "must be >= 0 [um]");
+  if (sm.f_number > 0 && !(sm.focal_length_mm > 0) && !(sm.pixel_pitch_um > 0))
+    v.fail("f_number needs focal_length_mm or pixel_pitch_um (the thin lens's focal length)");
+  m.finish();
+  return sm;
+}
+
 // A tag; `realistic`: the scene's camera_model preset (the print's default).
 render::TagSpec read_tag(const Value& v, bool realistic) {
   MapReader m = v.map();
@@ -379,6 +456,8 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
     render::CameraSpec cam;
     cam.id = read_camera_id(cm.get("id"), ids);
     cam.intrinsics = read_intrinsics(cm.get("intrinsics"));
+    if (realistic) cam.sensor = render::SensorModel::realistic();
+    if (const auto sn = cm.find("sensor")) cam.sensor = read_sensor(*sn, realistic);
     // The true pose: static at `pose`, or following `motion` (then g_wi_true is its t = 0 pose).
     const auto pose = cm.find("pose");
     const auto motion = cm.find("motion");
