@@ -187,5 +187,81 @@ TEST(RealisticSensor, SameSeedSameBytesOtherSeedOtherBytes) {
   EXPECT_GT(cv::countNonZero(a != c), 1000);
 }
 
+// The fronto-parallel tag moving at v [m/s] along the image's x axis (1 m away: 600 v px/s).
+SceneDescription moving_scene(double v, int spp) {
+  SceneDescription s = fronto_scene(spp);
+  s.target().motion.kind = Trajectory::Kind::Twist;
+  // The flip about x (facing_pose) keeps the object's x axis along the camera's x.
+  s.target().motion.twist << v, 0, 0, 0, 0, 0;
+  return s;
+}
+
+TEST(RealisticTime, MotionBlurWidthIsVelocityTimesExposure) {
+  SceneDescription s = moving_scene(1.0, 16);
+  s.cameras[0].sensor.exposure_time = 1.0 / 60;  // 600 px/s * 1/60 s = 10 px
+  Renderer r(s);
+  const cv::Mat img = r.render(0, 0);
+  // A step blurred by a box of width w has a linear ramp: its 10-90 % rise is 0.8 w (the pixel's
+  // own 1 px box adds a little at the ends of the ramp only).
+  EXPECT_NEAR(rise_width(img, int(kLeftEdge) - 12, int(kLeftEdge) + 12, 200, 280), 8.0, 0.4);
+  // The exposure is centred on the frame's time: the half-way point stays at the true edge.
+  EXPECT_NEAR(edge_position(img, int(kLeftEdge) - 12, int(kLeftEdge) + 12, 200, 280), kLeftEdge,
+              0.25);
+  EXPECT_NEAR(r.truth(0, 0).corners[0]->x(), kLeftEdge, 1e-6);  // truth at the frame's time
+}
+
+TEST(RealisticTime, MovingCameraBlursTheSameWay) {
+  // The camera moving at -1 m/s along its x sees the static tag move at +600 px/s.
+  SceneDescription s = fronto_scene(16);
+  s.cameras[0].motion = Trajectory();
+  s.cameras[0].motion->kind = Trajectory::Kind::Twist;
+  s.cameras[0].motion->twist << -1.0, 0, 0, 0, 0, 0;
+  s.cameras[0].sensor.exposure_time = 1.0 / 60;
+  Renderer r(s);
+  EXPECT_NEAR(rise_width(r.render(0, 0), int(kLeftEdge) - 12, int(kLeftEdge) + 12, 200, 280), 8.0,
+              0.4);
+}
+
+TEST(RealisticTime, RollingShutterShearsAVerticalEdge) {
+  SceneDescription s = moving_scene(1.0, 4);
+  s.cameras[0].sensor.line_delay = 1e-4;  // row r at (r - 239.5) * 1e-4 s: 0.06 px per row
+  Renderer r(s);
+  const cv::Mat img = r.render(0, 0);
+  const double top = edge_position(img, int(kLeftEdge) - 12, int(kLeftEdge) + 12, 200, 210);
+  const double mid = edge_position(img, int(kLeftEdge) - 12, int(kLeftEdge) + 12, 235, 245);
+  const double bottom = edge_position(img, int(kLeftEdge) - 12, int(kLeftEdge) + 12, 270, 280);
+  EXPECT_NEAR(bottom - top, 600 * 1e-4 * 70, 0.2);
+  EXPECT_NEAR(mid, kLeftEdge, 0.15);  // the middle row is exposed at the frame's time
+}
+
+// The tag of fronto_scene, its distance z and a thin lens of focal length 25 mm at f/1 (A =
+// 25 mm) focused at d: the circle of confusion is fx A |1/z - 1/d| px across.
+TEST(RealisticLens, DefocusBlurCircleFollowsTheThinLens) {
+  const double A = 0.025, d = 2.0;
+  SceneDescription s = fronto_scene(36);
+  s.cameras[0].sensor.f_number = 1.0;
+  s.cameras[0].sensor.focal_length_mm = 25;
+  s.cameras[0].sensor.focus_distance = d;
+  Renderer r(s);
+  const double c = 600 * A * std::abs(1 / 1.0 - 1 / d);  // 7.5 px
+  // A step blurred by a uniform disc of radius R: the fraction of the disc past x is
+  // (acos(x / R) - (x / R) sqrt(1 - (x / R)^2)) / pi; its 10-90 % rise is 2 x90 with
+  // (acos(u) - u sqrt(1 - u^2)) / pi = 0.1 at u = x90 / R.
+  double lo = 0, hi = 1;
+  for (int i = 0; i < 60; ++i) {
+    const double u = 0.5 * (lo + hi);
+    ((std::acos(u) - u * std::sqrt(1 - u * u)) / M_PI > 0.1 ? lo : hi) = u;
+  }
+  const double expected = 2 * lo * 0.5 * c;
+  EXPECT_NEAR(rise_width(r.render(0, 0), int(kLeftEdge) - 10, int(kLeftEdge) + 10, 200, 280),
+              expected, 0.1 * expected + 0.3);
+  // In focus (d = 1 m, the tag's distance) the edge is as sharp as the pinhole's.
+  s.cameras[0].sensor.focus_distance = 1.0;
+  Renderer sharp(s), pinhole(fronto_scene(36));
+  EXPECT_NEAR(rise_width(sharp.render(0, 0), int(kLeftEdge) - 10, int(kLeftEdge) + 10, 200, 280),
+              rise_width(pinhole.render(0, 0), int(kLeftEdge) - 10, int(kLeftEdge) + 10, 200, 280),
+              0.1);
+}
+
 }  // namespace
 }  // namespace netvmo::render
