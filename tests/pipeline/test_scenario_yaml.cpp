@@ -60,7 +60,8 @@ TEST(RenderScenario, MinimalLoads) {
 }
 
 TEST(RenderScenario, ShippedScenariosLoad) {
-  for (const char* name : {"paper5_render.yaml", "moving_target.yaml"}) {
+  for (const char* name : {"paper5_render.yaml", "moving_target.yaml", "paper5_render_realistic.yaml",
+                           "moving_target_realistic.yaml"}) {
     const auto s =
         netvmo::io::load_render_scenario(fs::path(NETVMO_SOURCE_DIR) / "datasets" / name);
     EXPECT_EQ(s.cameras.size(), 5u) << name;
