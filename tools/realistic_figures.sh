@@ -12,7 +12,8 @@ netvmo=build/netvmo
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
-# $1 print, $2 sensor, $3 target velocity [m/s], $4 imaging extras, $5 light direction
+# $1 print, $2 sensor, $3 target velocity [m/s], $4 imaging extras, $5 light direction,
+# $6 intrinsics (default: 200 x 150, fx = fy = 600)
 scene() {
   cat <<YAML
 fps: 30
@@ -27,13 +28,13 @@ target:
        material: {pattern: noise, albedo: 0.5, albedo2: 0.1, scale: 0.04, seed: 1}}
   motion: {type: twist, pose: {p: [0, 0, 1.3], r: [3.05, 0, 0.25]}, v: [$3, 0, 0]}
 cameras:
-  - {id: 1, intrinsics: {width: 200, height: 150, fx: 600, fy: 600}, sensor: $2,
+  - {id: 1, intrinsics: {${6:-width: 200, height: 150, fx: 600, fy: 600}}, sensor: $2,
      pose: {p: [0, 0, 0], r: [0, 0, 0]}}
 YAML
 }
 
 render() {  # $1 name, then scene's arguments; prints the PNG of the one image
-  scene "$2" "$3" "$4" "$5" "$6" > "$tmp/$1.yaml"
+  scene "$2" "$3" "$4" "$5" "$6" "$7" > "$tmp/$1.yaml"
   "$netvmo" render "$tmp/$1.yaml" --out "$tmp/$1" > "$tmp/$1.log" 2>&1 || { cat "$tmp/$1.log" >&2; exit 1; }
   local img
   img=$(ls "$tmp/$1"/cam_1/000000.* | head -1)
@@ -41,11 +42,12 @@ render() {  # $1 name, then scene's arguments; prints the PNG of the one image
   echo "$tmp/$1.png"
 }
 
-figure() {  # $1 effect, $2 print, $3 sensor, [$4 velocity, $5 imaging extras, $6 light]
-  local v=${4:-0} extra=${5:-} light=${6:-"[0.3, 0.4, 1.0]"}
+figure() {  # $1 effect, $2 print, $3 sensor, [$4 velocity, $5 imaging extras, $6 light,
+            #  $7 intrinsics of the effect's camera]
+  local v=${4:-0} extra=${5:-} light=${6:-"[0.3, 0.4, 1.0]"} lens=${7:-}
   local a b
-  a=$(render "clean_$1" clean clean "$v" "$extra" "$light")
-  b=$(render "$1" "$2" "$3" "$v" "$extra" "$light")
+  a=$(render "clean_$1" clean clean "$v" "$extra" "$light" "")
+  b=$(render "$1" "$2" "$3" "$v" "$extra" "$light" "$lens")
   convert "$a" "$b" -background white -splice 4x0 +append -chop 4x0 \
     -strip -define png:compression-level=9 "docs/figures/realistic_$1.png"
   echo "docs/figures/realistic_$1.png $(stat -c %s "docs/figures/realistic_$1.png") bytes"
@@ -63,4 +65,6 @@ figure jpeg clean "{jpeg_quality: 15}"
 figure motion_blur clean "{exposure_time: 0.02}" 1.0
 figure rolling_shutter clean "{line_delay: 1.0e-4}" 2.0
 figure defocus clean "{f_number: 1.4, focal_length_mm: 25, focus_distance: 3.0}"
+figure fisheye clean clean 0 "" "[0.3, 0.4, 1.0]" \
+  "width: 200, height: 150, fx: 260, fy: 260, lens: fisheye, distortion: [0.2, 0.1, 0, 0]"
 figure realistic realistic realistic 0.5 ", noise: true"

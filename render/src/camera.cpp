@@ -13,6 +13,22 @@ bool Intrinsics::has_distortion() const {
 
 Vec2 Intrinsics::distort(const Vec2& xn) const {
   const double x = xn.x(), y = xn.y();
+  if (lens == Lens::Fisheye) {  // cv::fisheye: equidistant with a polynomial in theta
+    const double r = std::hypot(x, y);
+    if (r < 1e-15) return xn;
+    const double th = std::atan(r), t2 = th * th;
+    const double thd = th * (1 + t2 * (dist[0] + t2 * (dist[1] + t2 * (dist[2] + t2 * dist[3]))));
+    return xn * (thd / r);
+  }
+  if (lens == Lens::Rational) {
+    const double k1 = dist[0], k2 = dist[1], p1 = dist[2], p2 = dist[3], k3 = dist[4];
+    const double k4 = dist[5], k5 = dist[6], k6 = dist[7];
+    const double r2 = x * x + y * y;
+    const double radial =
+        (1 + r2 * (k1 + r2 * (k2 + r2 * k3))) / (1 + r2 * (k4 + r2 * (k5 + r2 * k6)));
+    return {x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x),
+            y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y};
+  }
   const double k1 = dist[0], k2 = dist[1], p1 = dist[2], p2 = dist[3], k3 = dist[4];
   const double r2 = x * x + y * y;
   const double radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3));
@@ -55,6 +71,11 @@ void Intrinsics::validate() const {
     throw std::invalid_argument("cx, cy must be finite");
   for (double d : dist)
     if (!std::isfinite(d)) throw std::invalid_argument("distortion coefficients must be finite");
+  const size_t used = lens == Lens::Fisheye ? 4 : lens == Lens::Rational ? 8 : 5;
+  for (size_t i = used; i < dist.size(); ++i)
+    if (dist[i] != 0)
+      throw std::invalid_argument("the lens model takes " + std::to_string(used) +
+                                  " distortion coefficients");
 }
 
 }  // namespace netvmo::render

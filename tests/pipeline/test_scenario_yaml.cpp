@@ -60,8 +60,8 @@ TEST(RenderScenario, MinimalLoads) {
 }
 
 TEST(RenderScenario, ShippedScenariosLoad) {
-  for (const char* name : {"paper5_render.yaml", "moving_target.yaml", "paper5_render_realistic.yaml",
-                           "moving_target_realistic.yaml"}) {
+  for (const char* name : {"paper5_render.yaml", "moving_target.yaml",
+                           "paper5_render_realistic.yaml", "moving_target_realistic.yaml"}) {
     const auto s =
         netvmo::io::load_render_scenario(fs::path(NETVMO_SOURCE_DIR) / "datasets" / name);
     EXPECT_EQ(s.cameras.size(), 5u) << name;
@@ -247,6 +247,23 @@ TEST(RenderScenario, SensorKeys) {
   expect_rejected("s12.yaml", cam, with("{line_delay: 1}"), k + "line_delay");
   expect_rejected("s13.yaml", cam, with("{shutter: 1}"), k + "shutter");
   expect_rejected("s14.yaml", cam, with("fancy"), "cameras[0].sensor");
+}
+
+TEST(RenderScenario, LensKeys) {
+  const std::string cam = "fx: 70, fy: 70}";
+  auto s = netvmo::io::load_render_scenario(write_scenario(
+      "fisheye.yaml",
+      replaced(kMinimal, cam, "fx: 70, fy: 70, lens: fisheye, distortion: [0.1, 0, 0, 0]}")));
+  EXPECT_EQ(s.cameras[0].intrinsics.lens, netvmo::render::Intrinsics::Lens::Fisheye);
+  EXPECT_TRUE(netvmo::io::scene_calibration(s.cameras[0]).fisheye);
+  s = netvmo::io::load_render_scenario(write_scenario(
+      "rational.yaml", replaced(kMinimal, cam,
+                                "fx: 70, fy: 70, lens: rational, distortion: [0.1, 0, 0, 0, 0, "
+                                "0.2, 0, 0]}")));
+  EXPECT_DOUBLE_EQ(netvmo::io::scene_calibration(s.cameras[0]).rational[0], 0.2);
+  expect_rejected("lens.yaml", cam, "fx: 70, fy: 70, lens: kannala}", "cameras[0].intrinsics.lens");
+  expect_rejected("lens_n.yaml", cam, "fx: 70, fy: 70, lens: fisheye, distortion: [0, 0, 0, 0, 0]}",
+                  "cameras[0].intrinsics.distortion");
 }
 
 }  // namespace

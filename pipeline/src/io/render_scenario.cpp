@@ -315,9 +315,31 @@ render::Intrinsics read_intrinsics(const Value& v) {
   // Default principal point: the image centre in OpenCV pixel coordinates.
   k.cx = m.get_or("cx", (k.width - 1) / 2.0);
   k.cy = m.get_or("cy", (k.height - 1) / 2.0);
+  // lens: radtan (5 coefficients k1 k2 p1 p2 k3), rational (8: + k4 k5 k6) or fisheye (4: k1..k4,
+  // cv::fisheye's equidistant model).
+  size_t n = 5;
+  if (const auto l = m.find("lens")) {
+    const std::string name = l->string();
+    if (name == "radtan") {
+      k.lens = render::Intrinsics::Lens::RadTan;
+    } else if (name == "rational") {
+      k.lens = render::Intrinsics::Lens::Rational;
+      n = 8;
+    } else if (name == "fisheye") {
+      k.lens = render::Intrinsics::Lens::Fisheye;
+      n = 4;
+    } else {
+      l->fail("unsupported lens model '" + name + "' (use radtan, rational or fisheye)");
+    }
+  }
   if (const auto d = m.find("distortion")) {
-    const auto c = d->vec<5>();
-    for (int i = 0; i < 5; ++i) k.dist[size_t(i)] = c[i];
+    const auto c = d->numbers();
+    if (c.size() != n)
+      d->fail("expected " + std::to_string(n) + " numbers for lens " +
+              (n == 5   ? "radtan (k1 k2 p1 p2 k3)"
+               : n == 8 ? "rational (k1 k2 p1 p2 k3 k4 k5 k6)"
+                        : "fisheye (k1 k2 k3 k4)"));
+    for (size_t i = 0; i < n; ++i) k.dist[i] = c[i];
   }
   m.finish();
   return k;
@@ -553,7 +575,19 @@ Calibration scene_calibration(const render::CameraSpec& c) {
   k.height = c.intrinsics.height;
   k.K = cv::Matx33d(c.intrinsics.fx, 0, c.intrinsics.cx, 0, c.intrinsics.fy, c.intrinsics.cy, 0, 0,
                     1);
-  for (int j = 0; j < 5; ++j) k.dist[j] = c.intrinsics.dist[static_cast<size_t>(j)];
+  const auto& d = c.intrinsics.dist;
+  switch (c.intrinsics.lens) {
+    case render::Intrinsics::Lens::Fisheye:
+      k.fisheye = true;
+      for (int j = 0; j < 4; ++j) k.dist[j] = d[size_t(j)];
+      break;
+    case render::Intrinsics::Lens::Rational:
+      for (int j = 0; j < 3; ++j) k.rational[j] = d[size_t(5 + j)];
+      [[fallthrough]];
+    case render::Intrinsics::Lens::RadTan:
+      for (int j = 0; j < 5; ++j) k.dist[j] = d[size_t(j)];
+      break;
+  }
   k.source = "camera " + std::to_string(c.id) + " of the scene";
   return k;
 }

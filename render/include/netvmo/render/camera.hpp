@@ -1,4 +1,6 @@
-// Pinhole cameras with optional OpenCV radial-tangential distortion (k1, k2, p1, p2, k3).
+// Pinhole cameras with optional lens distortion: OpenCV's radial-tangential model (k1, k2, p1,
+// p2, k3), its 8-coefficient rational model (+ k4, k5, k6 in the denominator), or the fisheye
+// (equidistant, cv::fisheye) model (k1..k4).
 // Pixel convention (OpenCV): pixel (col, row) has its centre at continuous (col, row) and
 // covers [col-0.5, col+0.5] x [row-0.5, row+0.5].
 #pragma once
@@ -12,13 +14,23 @@
 namespace netvmo::render {
 
 struct Intrinsics {
+  /// The distortion model, on undistorted normalized (x, y), r^2 = x^2 + y^2:
+  ///  RadTan (cv::projectPoints with 5 coefficients): x (1 + k1 r^2 + k2 r^4 + k3 r^6) +
+  ///    tangential 2 p1 x y + p2 (r^2 + 2 x^2) (and the same for y with p1, p2 swapped);
+  ///  Rational (cv::projectPoints with 8): the radial factor divided by 1 + k4 r^2 + k5 r^4 + k6
+  ///  r^6; Fisheye (cv::fisheye::projectPoints): theta = atan(r), theta_d = theta (1 + k1 theta^2 +
+  ///    k2 theta^4 + k3 theta^6 + k4 theta^8), (x, y) scaled by theta_d / r.
+  enum class Lens { RadTan, Rational, Fisheye };
   int width = 640, height = 480;
   double fx = 600, fy = 600;
   double cx = 319.5, cy = 239.5;
-  std::array<double, 5> dist{};  ///< k1, k2, p1, p2, k3 (OpenCV order); all zero = none
+  Lens lens = Lens::RadTan;
+  /// RadTan: k1, k2, p1, p2, k3 (OpenCV order; the rest zero); Rational: k1, k2, p1, p2, k3, k4,
+  /// k5, k6; Fisheye: k1, k2, k3, k4 (the rest zero). All zero = none.
+  std::array<double, 8> dist{};
 
   bool has_distortion() const;
-  /// Normalized undistorted point (x/z, y/z) -> distorted normalized point (OpenCV model).
+  /// Normalized undistorted point (x/z, y/z) -> distorted normalized point (the lens model).
   Vec2 distort(const Vec2& xn) const;
   /// Inverse of distort() by Newton iteration; nullopt if it does not converge.
   std::optional<Vec2> undistort(const Vec2& xd) const;
