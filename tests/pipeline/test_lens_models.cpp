@@ -6,9 +6,12 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <opencv2/calib3d.hpp>
 #include <random>
+#include <tuple>
 
+#include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/calibration.hpp"
 #include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/render/renderer.hpp"
@@ -103,6 +106,33 @@ TEST(LensModels, RationalEqualsProjectPoints) {
 }
 TEST(LensModels, FisheyeEqualsFisheyeProjectPoints) {
   check_model(Intrinsics::Lens::Fisheye);
+}
+
+TEST(LensModels, UnsupportedLensModelNamesFileAndKey) {
+  const fs::path dir = fs::path(NETVMO_BINARY_DIR) / "test_tmp" / "lens_models";
+  fs::create_directories(dir);
+  netvmo::io::save_calibration_opencv(dir / "fish.yaml",
+                                      calibration(lens(Intrinsics::Lens::Fisheye)));
+  std::ifstream in(dir / "fish.yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const auto& [from, to, needle] :
+       {std::tuple<std::string, std::string, std::string>{"fisheye", "kannala", "lens_model"},
+        {"cols: 4", "cols: 5", "distortion_coefficients"}}) {
+    // cols: 4 appears first in distortion_coefficients (the camera matrix has cols: 3).
+    std::string bad = text;
+    bad.replace(bad.find(from), from.size(), to);
+    if (from == "cols: 4")  // a fifth coefficient
+      bad.replace(bad.find("data: [ ", bad.find("distortion_coefficients")), 8, "data: [ 0., ");
+    std::ofstream(dir / "bad.yaml") << bad;
+    try {
+      netvmo::io::load_calibration_opencv(dir / "bad.yaml");
+      ADD_FAILURE() << "accepted\n" << bad;
+    } catch (const netvmo::InputError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find((dir / "bad.yaml").string() + ": " + needle), std::string::npos) << m;
+      EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+    }
+  }
 }
 
 TEST(LensModels, FisheyeImageShowsTheTagAtItsTruthCorners) {
