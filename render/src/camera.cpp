@@ -13,6 +13,22 @@ bool Intrinsics::has_distortion() const {
 
 Vec2 Intrinsics::distort(const Vec2& xn) const {
   const double x = xn.x(), y = xn.y();
+  if (lens == Lens::Fisheye) {  // cv::fisheye: equidistant with a polynomial in theta
+    const double r = std::hypot(x, y);
+    if (r < 1e-15) return xn;
+    const double th = std::atan(r), t2 = th * th;
+    const double thd = th * (1 + t2 * (dist[0] + t2 * (dist[1] + t2 * (dist[2] + t2 * dist[3]))));
+    return xn * (thd / r);
+  }
+  if (lens == Lens::Rational) {
+    const double k1 = dist[0], k2 = dist[1], p1 = dist[2], p2 = dist[3], k3 = dist[4];
+    const double k4 = dist[5], k5 = dist[6], k6 = dist[7];
+    const double r2 = x * x + y * y;
+    const double radial =
+        (1 + r2 * (k1 + r2 * (k2 + r2 * k3))) / (1 + r2 * (k4 + r2 * (k5 + r2 * k6)));
+    return {x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x),
+            y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y};
+  }
   const double k1 = dist[0], k2 = dist[1], p1 = dist[2], p2 = dist[3], k3 = dist[4];
   const double r2 = x * x + y * y;
   const double radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3));
@@ -55,11 +71,69 @@ void Intrinsics::validate() const {
     throw std::invalid_argument("cx, cy must be finite");
   for (double d : dist)
     if (!std::isfinite(d)) throw std::invalid_argument("distortion coefficients must be finite");
+  const size_t used = lens == Lens::Fisheye ? 4 : lens == Lens::Rational ? 8 : 5;
+  for (size_t i = used; i < dist.size(); ++i)
+    if (dist[i] != 0)
+      throw std::invalid_argument("the lens model takes " + std::to_string(used) +
+                                  " distortion coefficients");
 }
 
 }  // namespace netvmo::render
 
 namespace netvmo::render {
+
+SensorModel SensorModel::realistic() {
+  SensorModel m;
+  m.tone = Tone::Srgb;
+  m.full_well = 240;
+  m.bloom = 0.3;
+  m.vignetting = Vignetting::Cos4;
+  m.psf_sigma = 0.6;
+  m.jpeg_quality = 90;
+  m.exposure_time = 0.004;
+  m.line_delay = 20e-6;
+  m.f_number = 2.8;
+  m.focus_distance = 2.0;
+  m.focal_length_mm = 6.0;
+  return m;
+}
+
+bool SensorModel::image_effects() const {
+  return gain != 1.0 || tone != Tone::Linear || full_well > 0 || vignetting != Vignetting::None ||
+         psf_sigma > 0;
+}
+
+double SensorModel::focal_length_m(double fx) const {
+  if (focal_length_mm > 0) return focal_length_mm * 1e-3;
+  const double v = fx * pixel_pitch_um * 1e-6, d = focus_distance;
+  return v * d / (v + d);
+}
+
+void SensorModel::validate() const {
+  auto need = [](bool ok, const char* what) {
+    if (!ok) throw std::invalid_argument(what);
+  };
+  need(gain > 0 && std::isfinite(gain), "sensor.gain must be positive");
+  need(gamma > 0 && std::isfinite(gamma), "sensor.gamma must be positive");
+  need(full_well >= 0 && std::isfinite(full_well), "sensor.full_well must be >= 0 (0 = none)");
+  need(bloom >= 0 && bloom <= 1, "sensor.bloom must be between 0 and 1");
+  for (double a : vignetting_poly)
+    need(std::isfinite(a), "sensor.vignetting_poly coefficients must be finite");
+  need(psf_sigma >= 0 && psf_sigma <= 20, "sensor.psf_sigma must be between 0 and 20 px");
+  need(jpeg_quality >= 0 && jpeg_quality <= 100, "sensor.jpeg_quality must be between 1 and 100");
+  need(exposure_time >= 0 && exposure_time <= 10, "sensor.exposure_time must be 0..10 s");
+  need(std::abs(line_delay) <= 1e-2, "sensor.line_delay must be within +-0.01 s");
+  need(f_number == 0 || (f_number >= 0.5 && f_number <= 1000),
+       "sensor.f_number must be 0 (pinhole) or between 0.5 and 1000");
+  if (f_number > 0) {
+    need(focus_distance > 0 && std::isfinite(focus_distance),
+         "sensor.focus_distance must be positive");
+    need(focal_length_mm > 0 || pixel_pitch_um > 0,
+         "sensor.f_number needs focal_length_mm or pixel_pitch_um");
+  }
+  need(focal_length_mm >= 0 && focal_length_mm < 1e4, "sensor.focal_length_mm must be >= 0");
+  need(pixel_pitch_um >= 0 && pixel_pitch_um < 1e3, "sensor.pixel_pitch_um must be >= 0");
+}
 
 Pose CameraSpec::believed_pose(double t) const {
   if (!moving()) return g_wi_believed;

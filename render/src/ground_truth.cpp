@@ -39,8 +39,9 @@ void project_corners(const Intrinsics& Kc, const CameraCache& cc, double h, Fram
 
 // Whether the segment from the camera centre to the world point at `dist` along unit `d` is
 // free of geometry (up to just short of the point).
+// `time`: the Embree ray time of the frame's time (0.5 with motion blur, else 0).
 bool line_of_sight(RTCScene top, RTCIntersectContext* ctx, const Vec3& cam_w, const Vec3& d,
-                   double dist) {
+                   double dist, float time) {
   RTCRay ray;
   ray.org_x = float(cam_w.x());
   ray.org_y = float(cam_w.y());
@@ -50,7 +51,7 @@ bool line_of_sight(RTCScene top, RTCIntersectContext* ctx, const Vec3& cam_w, co
   ray.dir_z = float(d.z());
   ray.tnear = 0;
   ray.tfar = float(dist - std::max(1e-4, 1e-5 * dist));
-  ray.time = 0;
+  ray.time = time;
   ray.mask = 0xFFFFFFFFu;
   ray.id = 0;
   ray.flags = 0;
@@ -62,7 +63,7 @@ bool line_of_sight(RTCScene top, RTCIntersectContext* ctx, const Vec3& cam_w, co
 // white quiet zone, which the detector needs too), each sample front-facing, in view and with
 // an unobstructed line of sight from the camera centre.
 double visible_fraction(RTCScene top, const CameraSpec& cam, const CameraCache& cc,
-                        const FrameTruth& t, const Pose& g_wi, double hp, int n) {
+                        const FrameTruth& t, const Pose& g_wi, double hp, int n, float time) {
   const Vec3 cam_w = g_wi.translation();
   const Vec3 normal_w = t.g_wo.linear().col(2);
   int seen = 0;
@@ -76,7 +77,7 @@ double visible_fraction(RTCScene top, const CameraSpec& cam, const CameraCache& 
       if (normal_w.dot(to_cam) <= 0) continue;
       if (!in_fov(cam.intrinsics, cc, t.g_io * po, nullptr)) continue;
       const double dist = to_cam.norm();
-      if (line_of_sight(top, &ctx, cam_w, -to_cam / dist, dist)) ++seen;
+      if (line_of_sight(top, &ctx, cam_w, -to_cam / dist, dist, time)) ++seen;
     }
   return double(seen) / double(n * n);
 }
@@ -97,8 +98,8 @@ FrameTruth Renderer::truth(int ci, int frame) {
   t.g_io = g_wi.inverse() * t.g_wo;
   project_corners(cam.intrinsics, cc, scene_.target().tag.size / 2, t);
   const double hp = 0.5 * I.tags.front()->printed_side();
-  t.visible_fraction =
-      visible_fraction(I.top, cam, cc, t, g_wi, hp, scene_.imaging.visibility_grid);
+  t.visible_fraction = visible_fraction(I.top, cam, cc, t, g_wi, hp, scene_.imaging.visibility_grid,
+                                        I.motion_steps > 1 ? 0.5f : 0.0f);  // at the frame's time
   return t;
 }
 

@@ -5,6 +5,7 @@
 // wherever no moved body or its shadow can have changed it (reuse_bounds.cpp) and re-traces the
 // rest; in either case the frame draws new noise. A camera whose pose changed since its last
 // image (a moving camera) traces it in full.
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <numeric>
@@ -39,13 +40,43 @@ struct FrameJob {
         chunk(std::lcm(block * block * spp, kPacket)),
         shading(make_shading(I, scene)),
         cache(*I.radiance[size_t(ci)]),
-        out(out) {
+        out(out),
+        develop(scene.cameras[size_t(ci)].sensor.image_effects()) {
     const CameraSpec& cam = scene.cameras[size_t(ci)];
     g_wc = cam.true_pose(t);  // the camera's true pose at this frame's time
     R = g_wc.linear().cast<float>();
     O = g_wc.translation().cast<float>();
     const Intrinsics& Kc = cam.intrinsics;
     fx = float(Kc.fx), fy = float(Kc.fy), cx = float(Kc.cx), cy = float(Kc.cy);
+    // The realistic camera's rays: each sample at its own time in the exposure (and its row's
+    // rolling-shutter offset) and through its own point of the lens aperture.
+    const SensorModel& sm = cam.sensor;
+    timed = I.motion_steps > 1;
+    lens = sm.lens_effects();
+    if (timed || lens) {
+      exposure_time = sm.exposure_time;
+      line_delay = sm.line_delay;
+      row_mid = 0.5 * (Kc.height - 1);
+      half_window = I.half_window;
+      lens_radius = float(0.5 * sm.aperture(Kc.fx));
+      focus = float(sm.focus_distance);
+      std::uint64_t h = im.seed ^ 0x5bd1e9955bd1e995ULL;
+      jitter_seed =
+          mix(mix(h) ^ (std::uint64_t(std::uint32_t(camera_id)) << 32 | std::uint32_t(frame)));
+      if (timed && cam.moving())  // the camera's own pose at the motion steps
+        for (int k = 0; k < I.motion_steps; ++k) {
+          const Pose g = cam.true_pose(t + (2.0 * k / (I.motion_steps - 1) - 1.0) * half_window);
+          cam_R.push_back(g.linear().cast<float>());
+          cam_O.push_back(g.translation().cast<float>());
+        }
+    }
+  }
+
+  static std::uint64_t mix(std::uint64_t z) {  // splitmix64's finalizer
+    z += 0x9e3779b97f4a7c15ULL;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
   }
 
   const Renderer::Impl& impl;
@@ -65,10 +96,18 @@ struct FrameJob {
   std::vector<MovedBody> moved;        // Partial: the bodies that moved since the cached image
   mutable std::atomic<int> traced{0};  // packets traced
   cv::Mat& out;
+  bool develop;  // SensorModel::image_effects(): the whole image goes through develop_image
   Pose g_wc;
   Eigen::Matrix3f R;  // camera -> world
   Eigen::Vector3f O;  // camera centre
   float fx = 0, fy = 0, cx = 0, cy = 0;
+  // Realistic rays (SensorModel): per-lane time (motion blur, rolling shutter) and lens point.
+  bool timed = false, lens = false;
+  double exposure_time = 0, line_delay = 0, row_mid = 0, half_window = 0;
+  float lens_radius = 0, focus = 1;
+  std::uint64_t jitter_seed = 0;       // from (seed, camera id, frame): per-pixel sample rotation
+  std::vector<Eigen::Matrix3f> cam_R;  // a moving camera's pose at the motion steps
+  std::vector<Eigen::Vector3f> cam_O;
 };
 
 // A tile: its origin and size in the image, and how its samples are ordered into packets.
@@ -151,6 +190,71 @@ bool camera_ray(const FrameJob& f, int col, int row, int s, float& xn, float& yn
   return std::isfinite(xn);
 }
 
+double radical_inverse(unsigned i, unsigned base) {
+  double r = 0, f = 1.0 / base;
+  for (; i; i /= base, f /= base) r += f * (i % base);
+  return r;
+}
+
+// The realistic part of lane j's ray for sample s of pixel (col, row) through undistorted
+// normalized (xn, yn): its time in the exposure (radical inverse base 3 of s) and lens point
+// (bases 5 and 7, concentric disc mapping), each rotated by a per-pixel seeded offset.
+void realistic_lane(const FrameJob& f, int col, int row, int s, float xn, float yn, Packet& pk,
+                    int j) {
+  const std::uint64_t h =
+      FrameJob::mix(f.jitter_seed ^ (std::uint64_t(row) * 0x100000001b3ULL + std::uint64_t(col)));
+  auto rot = [&](double u, int k) {
+    const double o = double((h >> (21 * k)) & 0x1FFFFF) / 2097152.0;
+    const double v = u + o;
+    return v >= 1 ? v - 1 : v;
+  };
+  Eigen::Matrix3f R = f.R;
+  Eigen::Vector3f O = f.O;
+  float time = 0;
+  if (f.timed) {
+    const double dt = (row - f.row_mid) * f.line_delay +
+                      (rot(radical_inverse(unsigned(s), 3), 0) - 0.5) * f.exposure_time;
+    time = float(std::clamp(0.5 + 0.5 * dt / f.half_window, 0.0, 1.0));
+    if (!f.cam_R.empty()) {  // the moving camera at the ray's time, interpolated as bodies are
+      const int last = int(f.cam_R.size()) - 1;
+      const float x = time * float(last);
+      const int i = std::min(int(x), last - 1);
+      const float fr = x - float(i);
+      R = (1 - fr) * f.cam_R[size_t(i)] + fr * f.cam_R[size_t(i + 1)];
+      O = (1 - fr) * f.cam_O[size_t(i)] + fr * f.cam_O[size_t(i + 1)];
+    }
+  }
+  Eigen::Vector3f d(xn, yn, 1.0f);
+  if (f.lens) {
+    // Thin lens: the ray leaves lens point l (camera frame, z = 0) towards the point of the
+    // pinhole ray on the plane in focus, (xn, yn, 1) * focus.
+    const double a = 2 * rot(radical_inverse(unsigned(s), 5), 1) - 1;
+    const double b = 2 * rot(radical_inverse(unsigned(s), 7), 2) - 1;
+    double r = 0, phi = 0;  // Shirley and Chiu's concentric mapping of the square to the disc
+    if (a != 0 || b != 0) {
+      if (std::abs(a) > std::abs(b)) {
+        r = a;
+        phi = M_PI / 4 * (b / a);
+      } else {
+        r = b;
+        phi = M_PI / 2 - M_PI / 4 * (a / b);
+      }
+    }
+    const Eigen::Vector3f l(float(f.lens_radius * r * std::cos(phi)),
+                            float(f.lens_radius * r * std::sin(phi)), 0.0f);
+    d = Eigen::Vector3f(xn - l.x() / f.focus, yn - l.y() / f.focus, 1.0f);
+    O += R * l;
+  }
+  d = R * d;
+  pk.rh.ray.org_x[j] = O.x();
+  pk.rh.ray.org_y[j] = O.y();
+  pk.rh.ray.org_z[j] = O.z();
+  pk.rh.ray.dir_x[j] = d.x();
+  pk.rh.ray.dir_y[j] = d.y();
+  pk.rh.ray.dir_z[j] = d.z();
+  pk.rh.ray.time[j] = time;
+}
+
 // Pixel level: lane j takes sample `idx` of the tile, if it has one; `pb` bounds the rays.
 void primary_lane(const FrameJob& f, const TileRect& t, int idx, int j, Packet& pk,
                   PacketBounds& pb) {
@@ -167,11 +271,12 @@ void primary_lane(const FrameJob& f, const TileRect& t, int idx, int j, Packet& 
   pb.xmax = std::max(pb.xmax, xn);
   pb.ymin = std::min(pb.ymin, yn);
   pb.ymax = std::max(pb.ymax, yn);
+  pk.valid[j] = -1;
+  if (f.timed || f.lens) return realistic_lane(f, t.x0 + cin, t.y0 + rin, s, xn, yn, pk, j);
   const Eigen::Vector3f d = f.R * Eigen::Vector3f(xn, yn, 1.0f);
   pk.rh.ray.dir_x[j] = d.x();
   pk.rh.ray.dir_y[j] = d.y();
   pk.rh.ray.dir_z[j] = d.z();
-  pk.valid[j] = -1;
 }
 
 // Packet level: aim, trace and shade kPacket samples from `base` on; add them to their pixels
@@ -181,7 +286,7 @@ void trace_packet(const FrameJob& f, const TileRect& t, int base, TileWorker& w,
   pb = PacketBounds();
   for (int j = 0; j < kPacket; ++j) primary_lane(f, t, base + j, j, pk, pb);
   intersectK(pk.valid, f.impl.top, &w.ctx, &pk.rh);
-  shade_packet(f.shading, f.O, pk, &w.sctx);
+  shade_packet(f.shading, pk, &w.sctx);
   for (int j = 0; j < kPacket; ++j) {
     if (pk.pix[j] >= 0) w.acc[size_t(pk.pix[j])] += pk.rad[j];
     if (pk.valid[j]) {  // a hit (shading clears the lanes that missed)
@@ -262,6 +367,7 @@ void render_tile(const FrameJob& f, int tile, TileWorker& w) {
     }
     if (traced) copy_radiance(f, t, w, true);
   }
+  if (f.develop) return;  // the realistic sensor works on the whole image (develop_image)
   expose_tile(f.im, f.scale, tile_seed(f.im.seed, f.camera_id, f.frame, tile), w.acc, t.x0, t.y0,
               t.w, t.h, f.out);
 }
@@ -292,7 +398,9 @@ cv::Mat Renderer::render(int ci, int frame) {
   std::vector<Eigen::Matrix4d> key;
   for (const auto& in : I.instances) key.push_back(in.g_wb.matrix());
   // A camera that moved sees every ray change: its whole image is traced again.
-  if (!f.im.reuse_radiance || !f.cache.valid || f.cache.camera != f.g_wc.matrix()) {
+  // Motion blur and defocus: rays leave the camera at other times and points; no reuse.
+  if (!f.im.reuse_radiance || !f.cache.valid || f.cache.camera != f.g_wc.matrix() || f.timed ||
+      f.lens) {
     f.source = Radiance::Trace;
     f.cache.acc.assign(size_t(f.width) * size_t(f.height), 0.0f);
     f.cache.packets.assign(size_t(packets), PacketBounds());
@@ -307,6 +415,10 @@ cv::Mat Renderer::render(int ci, int frame) {
   const int nthreads = std::max(1, std::min(f.ntiles, f.im.threads > 0 ? f.im.threads : hw));
   std::atomic<int> next{0};
   run_threads(nthreads, [&]() { render_tiles(f, next); });
+  if (f.develop) {
+    const CameraSpec& cam = scene_.cameras[size_t(ci)];
+    develop_image(cam.sensor, f.im, Kc, f.scale, cam.id, frame, f.cache.acc, out);
+  }
   f.cache.key = std::move(key);
   f.cache.camera = f.g_wc.matrix();
   f.cache.traced_fraction = double(f.traced) / double(std::max(1, packets));

@@ -54,8 +54,12 @@ void Renderer::set_frame(int frame) {
   Impl& I = *impl_;
   if (I.current_frame == frame) return;
   const double t = time_of(frame);
-  for (auto& in : I.instances)
-    if (in.motion) I.set_transform(in, in.motion->at(t));
+  for (auto& in : I.instances) {
+    if (I.blurred(in))
+      I.set_motion(in, *in.motion, t);
+    else if (in.motion)
+      I.set_transform(in, in.motion->at(t));
+  }
   rtcCommitScene(I.top);
   I.check("per-frame commit");
   I.current_frame = frame;

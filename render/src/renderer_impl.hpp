@@ -56,8 +56,11 @@ struct Instance {
   std::vector<GeomInfo> geoms;
   const Trajectory* motion = nullptr;  // null: static (identity)
   Eigen::AlignedBox3d box;             // bounds of the geometry in the instance frame
-  Pose g_wb = Pose::Identity();        // current pose
+  Pose g_wb = Pose::Identity();        // current pose (at the frame's time)
   Pose g_bw = Pose::Identity();
+  // Motion blur (Renderer::Impl::motion_steps > 1, a moving instance): g_wb at the motion steps
+  // over the frame's exposure window, as Embree interpolates them (3 x 4, linearly).
+  std::vector<Eigen::Matrix<float, 3, 4>> steps;
 };
 
 /// What a traced packet covered: the bounds of its rays in the camera's undistorted normalized
@@ -103,6 +106,12 @@ struct Renderer::Impl {
   std::shared_mutex mutex;
   int current_frame = -1;
   std::vector<int> target_instances;  // instance of each target
+  // Motion blur and rolling shutter (SensorModel::time_effects() of any camera): moving
+  // instances carry `motion_steps` transforms spread evenly over [t - half_window, t +
+  // half_window] around the frame's time t (Embree ray time 0..1, the frame's time at 0.5);
+  // 1: one transform at t, the clean renderer.
+  int motion_steps = 1;
+  double half_window = 0;  // [s]: the largest exposure half-time plus rolling-shutter offset
 
   ~Impl();
 
@@ -111,6 +120,12 @@ struct Renderer::Impl {
   void build(const SceneDescription& scene);
   void check(const char* what) const;
   void set_transform(Instance& in, const Pose& g);
+  /// Whether the instance is motion-blurred: it moves and motion_steps > 1.
+  bool blurred(const Instance& in) const {
+    return motion_steps > 1 && in.motion && in.motion->kind != Trajectory::Kind::Static;
+  }
+  /// Motion blur: the instance's pose at every motion step of the window around time t.
+  void set_motion(Instance& in, const Trajectory& motion, double t);
 
  private:
   void create_device();
@@ -146,6 +161,10 @@ struct Shading {
   std::vector<Eigen::Matrix3f> inst_R;                 // per top-level id: object -> world normals
   std::vector<std::vector<Eigen::Affine3f>> to_local;  // per (top id, geometry): world -> shape
   float ambient = 0, background = 0;
+  // Motion blur: per top id, the instance's motion steps (empty: static) and per geometry its
+  // instance -> shape transform; the shading of a hit interpolates the instance at the ray time.
+  std::vector<std::vector<Eigen::Matrix<float, 3, 4>>> steps;
+  std::vector<std::vector<Eigen::Affine3f>> geom_local;
 };
 Shading make_shading(const Renderer::Impl& impl, const SceneDescription& scene);
 
@@ -157,13 +176,14 @@ struct Packet {
   alignas(64) int svalid[kPacket];
   int pix[kPacket];  // pixel of the lane in its tile, -1: none
   float rad[kPacket], alb[kPacket], contrib[kPacket];
+  float gloss[kPacket], shininess[kPacket];  // specular term of a glossy tag print (0: matte)
   Eigen::Vector3f p[kPacket], n[kPacket];
 };
 
-/// Radiance of every lane of a traced primary packet from origin O: background, textured
-/// albedo times ambient plus each light, one shadow-ray packet per light (context `sctx`).
-void shade_packet(const Shading& sh, const Eigen::Vector3f& O, Packet& pk,
-                  RTCIntersectContext* sctx);
+/// Radiance of every lane of a traced primary packet (each lane from its own ray origin):
+/// background, textured albedo times ambient plus each light, one shadow-ray packet per light
+/// (context `sctx`).
+void shade_packet(const Shading& sh, Packet& pk, RTCIntersectContext* sctx);
 
 // Radiance reuse under motion (reuse_bounds.cpp).
 /// A body that moved since a camera's cached image: a world box holding it at both poses
@@ -196,12 +216,25 @@ bool ray_may_hit(const MovedBody& b, float xn, float yn);
 bool shadow_may_hit(const MovedBody& b, const LightF& L, const PacketBounds& p);
 
 // The sensor (sensor.cpp).
+/// Number of motion steps over a frame's exposure window with motion blur.
+constexpr int kMotionSteps = 9;
+/// Motion-blur window of a scene: the largest half exposure plus rolling-shutter offset of its
+/// cameras [s] (0: no camera has time effects).
+double motion_half_window(const SceneDescription& scene);
+
 /// Seed of a tile's noise generator, from (seed, camera id, frame, tile).
 std::uint64_t tile_seed(std::uint64_t seed, int camera_id, int frame, int tile);
 /// Writes a tile's pixels at (x0, y0) of `out`: DN = scale * acc, plus read and shot noise
 /// drawn from the generator seeded with `seed` when im.noise, rounded and clamped to [0, 255].
 void expose_tile(const Imaging& im, double scale, std::uint64_t seed, const std::vector<float>& acc,
                  int x0, int y0, int w, int h, cv::Mat& out);
+
+/// The realistic sensor (SensorModel::image_effects()): the whole image's summed radiance `acc`
+/// (row-major, `scale` * acc = the linear signal S [DN]) -> vignetting -> Gaussian PSF -> full
+/// well and bloom -> read and shot noise (tile by tile, from tile_seed(seed, camera id, frame,
+/// tile) as expose_tile) -> gain -> tone curve -> 8 bits in `out`.
+void develop_image(const SensorModel& sm, const Imaging& im, const Intrinsics& K, double scale,
+                   int camera_id, int frame, const std::vector<float>& acc, cv::Mat& out);
 
 /// Runs `worker` on `nthreads` threads (the calling one included) and joins them.
 template <class Worker>

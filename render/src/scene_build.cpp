@@ -1,6 +1,8 @@
 // Scene building: the Embree device, triangle meshes with their materials and tag textures,
 // one instance for all static geometry (built once), one per target and one per moving
 // occluder, all attached to the small top-level scene that is recommitted per frame.
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "renderer_impl.hpp"
@@ -68,7 +70,17 @@ void Renderer::Impl::create_device() {
   rtcSetSceneBuildQuality(top, RTC_BUILD_QUALITY_LOW);
 }
 
+double motion_half_window(const SceneDescription& scene) {
+  double w = 0;
+  for (const auto& c : scene.cameras)
+    w = std::max(w, 0.5 * c.sensor.exposure_time +
+                        std::abs(c.sensor.line_delay) * 0.5 * (c.intrinsics.height - 1));
+  return w;
+}
+
 void Renderer::Impl::build(const SceneDescription& scene) {
+  half_window = motion_half_window(scene);
+  motion_steps = half_window > 0 ? kMotionSteps : 1;
   create_device();
   instances.reserve(1 + scene.targets.size() + scene.occluders.size());
   // Static geometry: one scene, built once, instanced with the identity.
@@ -163,8 +175,13 @@ void Renderer::Impl::attach_instance(Instance& in, int index) {
   rtcCommitScene(in.scene);
   in.geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
   rtcSetGeometryInstancedScene(in.geom, in.scene);
-  rtcSetGeometryTimeStepCount(in.geom, 1);
-  set_transform(in, Pose::Identity());
+  if (blurred(in)) {  // motion blur: transforms at the motion steps (set_motion)
+    rtcSetGeometryTimeStepCount(in.geom, unsigned(motion_steps));
+    set_motion(in, *in.motion, 0.0);
+  } else {
+    rtcSetGeometryTimeStepCount(in.geom, 1);
+    set_transform(in, Pose::Identity());
+  }
   in.top_id = rtcAttachGeometry(top, in.geom);
   if (instance_of_top_id.size() <= in.top_id) instance_of_top_id.resize(in.top_id + 1, -1);
   instance_of_top_id[in.top_id] = index;
@@ -178,6 +195,22 @@ void Renderer::Impl::set_transform(Instance& in, const Pose& g) {
   for (int c = 0; c < 4; ++c)
     for (int r = 0; r < 3; ++r) m[3 * c + r] = float(M(r, c));
   rtcSetGeometryTransform(in.geom, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, m);
+  rtcCommitGeometry(in.geom);
+}
+
+void Renderer::Impl::set_motion(Instance& in, const Trajectory& motion, double t) {
+  in.g_wb = motion.at(t);
+  in.g_bw = in.g_wb.inverse();
+  in.steps.clear();
+  for (int k = 0; k < motion_steps; ++k) {
+    const double tk = t + (2.0 * k / (motion_steps - 1) - 1.0) * half_window;
+    const Eigen::Matrix<float, 3, 4> M = motion.at(tk).matrix().topRows<3>().cast<float>();
+    in.steps.push_back(M);
+    float m[12];
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 3; ++r) m[3 * c + r] = M(r, c);
+    rtcSetGeometryTransform(in.geom, unsigned(k), RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, m);
+  }
   rtcCommitGeometry(in.geom);
 }
 

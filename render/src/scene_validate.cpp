@@ -25,6 +25,7 @@ void validate_cameras(const std::vector<CameraSpec>& cameras) {
         fail("duplicate camera id " + std::to_string(cameras[i].id));
     try {
       cameras[i].intrinsics.validate();
+      cameras[i].sensor.validate();
       if (cameras[i].motion) cameras[i].motion->validate();
     } catch (const std::invalid_argument& e) {
       fail("camera " + std::to_string(cameras[i].id) + ": " + e.what());

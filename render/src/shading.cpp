@@ -2,6 +2,7 @@
 // has the albedo of its tag texture or material, lit by the ambient level plus every light
 // (directional, or point with 1 / d^2 falloff) it faces and, for lights with shadows, sees
 // along a shadow ray (one shadow packet per light); a miss has the background radiance.
+#include <algorithm>
 #include <cmath>
 
 #include "renderer_impl.hpp"
@@ -24,7 +25,7 @@ void clear_shadow_lane(RayK& sr, int j) {
 
 // Surface point of lane j: position, normal facing the camera, albedo from the texture, and the
 // ambient radiance; a miss gets the background and leaves the packet.
-void shade_surface(const Shading& sh, const Eigen::Vector3f& O, Packet& pk, int j) {
+void shade_surface(const Shading& sh, Packet& pk, int j) {
   const RayHitK& rh = pk.rh;
   if (rh.hit.geomID[j] == RTC_INVALID_GEOMETRY_ID) {
     pk.rad[j] = sh.background;
@@ -35,15 +36,34 @@ void shade_surface(const Shading& sh, const Eigen::Vector3f& O, Packet& pk, int 
   const unsigned top_id = rh.hit.instID[0][j];
   const GeomInfo& gi = I.instances[size_t(I.instance_of_top_id[top_id])].geoms[rh.hit.geomID[j]];
   const Eigen::Vector3f D(rh.ray.dir_x[j], rh.ray.dir_y[j], rh.ray.dir_z[j]);
+  const Eigen::Vector3f O(rh.ray.org_x[j], rh.ray.org_y[j], rh.ray.org_z[j]);
   const Eigen::Vector3f P = O + rh.ray.tfar[j] * D;
-  Eigen::Vector3f n =
-      sh.inst_R[top_id] * Eigen::Vector3f(rh.hit.Ng_x[j], rh.hit.Ng_y[j], rh.hit.Ng_z[j]);
+  const Eigen::Vector3f Ng(rh.hit.Ng_x[j], rh.hit.Ng_y[j], rh.hit.Ng_z[j]);
+  Eigen::Vector3f n;
+  Eigen::Affine3f moved;  // a motion-blurred instance: world -> shape at the ray's time
+  const bool blurred = !sh.steps.empty() && !sh.steps[top_id].empty();
+  if (blurred) {
+    // Embree interpolates the instance's 3 x 4 transforms linearly between motion steps.
+    const auto& S = sh.steps[top_id];
+    const int last = int(S.size()) - 1;
+    const float x = std::clamp(rh.ray.time[j], 0.0f, 1.0f) * float(last);
+    const int i = std::min(int(x), last - 1);
+    const float fr = x - float(i);
+    Eigen::Affine3f M = Eigen::Affine3f::Identity();
+    M.matrix().topRows<3>() = (1 - fr) * S[size_t(i)] + fr * S[size_t(i + 1)];
+    n = M.linear() * Ng;
+    moved = sh.geom_local[top_id][rh.hit.geomID[j]] * M.inverse();
+  } else {
+    n = sh.inst_R[top_id] * Ng;
+  }
   if (n.dot(D) > 0) n = -n;
   n.normalize();
-  const Eigen::Affine3f& wl = sh.to_local[top_id][rh.hit.geomID[j]];
+  const Eigen::Affine3f& wl = blurred ? moved : sh.to_local[top_id][rh.hit.geomID[j]];
   const Eigen::Vector3f pl = wl * P;
   pk.alb[j] = float(gi.tag ? gi.tag->albedo(pl.x(), pl.y())
                            : gi.material.eval(pl.cast<double>(), (wl.linear() * n).cast<double>()));
+  pk.gloss[j] = gi.tag ? float(gi.tag->spec().print.gloss) : 0.0f;
+  pk.shininess[j] = gi.tag ? float(gi.tag->spec().print.shininess) : 1.0f;
   pk.p[j] = P;
   pk.n[j] = n;
   pk.rad[j] = pk.alb[j] * sh.ambient;
@@ -72,6 +92,12 @@ bool light_lane(const LightF& L, Packet& pk, int j) {
   const float c = pk.n[j].dot(l);
   if (c <= 0) return false;
   pk.contrib[j] = pk.alb[j] * e * c;
+  if (pk.gloss[j] > 0) {  // Blinn-Phong: h halves the directions to the light and the viewer
+    const Eigen::Vector3f view =
+        -Eigen::Vector3f(pk.rh.ray.dir_x[j], pk.rh.ray.dir_y[j], pk.rh.ray.dir_z[j]).normalized();
+    const float nh = pk.n[j].dot((l + view).normalized());
+    if (nh > 0) pk.contrib[j] += pk.gloss[j] * e * std::pow(nh, pk.shininess[j]);
+  }
   if (!L.shadows) {
     pk.rad[j] += pk.contrib[j];
     return false;
@@ -85,6 +111,7 @@ bool light_lane(const LightF& L, Packet& pk, int j) {
   sr.dir_y[j] = l.y();
   sr.dir_z[j] = l.z();
   sr.tfar[j] = tfar;
+  sr.time[j] = pk.rh.ray.time[j];  // the shadow at the primary ray's time (motion blur)
   pk.svalid[j] = -1;
   return true;
 }
@@ -120,15 +147,25 @@ Shading make_shading(const Renderer::Impl& I, const SceneDescription& scene) {
     for (const auto& g : in.geoms)
       sh.to_local[t].push_back(Eigen::Affine3f((g.to_local * in.g_bw).cast<float>().matrix()));
   }
+  if (I.motion_steps > 1) {
+    sh.steps.resize(ninst);
+    sh.geom_local.resize(ninst);
+    for (size_t t = 0; t < ninst; ++t) {
+      if (I.instance_of_top_id[t] < 0) continue;
+      const Instance& in = I.instances[size_t(I.instance_of_top_id[t])];
+      sh.steps[t] = in.steps;
+      for (const auto& g : in.geoms)
+        sh.geom_local[t].push_back(Eigen::Affine3f(g.to_local.cast<float>().matrix()));
+    }
+  }
   sh.ambient = float(scene.imaging.ambient);
   sh.background = float(scene.imaging.background);
   return sh;
 }
 
-void shade_packet(const Shading& sh, const Eigen::Vector3f& O, Packet& pk,
-                  RTCIntersectContext* sctx) {
+void shade_packet(const Shading& sh, Packet& pk, RTCIntersectContext* sctx) {
   for (int j = 0; j < kPacket; ++j)
-    if (pk.valid[j]) shade_surface(sh, O, pk, j);
+    if (pk.valid[j]) shade_surface(sh, pk, j);
   for (const LightF& L : sh.lights) add_light(sh, L, pk, sctx);
 }
 

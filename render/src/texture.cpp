@@ -47,6 +47,12 @@ float value_noise(float x, float y, float z, std::uint32_t seed) {
 TagTexture::TagTexture(const TagSpec& spec) : spec_(spec) {
   if (!(spec.size > 0)) throw std::invalid_argument("tag size must be positive");
   if (spec.quiet_cells < 0) throw std::invalid_argument("tag quiet_cells must be >= 0");
+  if (!(std::abs(spec.print.ink_spread) <= 0.5))
+    throw std::invalid_argument("tag print.ink_spread must be between -0.5 and 0.5 cells");
+  if (!(spec.print.gloss >= 0 && spec.print.gloss <= 1))
+    throw std::invalid_argument("tag print.gloss must be between 0 and 1");
+  if (!(spec.print.shininess >= 1 && spec.print.shininess <= 10000))
+    throw std::invalid_argument("tag print.shininess must be between 1 and 10000");
   const TagFamilyPtr f = create_tag_family(spec.family);
   if (spec.id < 0 || static_cast<std::uint32_t>(spec.id) >= f->ncodes)
     throw std::invalid_argument("tag id " + std::to_string(spec.id) + " out of range for " +
@@ -69,6 +75,29 @@ TagTexture::TagTexture(const TagSpec& spec) : spec_(spec) {
   for (int r = 0; r < total_width_; ++r)
     for (int c = 0; c < total_width_; ++c)
       dark_[static_cast<size_t>(r * total_width_ + c)] = im->buf[r * im->stride + c] < 128 ? 1 : 0;
+}
+
+double TagTexture::spread_albedo(double x, double y) const {
+  const double f = spec_.print.ink_spread, d = std::abs(f);
+  const double half = 0.5 * total_width_;
+  const double fc = x / cell_ + half, fr = half - y / cell_;
+  const double cf = std::floor(fc), rf = std::floor(fr);
+  const int c = static_cast<int>(cf), r = static_cast<int>(rf);
+  const double u = fc - cf, v = fr - rf;  // position inside the cell, [0, 1)
+  const bool me = dark_or_white(r, c);
+  // A point takes the other colour when a cell of the spreading colour (black for f > 0, white
+  // for f < 0) lies within d cells of it; |f| <= 0.5 keeps that to the 8 neighbours.
+  const bool spreading_dark = f > 0;
+  if (me == spreading_dark) return me ? spec_.black_albedo : spec_.white_albedo;
+  for (int dr = -1; dr <= 1; ++dr)
+    for (int dc = -1; dc <= 1; ++dc) {
+      if ((dr == 0 && dc == 0) || dark_or_white(r + dr, c + dc) != spreading_dark) continue;
+      const double ex = dc < 0 ? u : (dc > 0 ? 1 - u : 0);
+      const double ey = dr < 0 ? v : (dr > 0 ? 1 - v : 0);
+      if (ex * ex + ey * ey < d * d)
+        return spreading_dark ? spec_.black_albedo : spec_.white_albedo;
+    }
+  return me ? spec_.black_albedo : spec_.white_albedo;
 }
 
 double Material::eval(const Vec3& p, const Vec3& n) const {

@@ -11,6 +11,8 @@
 
 #include "netvmo/pipeline/io/dataset_writer.hpp"
 #include "netvmo/pipeline/io/render_scenario.hpp"
+#include "netvmo/pipeline/sources/network_source.hpp"
+#include "netvmo/pipeline/sources/render_source.hpp"
 #include "test_util.hpp"
 
 namespace fs = std::filesystem;
@@ -133,6 +135,32 @@ TEST(DatasetWriter, WritesDocumentedLayout) {
   // No temporary files left behind.
   for (const auto& e : fs::recursive_directory_iterator(out))
     EXPECT_EQ(e.path().string().find(".partial"), std::string::npos) << e.path();
+}
+
+// sensor.jpeg_quality: the camera's frames are JPEG files at that quality, which the dataset
+// reader takes, and the live renderer gives the same decoded bytes.
+TEST(DatasetWriter, JpegFramesAtTheSensorsQuality) {
+  const fs::path dir = fs::path(NETVMO_BINARY_DIR) / "test_tmp" / "dataset_writer_jpeg";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "scenario.yaml")
+      << netvmo::test::replaced(kScenario, "fx: 70, fy: 71, cx: 39, cy: 29}",
+                                "fx: 70, fy: 71, cx: 39, cy: 29}\n    sensor: {jpeg_quality: 60}");
+  const auto scene = netvmo::io::load_render_scenario(dir / "scenario.yaml");
+  ASSERT_EQ(scene.cameras[0].sensor.jpeg_quality, 60);
+  netvmo::render::Renderer r(scene);
+  netvmo::io::DatasetOptions opt;
+  opt.progress = false;
+  netvmo::io::write_dataset(r, dir / "dataset", opt);
+  EXPECT_TRUE(fs::exists(dir / "dataset" / "cam_3" / "000001.jpg"));
+  EXPECT_FALSE(fs::exists(dir / "dataset" / "cam_3" / "000001.png"));
+  EXPECT_TRUE(fs::exists(dir / "dataset" / "cam_7" / "000001.png"));
+  auto recorded = netvmo::sources::open_dataset_source(dir / "dataset");
+  auto live = netvmo::sources::make_render_source(scene);
+  const cv::Mat a = recorded->read(0, 1), b = live->read(0, 1);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(cv::countNonZero(a != b), 0);
+  EXPECT_GT(cv::countNonZero(a != r.render(0, 1)), 0);  // compressed, not the rendered bytes
 }
 
 }  // namespace

@@ -254,8 +254,10 @@ TEST(Calibration, RosErrorsNameFileAndField) {
       for (const auto& n : needles) EXPECT_NE(m.find(n), std::string::npos) << m << " lacks " << n;
     }
   };
-  fails(ros_camera_info("equidistant", "[0.1, 0.01, 0.001, 0.0001]"),
-        {"distortion_model", "'equidistant' is not supported"});
+  fails(ros_camera_info("kannala_brandt", "[0.1, 0.01, 0.001, 0.0001]"),
+        {"distortion_model", "'kannala_brandt' is not supported"});
+  fails(ros_camera_info("equidistant", "[0.1, 0.01, 0.001, 0.0001, 0.0]"),
+        {"distortion_coefficients", "expected a 1x4 matrix", "cols 5"});
   fails(ros_camera_info("plumb_bob", "[-0.12, 0.05, 0.0004, -0.0003]"),
         {"distortion_coefficients", "expected a 1x5 matrix", "cols 4"});
   fails(ros_camera_info("rational_polynomial"), {"distortion_coefficients", "1x8"});

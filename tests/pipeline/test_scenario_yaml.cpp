@@ -60,7 +60,8 @@ TEST(RenderScenario, MinimalLoads) {
 }
 
 TEST(RenderScenario, ShippedScenariosLoad) {
-  for (const char* name : {"paper5_render.yaml", "moving_target.yaml"}) {
+  for (const char* name : {"paper5_render.yaml", "moving_target.yaml",
+                           "paper5_render_realistic.yaml", "moving_target_realistic.yaml"}) {
     const auto s =
         netvmo::io::load_render_scenario(fs::path(NETVMO_SOURCE_DIR) / "datasets" / name);
     EXPECT_EQ(s.cameras.size(), 5u) << name;
@@ -173,6 +174,96 @@ TEST(RenderScenario, BadValuesAreRejected) {
       std::string::npos);
   EXPECT_NE(load_error(fs::path(NETVMO_BINARY_DIR) / "no_such_file.yaml").find("file not found"),
             std::string::npos);
+}
+
+// The realistic camera model's keys (docs/realistic_camera.md): out of their physical range each
+// gives one line naming the file and the key.
+void expect_rejected(const std::string& name, const std::string& from, const std::string& to,
+                     const std::string& key) {
+  const auto f = write_scenario(name, replaced(kMinimal, from, to));
+  const std::string msg = load_error(f);
+  EXPECT_NE(msg.find(f.string()), std::string::npos) << msg;
+  EXPECT_NE(msg.find(key), std::string::npos) << msg;
+  EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+}
+
+TEST(RenderScenario, PrintKeys) {
+  const auto tag = [](const std::string& print) { return "size: 0.15, print: " + print + "}"; };
+  auto s = netvmo::io::load_render_scenario(write_scenario(
+      "print.yaml", replaced(kMinimal, "size: 0.15}", tag("{ink_spread: -0.1, gloss: 0.3}"))));
+  EXPECT_DOUBLE_EQ(s.target().tag.print.ink_spread, -0.1);
+  EXPECT_DOUBLE_EQ(s.target().tag.print.gloss, 0.3);
+  s = netvmo::io::load_render_scenario(
+      write_scenario("print_preset.yaml", replaced(kMinimal, "size: 0.15}", tag("realistic"))));
+  EXPECT_TRUE(s.target().tag.print == netvmo::render::PrintModel::realistic());
+  s = netvmo::io::load_render_scenario(write_scenario(
+      "print_scene.yaml",
+      replaced(kMinimal, "{spp: 1, seed: 5}", "{spp: 1, seed: 5, camera_model: realistic}")));
+  EXPECT_TRUE(s.target().tag.print == netvmo::render::PrintModel::realistic());
+  expect_rejected("ink.yaml", "size: 0.15}", tag("{ink_spread: 0.6}"),
+                  "target.tag.print.ink_spread");
+  expect_rejected("gloss.yaml", "size: 0.15}", tag("{gloss: -1}"), "target.tag.print.gloss");
+  expect_rejected("shiny.yaml", "size: 0.15}", tag("{shininess: 0}"), "target.tag.print.shininess");
+  expect_rejected("preset.yaml", "size: 0.15}", tag("glossy"), "target.tag.print");
+  expect_rejected("model.yaml", "{spp: 1, seed: 5}", "{spp: 1, camera_model: fancy}",
+                  "imaging.camera_model");
+}
+
+TEST(RenderScenario, SensorKeys) {
+  const std::string cam = "fx: 70, fy: 70}";
+  const auto with = [&](const std::string& sensor) { return cam + "\n    sensor: " + sensor; };
+  auto s = netvmo::io::load_render_scenario(write_scenario(
+      "sensor.yaml",
+      replaced(kMinimal, cam,
+               with("{gain: 2, gamma: 2.4, full_well: 200, bloom: 0.5, vignetting: cos4, "
+                    "psf_sigma: 0.7, jpeg_quality: 75, exposure_time: 0.01, line_delay: 3e-5, "
+                    "f_number: 2, focus_distance: 1.5, focal_length_mm: 8}"))));
+  const auto& sm = s.cameras[0].sensor;
+  EXPECT_DOUBLE_EQ(sm.gain, 2);
+  EXPECT_EQ(sm.tone, netvmo::render::SensorModel::Tone::Gamma);
+  EXPECT_DOUBLE_EQ(sm.gamma, 2.4);
+  EXPECT_EQ(sm.vignetting, netvmo::render::SensorModel::Vignetting::Cos4);
+  EXPECT_EQ(sm.jpeg_quality, 75);
+  EXPECT_DOUBLE_EQ(sm.line_delay, 3e-5);
+  EXPECT_DOUBLE_EQ(sm.focal_length_m(70), 8e-3);
+  EXPECT_FALSE(s.cameras[1].sensor.image_effects());
+  s = netvmo::io::load_render_scenario(write_scenario(
+      "sensor_scene.yaml",
+      replaced(kMinimal, "{spp: 1, seed: 5}", "{spp: 1, seed: 5, camera_model: realistic}")));
+  EXPECT_EQ(s.cameras[1].sensor.jpeg_quality,
+            netvmo::render::SensorModel::realistic().jpeg_quality);
+  const std::string k = "cameras[0].sensor.";
+  expect_rejected("s1.yaml", cam, with("{exposure_time: -0.001}"), k + "exposure_time");
+  expect_rejected("s2.yaml", cam, with("{f_number: 0.3, focal_length_mm: 6}"), k + "f_number");
+  expect_rejected("s3.yaml", cam, with("{jpeg_quality: 101}"), k + "jpeg_quality");
+  expect_rejected("s4.yaml", cam, with("{gamma: 0}"), k + "gamma");
+  expect_rejected("s5.yaml", cam, with("{gain: -1}"), k + "gain");
+  expect_rejected("s6.yaml", cam, with("{bloom: 2}"), k + "bloom");
+  expect_rejected("s7.yaml", cam, with("{psf_sigma: -1}"), k + "psf_sigma");
+  expect_rejected("s8.yaml", cam, with("{tone: log}"), k + "tone");
+  expect_rejected("s9.yaml", cam, with("{vignetting: cos3}"), k + "vignetting");
+  expect_rejected("s10.yaml", cam, with("{f_number: 2}"), "cameras[0].sensor");
+  expect_rejected("s11.yaml", cam, with("{focus_distance: -2}"), k + "focus_distance");
+  expect_rejected("s12.yaml", cam, with("{line_delay: 1}"), k + "line_delay");
+  expect_rejected("s13.yaml", cam, with("{shutter: 1}"), k + "shutter");
+  expect_rejected("s14.yaml", cam, with("fancy"), "cameras[0].sensor");
+}
+
+TEST(RenderScenario, LensKeys) {
+  const std::string cam = "fx: 70, fy: 70}";
+  auto s = netvmo::io::load_render_scenario(write_scenario(
+      "fisheye.yaml",
+      replaced(kMinimal, cam, "fx: 70, fy: 70, lens: fisheye, distortion: [0.1, 0, 0, 0]}")));
+  EXPECT_EQ(s.cameras[0].intrinsics.lens, netvmo::render::Intrinsics::Lens::Fisheye);
+  EXPECT_TRUE(netvmo::io::scene_calibration(s.cameras[0]).fisheye);
+  s = netvmo::io::load_render_scenario(write_scenario(
+      "rational.yaml", replaced(kMinimal, cam,
+                                "fx: 70, fy: 70, lens: rational, distortion: [0.1, 0, 0, 0, 0, "
+                                "0.2, 0, 0]}")));
+  EXPECT_DOUBLE_EQ(netvmo::io::scene_calibration(s.cameras[0]).rational[0], 0.2);
+  expect_rejected("lens.yaml", cam, "fx: 70, fy: 70, lens: kannala}", "cameras[0].intrinsics.lens");
+  expect_rejected("lens_n.yaml", cam, "fx: 70, fy: 70, lens: fisheye, distortion: [0, 0, 0, 0, 0]}",
+                  "cameras[0].intrinsics.distortion");
 }
 
 }  // namespace

@@ -38,6 +38,8 @@ void validate(const Calibration& c, const std::string& file) {
   for (int i = 0; i < 3; ++i)
     if (!std::isfinite(c.rational[i]))
       throw InputError(file + ": distortion_coefficients: not finite");
+  if (c.fisheye && (c.dist[4] != 0 || c.is_rational()))
+    throw InputError(file + ": distortion_coefficients: the fisheye model takes 4 (k1..k4)");
 }
 
 // An opencv-matrix node, its declared size checked first: OpenCV allocates rows x cols before
@@ -234,6 +236,19 @@ Calibration load_calibration_opencv(const fs::path& path) {
     D.convertTo(D, CV_64F);
     D = D.reshape(1, 1);
     const int n = D.empty() ? 0 : D.cols;
+    // lens_model: pinhole (default) or fisheye (cv::fisheye's k1..k4).
+    if (const cv::FileNode lm = fsr["lens_model"]; !lm.empty() && !lm.isNone()) {
+      const std::string model = lm.isString() ? std::string(lm) : std::string("(not a string)");
+      if (model == "fisheye")
+        c.fisheye = true;
+      else if (model != "pinhole")
+        throw InputError(file + ": lens_model: '" + model +
+                         "' is not supported (supported: pinhole, fisheye)");
+      if (c.fisheye && n != 4)
+        throw InputError(file +
+                         ": distortion_coefficients: the fisheye model takes 4 (k1..k4), got " +
+                         std::to_string(n));
+    }
     if (n != 4 && n != 5 && n != 8 && n != 12 && n != 14)
       throw InputError(file + ": distortion_coefficients: expected 4, 5 or 8 numbers, got " +
                        std::to_string(n));
@@ -315,12 +330,16 @@ Calibration load_calibration_ros(const fs::path& path) {
     n = 5;
   else if (model == "rational_polynomial")
     n = 8;
+  else if (model == "equidistant")
+    n = 4;
   else
     model_value.fail("'" + model +
-                     "' is not supported (supported: plumb_bob, rational_polynomial; the "
-                     "images are undistorted with OpenCV's pinhole model)");
+                     "' is not supported (supported: plumb_bob, rational_polynomial, "
+                     "equidistant; the images are undistorted with OpenCV's pinhole or fisheye "
+                     "model)");
+  c.fisheye = n == 4;
   const std::vector<double> D = ros_matrix(root, "distortion_coefficients", 1, n);
-  for (int i = 0; i < 5; ++i) c.dist[i] = D[static_cast<size_t>(i)];
+  for (int i = 0; i < std::min(n, 5); ++i) c.dist[i] = D[static_cast<size_t>(i)];
   for (int i = 5; i < n; ++i) c.rational[i - 5] = D[static_cast<size_t>(i)];
   if (root.has("rectification_matrix")) {
     const std::vector<double> R = ros_matrix(root, "rectification_matrix", 3, 3);
@@ -370,6 +389,9 @@ void save_calibration_opencv(const fs::path& path, const Calibration& c) {
     fsw << "image_width" << c.width << "image_height" << c.height;
     fsw << "camera_matrix" << cv::Mat(c.K);
     fsw << "distortion_coefficients" << c.distortion();
+    if (c.fisheye)
+      fsw << "lens_model"
+          << "fisheye";
     text = fsw.releaseAndGetString();
   } catch (const cv::Exception& e) {
     throw InputError(path.string() + ": cannot write calibration: " + e.err);
@@ -397,7 +419,10 @@ void save_calibration_ros(const fs::path& path, const Calibration& c,
                      "\ncamera_name: " + camera_name + "\n";
   text += matrix("camera_matrix", 3, 3, std::vector<double>(K.val, K.val + 9));
   text += std::string("distortion_model: ") +
-          (c.is_rational() ? "rational_polynomial" : "plumb_bob") + "\n";
+          (c.fisheye         ? "equidistant"
+           : c.is_rational() ? "rational_polynomial"
+                             : "plumb_bob") +
+          "\n";
   text += matrix("distortion_coefficients", 1, D.cols,
                  std::vector<double>(D.begin<double>(), D.end<double>()));
   text += matrix("rectification_matrix", 3, 3, {1, 0, 0, 0, 1, 0, 0, 0, 1});
@@ -407,6 +432,7 @@ void save_calibration_ros(const fs::path& path, const Calibration& c,
 }
 
 cv::Mat Calibration::distortion() const {
+  if (fisheye) return (cv::Mat_<double>(1, 4) << dist[0], dist[1], dist[2], dist[3]);
   if (!is_rational()) return cv::Mat(cv::Matx<double, 1, 5>(dist.val)).clone();
   return (cv::Mat_<double>(1, 8) << dist[0], dist[1], dist[2], dist[3], dist[4], rational[0],
           rational[1], rational[2]);
@@ -416,6 +442,12 @@ std::vector<cv::Point2d> normalize_points(const std::vector<cv::Point2d>& px,
                                           const Calibration& calib) {
   std::vector<cv::Point2d> out;
   if (px.empty()) return out;
+  if (calib.fisheye) {
+    cv::fisheye::undistortPoints(
+        px, out, cv::Mat(calib.K), calib.distortion(), cv::noArray(), cv::noArray(),
+        cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12));
+    return out;
+  }
   cv::undistortPoints(
       px, out, cv::Mat(calib.K), calib.distortion(), cv::noArray(), cv::noArray(),
       cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12));
@@ -426,6 +458,10 @@ std::vector<cv::Point2d> denormalize_points(const std::vector<cv::Point2d>& xy,
                                             const Calibration& calib) {
   std::vector<cv::Point2d> out;
   if (xy.empty()) return out;
+  if (calib.fisheye) {
+    cv::fisheye::distortPoints(xy, out, cv::Mat(calib.K), calib.distortion());
+    return out;
+  }
   std::vector<cv::Point3d> rays;
   rays.reserve(xy.size());
   for (const auto& p : xy) rays.emplace_back(p.x, p.y, 1.0);

@@ -127,10 +127,15 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
       if (f < 0) continue;  // this camera takes no image at this time
       const int id = scene.cameras[size_t(ci)].id;
       const cv::Mat img = r.render(ci, u);
-      if (!cv::imencode(".png", img, png))
-        throw InputError("cannot encode PNG for camera " + std::to_string(id));
+      // A camera with sensor.jpeg_quality writes JPEG frames at that quality (OpenCV's encoder).
+      const int quality = scene.cameras[size_t(ci)].sensor.jpeg_quality;
+      const char* ext = quality > 0 ? ".jpg" : ".png";
+      const std::vector<int> params =
+          quality > 0 ? std::vector<int>{cv::IMWRITE_JPEG_QUALITY, quality} : std::vector<int>{};
+      if (!cv::imencode(ext, img, png, params))
+        throw InputError(std::string("cannot encode ") + ext + " for camera " + std::to_string(id));
       char name[32];
-      std::snprintf(name, sizeof name, "%06d.png", f);
+      std::snprintf(name, sizeof name, "%06d%s", f, ext);
       io::write_file_atomic(out / ("cam_" + std::to_string(id)) / name,
                             std::string(reinterpret_cast<const char*>(png.data()), png.size()));
       render::FrameTruth t = r.truth(ci, u);
@@ -150,7 +155,8 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
     for (const auto& e :
          fs::directory_iterator(out / ("cam_" + std::to_string(scene.cameras[ci].id)))) {
       const std::string name = e.path().filename().string();
-      if (name.size() == 10 && name.compare(6, 4, ".png") == 0 &&
+      if (name.size() == 10 &&
+          (name.compare(6, 4, ".png") == 0 || name.compare(6, 4, ".jpg") == 0) &&
           name.find_first_not_of("0123456789") == 6 && std::stoi(name.substr(0, 6)) >= own) {
         std::error_code ec;
         fs::remove(e.path(), ec);

@@ -172,9 +172,117 @@ render::Trajectory read_motion(const Value& v) {
   return tr;
 }
 
-render::TagSpec read_tag(const Value& v) {
+// A preset name: clean (the defaults) or realistic.
+bool read_preset(const Value& v) {
+  const std::string p = v.string();
+  if (p != "clean" && p != "realistic")
+    v.fail("unknown preset '" + p + "' (use clean or realistic)");
+  return p == "realistic";
+}
+
+// print: clean | realistic | {preset: clean|realistic, ink_spread, gloss, shininess}
+render::PrintModel read_print(const Value& v, bool realistic) {
+  if (v.node().IsScalar())
+    return read_preset(v) ? render::PrintModel::realistic() : render::PrintModel();
+  MapReader m = v.map();
+  if (const auto p = m.find("preset")) realistic = read_preset(*p);
+  render::PrintModel pm = realistic ? render::PrintModel::realistic() : render::PrintModel();
+  if (const auto x = m.find("ink_spread")) {
+    pm.ink_spread = x->number();
+    if (!(std::abs(pm.ink_spread) <= 0.5))
+      x->fail("must be between -0.5 and 0.5 (a fraction of a cell, signed)");
+  }
+  if (const auto x = m.find("gloss")) pm.gloss = unit_interval(*x);
+  if (const auto x = m.find("shininess")) {
+    pm.shininess = x->number();
+    if (!(pm.shininess >= 1 && pm.shininess <= 10000)) x->fail("must be between 1 and 10000");
+  }
+  m.finish();
+  return pm;
+}
+
+// sensor: clean | realistic | {preset: clean|realistic, gain, tone, gamma, full_well, bloom,
+// vignetting, vignetting_poly, psf_sigma, jpeg_quality, exposure_time, line_delay, f_number,
+// focus_distance, focal_length_mm, pixel_pitch_um} (render::SensorModel)
+render::SensorModel read_sensor(const Value& v, bool realistic) {
+  using SM = render::SensorModel;
+  if (v.node().IsScalar()) return read_preset(v) ? SM::realistic() : SM();
+  MapReader m = v.map();
+  if (const auto p = m.find("preset")) realistic = read_preset(*p);
+  SM sm = realistic ? SM::realistic() : SM();
+  auto in_range = [](const Value& x, double lo, double hi, const std::string& why) {
+    const double d = x.number();
+    if (!(d >= lo && d <= hi)) x.fail(why);
+    return d;
+  };
+  if (const auto x = m.find("gain")) sm.gain = positive(*x);
+  if (const auto x = m.find("tone")) {
+    const std::string t = x->string();
+    if (t == "linear")
+      sm.tone = SM::Tone::Linear;
+    else if (t == "srgb")
+      sm.tone = SM::Tone::Srgb;
+    else if (t == "gamma")
+      sm.tone = SM::Tone::Gamma;
+    else
+      x->fail("unknown tone curve '" + t + "' (use linear, srgb or gamma)");
+  }
+  if (const auto x = m.find("gamma")) {
+    sm.gamma = x->number();
+    if (!(sm.gamma > 0 && sm.gamma <= 10)) x->fail("must be > 0 and <= 10");
+    if (!m.has("tone")) sm.tone = SM::Tone::Gamma;
+  }
+  if (const auto x = m.find("full_well"))
+    sm.full_well = in_range(*x, 0, 1e6, "must be >= 0 [DN of the linear signal] (0 = none)");
+  if (const auto x = m.find("bloom")) sm.bloom = unit_interval(*x);
+  if (const auto x = m.find("vignetting")) {
+    const std::string t = x->string();
+    if (t == "none")
+      sm.vignetting = SM::Vignetting::None;
+    else if (t == "cos4")
+      sm.vignetting = SM::Vignetting::Cos4;
+    else if (t == "poly")
+      sm.vignetting = SM::Vignetting::Poly;
+    else
+      x->fail("unknown vignetting '" + t + "' (use none, cos4 or poly)");
+  }
+  if (const auto x = m.find("vignetting_poly")) {
+    const auto a = x->vec<3>();
+    for (int i = 0; i < 3; ++i) sm.vignetting_poly[size_t(i)] = a[i];
+    if (!m.has("vignetting")) sm.vignetting = SM::Vignetting::Poly;
+  }
+  if (const auto x = m.find("psf_sigma")) sm.psf_sigma = in_range(*x, 0, 20, "must be 0..20 [px]");
+  if (const auto x = m.find("jpeg_quality")) {
+    sm.jpeg_quality = x->integer();
+    if (sm.jpeg_quality < 0 || sm.jpeg_quality > 100)
+      x->fail("must be between 1 and 100 (0 = PNG)");
+  }
+  if (const auto x = m.find("exposure_time"))
+    sm.exposure_time = in_range(*x, 0, 10, "must be between 0 and 10 [s]");
+  if (const auto x = m.find("line_delay"))
+    sm.line_delay = in_range(*x, -0.01, 0.01, "must be within +-0.01 [s per row]");
+  if (const auto x = m.find("f_number")) {
+    sm.f_number = x->number();
+    if (!(sm.f_number == 0 || (sm.f_number >= 0.5 && sm.f_number <= 1000)))
+      x->fail("must be 0 (pinhole) or between 0.5 and 1000");
+  }
+  if (const auto x = m.find("focus_distance"))
+    sm.focus_distance = in_range(*x, 1e-3, 1e6, "must be positive [m]");
+  if (const auto x = m.find("focal_length_mm"))
+    sm.focal_length_mm = in_range(*x, 0, 1e4, "must be >= 0 [mm]");
+  if (const auto x = m.find("pixel_pitch_um"))
+    sm.pixel_pitch_um = in_range(*x, 0, 1e3, "must be >= 0 [um]");
+  if (sm.f_number > 0 && !(sm.focal_length_mm > 0) && !(sm.pixel_pitch_um > 0))
+    v.fail("f_number needs focal_length_mm or pixel_pitch_um (the thin lens's focal length)");
+  m.finish();
+  return sm;
+}
+
+// A tag; `realistic`: the scene's camera_model preset (the print's default).
+render::TagSpec read_tag(const Value& v, bool realistic) {
   MapReader m = v.map();
   render::TagSpec tag;
+  if (realistic) tag.print = render::PrintModel::realistic();
   tag.family = m.get_or("family", tag.family);
   if (const auto id = m.find("id")) tag.id = id->integer();
   tag.size = positive(m.get("size"));
@@ -184,6 +292,7 @@ render::TagSpec read_tag(const Value& v) {
   }
   if (const auto w = m.find("white")) tag.white_albedo = unit_interval(*w);
   if (const auto b = m.find("black")) tag.black_albedo = unit_interval(*b);
+  if (const auto p = m.find("print")) tag.print = read_print(*p, realistic);
   m.finish();
   try {
     render::TagTexture check(tag);  // family and id range, from libapriltag itself
@@ -206,9 +315,31 @@ render::Intrinsics read_intrinsics(const Value& v) {
   // Default principal point: the image centre in OpenCV pixel coordinates.
   k.cx = m.get_or("cx", (k.width - 1) / 2.0);
   k.cy = m.get_or("cy", (k.height - 1) / 2.0);
+  // lens: radtan (5 coefficients k1 k2 p1 p2 k3), rational (8: + k4 k5 k6) or fisheye (4: k1..k4,
+  // cv::fisheye's equidistant model).
+  size_t n = 5;
+  if (const auto l = m.find("lens")) {
+    const std::string name = l->string();
+    if (name == "radtan") {
+      k.lens = render::Intrinsics::Lens::RadTan;
+    } else if (name == "rational") {
+      k.lens = render::Intrinsics::Lens::Rational;
+      n = 8;
+    } else if (name == "fisheye") {
+      k.lens = render::Intrinsics::Lens::Fisheye;
+      n = 4;
+    } else {
+      l->fail("unsupported lens model '" + name + "' (use radtan, rational or fisheye)");
+    }
+  }
   if (const auto d = m.find("distortion")) {
-    const auto c = d->vec<5>();
-    for (int i = 0; i < 5; ++i) k.dist[size_t(i)] = c[i];
+    const auto c = d->numbers();
+    if (c.size() != n)
+      d->fail("expected " + std::to_string(n) + " numbers for lens " +
+              (n == 5   ? "radtan (k1 k2 p1 p2 k3)"
+               : n == 8 ? "rational (k1 k2 p1 p2 k3 k4 k5 k6)"
+                        : "fisheye (k1 k2 k3 k4)"));
+    for (size_t i = 0; i < n; ++i) k.dist[i] = c[i];
   }
   m.finish();
   return k;
@@ -239,8 +370,11 @@ render::Light read_light(const Value& v) {
   return l;
 }
 
-void read_imaging(const Value& v, render::Imaging& im) {
+// Returns whether imaging.camera_model is realistic (the default of every camera and tag).
+bool read_imaging(const Value& v, render::Imaging& im) {
   MapReader m = v.map();
+  bool realistic = false;
+  if (const auto x = m.find("camera_model")) realistic = read_preset(*x);
   if (const auto x = m.find("spp")) {
     im.spp = x->integer();
     if (im.spp < 1 || im.spp > 1024) x->fail("must be between 1 and 1024");
@@ -275,18 +409,19 @@ void read_imaging(const Value& v, render::Imaging& im) {
     if (im.visibility_grid < 1 || im.visibility_grid > 256) x->fail("must be between 1 and 256");
   }
   m.finish();
+  return realistic;
 }
 
 // One `target:` map (or `targets:` entry): tag, extra tags, shapes and motion.
-render::Target read_target(const Value& v, const std::filesystem::path& base_dir) {
+render::Target read_target(const Value& v, const std::filesystem::path& base_dir, bool realistic) {
   MapReader t = v.map();
   render::Target target;
-  target.tag = read_tag(t.get("tag"));
+  target.tag = read_tag(t.get("tag"), realistic);
   if (const auto extra = t.find("extra_tags"))
     for (const auto& e : extra->sequence()) {
       MapReader em = e.map();
       render::PlacedTag pt;
-      pt.tag = read_tag(em.get("tag"));
+      pt.tag = read_tag(em.get("tag"), realistic);
       pt.g_ot = read_pose(em.get("pose"));
       em.finish();
       if (auto why = tags_overlap(target.tag.size, obs::SE3::Identity(), pt.tag.size, pt.g_ot))
@@ -313,7 +448,8 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
   const Value frames = root.get("frames");
   s.frames = frames.integer();
   if (s.frames < 1) frames.fail("must be at least 1");
-  if (const auto im = root.find("imaging")) read_imaging(*im, s.imaging);
+  bool realistic = false;  // imaging.camera_model: realistic
+  if (const auto im = root.find("imaging")) realistic = read_imaging(*im, s.imaging);
 
   s.lights.clear();
   if (const auto ls = root.find("lights"))
@@ -324,7 +460,7 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
     const Value list = root.get("targets");
     s.targets.clear();
     for (const auto& t : list.sequence()) {
-      s.targets.push_back(read_target(t, base_dir));
+      s.targets.push_back(read_target(t, base_dir, realistic));
       if (s.targets.back().tag.family != s.targets[0].tag.family)
         t.fail("tag.family " + s.targets.back().tag.family +
                ": every target's tag must be of the first target's family (" +
@@ -332,7 +468,7 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
     }
     if (s.targets.empty()) list.fail("at least one target is required");
   } else {
-    s.targets = {read_target(root.get("target"), base_dir)};
+    s.targets = {read_target(root.get("target"), base_dir, realistic)};
   }
 
   const Value cams = root.get("cameras");
@@ -342,6 +478,8 @@ render::SceneDescription load_render_scenario(const std::filesystem::path& file)
     render::CameraSpec cam;
     cam.id = read_camera_id(cm.get("id"), ids);
     cam.intrinsics = read_intrinsics(cm.get("intrinsics"));
+    if (realistic) cam.sensor = render::SensorModel::realistic();
+    if (const auto sn = cm.find("sensor")) cam.sensor = read_sensor(*sn, realistic);
     // The true pose: static at `pose`, or following `motion` (then g_wi_true is its t = 0 pose).
     const auto pose = cm.find("pose");
     const auto motion = cm.find("motion");
@@ -437,7 +575,19 @@ Calibration scene_calibration(const render::CameraSpec& c) {
   k.height = c.intrinsics.height;
   k.K = cv::Matx33d(c.intrinsics.fx, 0, c.intrinsics.cx, 0, c.intrinsics.fy, c.intrinsics.cy, 0, 0,
                     1);
-  for (int j = 0; j < 5; ++j) k.dist[j] = c.intrinsics.dist[static_cast<size_t>(j)];
+  const auto& d = c.intrinsics.dist;
+  switch (c.intrinsics.lens) {
+    case render::Intrinsics::Lens::Fisheye:
+      k.fisheye = true;
+      for (int j = 0; j < 4; ++j) k.dist[j] = d[size_t(j)];
+      break;
+    case render::Intrinsics::Lens::Rational:
+      for (int j = 0; j < 3; ++j) k.rational[j] = d[size_t(5 + j)];
+      [[fallthrough]];
+    case render::Intrinsics::Lens::RadTan:
+      for (int j = 0; j < 5; ++j) k.dist[j] = d[size_t(j)];
+      break;
+  }
   k.source = "camera " + std::to_string(c.id) + " of the scene";
   return k;
 }

@@ -1,6 +1,8 @@
 #include "netvmo/pipeline/sources/render_source.hpp"
 
 #include <algorithm>
+#include <opencv2/imgcodecs.hpp>
+#include <vector>
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/render_scenario.hpp"
@@ -22,7 +24,15 @@ class RenderProvider final : public NetworkSource {
   const io::Calibration& calibration(size_t i) const override { return calib_.at(i); }
   int frame_count() const override { return frames_; }
   cv::Mat read(size_t i, int frame) override {
-    return renderer_.render(static_cast<int>(i), frame);
+    cv::Mat img = renderer_.render(static_cast<int>(i), frame);
+    // sensor.jpeg_quality: the image a recorded dataset would hold (io::write_dataset's JPEG).
+    const int quality = renderer_.scene().cameras.at(i).sensor.jpeg_quality;
+    if (quality > 0) {
+      std::vector<uchar> jpg;
+      cv::imencode(".jpg", img, jpg, {cv::IMWRITE_JPEG_QUALITY, quality});
+      img = cv::imdecode(jpg, cv::IMREAD_GRAYSCALE);
+    }
+    return img;
   }
   std::optional<obs::SE3> target_truth(int frame, size_t target) const override {
     return renderer_.target_pose(frame, target);

@@ -12,6 +12,26 @@
 
 namespace netvmo::render {
 
+/// What printing does to a tag (docs/realistic_camera.md). The defaults are an ideal print: sharp
+/// cell edges and a matte (Lambertian) surface.
+struct PrintModel {
+  /// Ink spread [cells], signed: every black/white edge of the printed bitmap moves by
+  /// ink_spread * cell into the white (> 0, the black grows) or into the black (< 0); the black
+  /// region is dilated (eroded) by a disc of that radius. |ink_spread| <= 0.5.
+  double ink_spread = 0.0;
+  /// Specular reflectance of a glossy print (Blinn-Phong): each light adds
+  /// gloss * intensity * max(0, n.h)^shininess, h the half vector of light and view. 0..1; 0 =
+  /// matte.
+  double gloss = 0.0;
+  double shininess = 40.0;  ///< Blinn-Phong exponent (1..10000)
+
+  /// A laser print on office paper: the black grows by 0.08 cell, slightly glossy.
+  static PrintModel realistic() { return {0.08, 0.04, 30.0}; }
+  bool operator==(const PrintModel& o) const {
+    return ink_spread == o.ink_spread && gloss == o.gloss && shininess == o.shininess;
+  }
+};
+
 /// One printed AprilTag. Defaults: tag36h11 id 0, 0.2 m.
 struct TagSpec {
   std::string family = "tag36h11";  ///< one of tag_families() (tag_family.hpp)
@@ -21,6 +41,7 @@ struct TagSpec {
                                ///< own outer ring is already white (so 1 gives a 2-cell margin)
   double white_albedo = 0.85;  ///< reflectance of the paper
   double black_albedo = 0.05;  ///< reflectance of the ink
+  PrintModel print;            ///< ink spread and gloss (default: an ideal matte print)
 };
 
 /// The tag bitmap and its geometry in the tag frame (origin at the tag centre, x right, y up
@@ -38,6 +59,7 @@ class TagTexture {
   double printed_side() const { return cell_ * (total_width_ + 2 * spec_.quiet_cells); }
   /// Albedo at tag-frame coordinates (x, y) [m]; white outside the bitmap (quiet zone).
   double albedo(double x, double y) const {
+    if (spec_.print.ink_spread != 0) return spread_albedo(x, y);
     const double half = 0.5 * total_width_;
     const double fc = x / cell_ + half, fr = half - y / cell_;
     if (fc < 0 || fr < 0) return spec_.white_albedo;
@@ -52,6 +74,13 @@ class TagTexture {
   bool dark(int r, int c) const { return dark_[static_cast<size_t>(r * total_width_ + c)] != 0; }
 
  private:
+  /// albedo() with PrintModel::ink_spread: the black dilated (eroded) by a disc.
+  double spread_albedo(double x, double y) const;
+  /// dark(r, c), false (white) outside the bitmap.
+  bool dark_or_white(int r, int c) const {
+    return r >= 0 && c >= 0 && r < total_width_ && c < total_width_ && dark(r, c);
+  }
+
   TagSpec spec_;
   int total_width_ = 0, width_at_border_ = 0;
   double cell_ = 0;

@@ -1,16 +1,20 @@
 // Camera intrinsics for the tag front end: OpenCV's pinhole model with the 5-coefficient
 // Brown-Conrady distortion (k1, k2, p1, p2, k3), optionally OpenCV's rational model (k4, k5, k6
-// in the denominator), pixel (col,row) centred at continuous (col,row). Every use of the
-// distortion goes through OpenCV (distortion()).
+// in the denominator), or OpenCV's fisheye (equidistant) model cv::fisheye (k1..k4); pixel
+// (col,row) centred at continuous (col,row). Every use of the distortion goes through OpenCV
+// (distortion(), normalize_points(), denormalize_points()).
 //
 // Three file formats are read:
 //  - OpenCV FileStorage (YAML/XML/JSON as written by cv::FileStorage, e.g. by OpenCV's own
 //    calibration tools or by `netvmo render`): `image_width`, `image_height`, `camera_matrix`
 //    (3x3), `distortion_coefficients` (4, 5 or 8 numbers; 12/14 accepted when the coefficients
-//    past the 8th are all zero).
+//    past the 8th are all zero); optional `lens_model`: pinhole (the default) or fisheye (then
+//    distortion_coefficients are cv::fisheye's 4, k1..k4; `netvmo render` writes the key only for
+//    fisheye cameras).
 //  - ROS camera_info YAML (as written by ROS's camera_calibration, read with yaml-cpp), detected
 //    by its top-level `distortion_model` key: `image_width`, `image_height`, `camera_name`,
-//    `camera_matrix`, `distortion_model` (plumb_bob: 5 coefficients, rational_polynomial: 8),
+//    `camera_matrix`, `distortion_model` (plumb_bob: 5 coefficients, rational_polynomial: 8,
+//    equidistant: 4, cv::fisheye's k1..k4),
 //    `distortion_coefficients`, `rectification_matrix` (must be the identity: a monocular
 //    camera's; the images are used raw), `projection_matrix` (3x4, checked, not used: it
 //    describes rectified images), each matrix as {rows, cols, data}.
@@ -35,11 +39,15 @@ struct Calibration {
   cv::Matx33d K = cv::Matx33d::eye();         ///< [fx 0 cx; 0 fy cy; 0 0 1]
   cv::Vec<double, 5> dist = {0, 0, 0, 0, 0};  ///< k1, k2, p1, p2, k3
   cv::Vec3d rational = {0, 0, 0};             ///< k4, k5, k6 (OpenCV's rational model)
-  std::string source;                         ///< file it was read from (for messages)
+  /// OpenCV's fisheye (equidistant) model, cv::fisheye: dist[0..3] are its k1..k4, dist[4] and
+  /// rational are zero.
+  bool fisheye = false;
+  std::string source;  ///< file it was read from (for messages)
 
   bool has_distortion() const { return cv::norm(dist) != 0.0 || cv::norm(rational) != 0.0; }
   bool is_rational() const { return cv::norm(rational) != 0.0; }
-  /// The coefficients as OpenCV takes them: 1x5 (k1 k2 p1 p2 k3), or 1x8 with k4 k5 k6.
+  /// The coefficients as OpenCV takes them: 1x5 (k1 k2 p1 p2 k3), or 1x8 with k4 k5 k6; fisheye:
+  /// 1x4 (k1 k2 k3 k4, for cv::fisheye's functions).
   cv::Mat distortion() const;
 };
 
@@ -63,10 +71,11 @@ void save_calibration_ros(const std::filesystem::path& file, const Calibration& 
 /// Pixel points (OpenCV convention) to undistorted normalized image coordinates
 /// ((u - cx)/fx, (v - cy)/fy after removing distortion), with cv::undistortPoints iterated to
 /// convergence (OpenCV's default of 5 fixed iterations leaves errors of ~0.1 px at the image
-/// border for strong distortion).
+/// border for strong distortion); cv::fisheye::undistortPoints for a fisheye calibration.
 std::vector<cv::Point2d> normalize_points(const std::vector<cv::Point2d>& px,
                                           const Calibration& calib);
-/// Inverse: normalized (undistorted) coordinates to distorted pixels (cv::projectPoints).
+/// Inverse: normalized (undistorted) coordinates to distorted pixels (cv::projectPoints;
+/// cv::fisheye::distortPoints for a fisheye calibration).
 std::vector<cv::Point2d> denormalize_points(const std::vector<cv::Point2d>& xy,
                                             const Calibration& calib);
 

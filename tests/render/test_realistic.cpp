@@ -1,0 +1,267 @@
+// The realistic camera model (docs/realistic_camera.md), each effect against a closed form on a
+// fronto-parallel tag: ink spread moves the imaged black/white edge by ink_spread * cell px, a
+// glossy print adds its Blinn-Phong term.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "fixtures.hpp"
+
+namespace netvmo::render {
+namespace {
+
+// A 0.2 m tag36h11 (8 cells at the border, 0.025 m each) 1 m in front of a 600 px camera: a cell
+// is 15 px and the black square's left edge is at u = 319.5 - 60 = 259.5.
+constexpr double kCellPx = 15.0, kLeftEdge = 259.5;
+
+SceneDescription fronto_scene(int spp = 16) {
+  return testing::single_tag_scene(testing::facing_pose(Vec3(0, 0, 1), Vec3::Zero()), spp);
+}
+
+// Mean of rows [r0, r1) of column u.
+double column_mean(const cv::Mat& img, int u, int r0, int r1) {
+  double s = 0;
+  for (int r = r0; r < r1; ++r) s += img.at<std::uint8_t>(r, u);
+  return s / (r1 - r0);
+}
+
+// Where the mean of rows [r0, r1) first crosses half-way from its value at u0 to its value at u1
+// (u0 < u1), by linear interpolation between pixel centres.
+double edge_position(const cv::Mat& img, int u0, int u1, int r0, int r1) {
+  const double a = column_mean(img, u0, r0, r1), b = column_mean(img, u1, r0, r1);
+  const double level = 0.5 * (a + b);
+  for (int u = u0; u < u1; ++u) {
+    const double p = column_mean(img, u, r0, r1), q = column_mean(img, u + 1, r0, r1);
+    if ((p - level) * (q - level) <= 0 && p != q) return u + (p - level) / (p - q);
+  }
+  return std::nan("");
+}
+
+// The black square's left edge, measured over rows well inside the tag.
+double left_edge(const cv::Mat& img) {
+  return edge_position(img, int(kLeftEdge) - 10, int(kLeftEdge) + 10, 200, 280);
+}
+
+TEST(RealisticPrint, CleanEdgeIsWhereTheGeometrySaysIt) {
+  Renderer r(fronto_scene());
+  EXPECT_NEAR(left_edge(r.render(0, 0)), kLeftEdge, 0.05);
+}
+
+TEST(RealisticPrint, InkSpreadMovesTheEdgeByItsFractionOfACell) {
+  for (double f : {0.2, -0.2, 0.45}) {
+    SceneDescription s = fronto_scene();
+    s.target().tag.print.ink_spread = f;
+    Renderer r(s);
+    // 4 x 4 samples per pixel: an edge is located to within 1/8 px.
+    EXPECT_NEAR(left_edge(r.render(0, 0)), kLeftEdge - f * kCellPx, 0.13) << "ink_spread " << f;
+  }
+}
+
+TEST(RealisticPrint, InkSpreadOutOfRangeIsRefused) {
+  SceneDescription s = fronto_scene();
+  s.target().tag.print.ink_spread = 0.6;
+  EXPECT_THROW(Renderer r(s), std::invalid_argument);
+}
+
+TEST(RealisticPrint, GlossAddsTheBlinnPhongTerm) {
+  SceneDescription s = fronto_scene();
+  s.target().tag.print.gloss = 0.2;
+  s.target().tag.print.shininess = 1;
+  Renderer clean(fronto_scene()), glossy(s);
+  // Quiet-zone pixel at u = 252 (x = -0.1125 m on the tag): the light travels along +z, the
+  // face's normal is -z, the viewer is at the origin.
+  const int u = 252, v = 239;
+  const Eigen::Vector3d n(0, 0, -1), l(0, 0, -1),
+      view = -Eigen::Vector3d((u - 319.5) / 600.0, (v - 239.5) / 600.0, 1).normalized();
+  const double expected = 255 * 0.2 * 0.7 * n.dot((l + view).normalized());
+  const double d = double(glossy.render(0, 0).at<std::uint8_t>(v, u)) -
+                   double(clean.render(0, 0).at<std::uint8_t>(v, u));
+  EXPECT_NEAR(d, expected, 1.0);
+}
+
+// A quiet-zone pixel of the fronto-parallel tag: albedo 0.85 lit by ambient 0.3 plus the light
+// 0.7 along the normal, S = 255 * 0.85 = 216.75 DN on the linear scale.
+constexpr int kWhiteU = 252, kWhiteV = 239;
+constexpr double kWhiteS = 216.75;
+
+std::uint8_t white_dn(const SensorModel& sm) {
+  SceneDescription s = fronto_scene(4);
+  s.cameras[0].sensor = sm;
+  Renderer r(s);
+  return r.render(0, 0).at<std::uint8_t>(kWhiteV, kWhiteU);
+}
+
+TEST(RealisticSensor, ToneCurveMapsAKnownRadianceToItsDn) {
+  SensorModel sm;
+  EXPECT_EQ(white_dn(sm), 217);  // clean: round(216.75)
+  sm.tone = SensorModel::Tone::Srgb;
+  const double v = kWhiteS / 255;
+  EXPECT_EQ(white_dn(sm), std::lround(255 * (1.055 * std::pow(v, 1 / 2.4) - 0.055)));
+  sm.tone = SensorModel::Tone::Gamma;
+  sm.gamma = 1.8;
+  EXPECT_EQ(white_dn(sm), std::lround(255 * std::pow(v, 1 / 1.8)));
+  sm.tone = SensorModel::Tone::Linear;
+  sm.gain = 0.5;
+  EXPECT_EQ(white_dn(sm), std::lround(0.5 * kWhiteS));
+  sm.gain = 1;
+  sm.full_well = 150;  // saturates at the full well
+  EXPECT_EQ(white_dn(sm), 150);
+}
+
+// Only the background (radiance 0.5, S = 127.5 DN) in view: the tag is behind the camera.
+cv::Mat background_image(const SensorModel& sm) {
+  SceneDescription s = fronto_scene(1);
+  s.target().motion = Trajectory::fixed(testing::facing_pose(Vec3(0, 0, -5), Vec3::Zero()));
+  s.cameras[0].sensor = sm;
+  Renderer r(s);
+  return r.render(0, 0);
+}
+
+TEST(RealisticSensor, VignettingFallsAsSpecifiedAtTheCorner) {
+  SensorModel sm;
+  sm.vignetting = SensorModel::Vignetting::Cos4;
+  cv::Mat img = background_image(sm);
+  const double xn = -319.5 / 600, yn = -239.5 / 600, q = 1 + xn * xn + yn * yn;
+  EXPECT_NEAR(img.at<std::uint8_t>(0, 0), 127.5 / (q * q), 0.51);
+  EXPECT_NEAR(img.at<std::uint8_t>(240, 320), 127.5, 0.51);
+  sm.vignetting = SensorModel::Vignetting::Poly;
+  sm.vignetting_poly = {-0.3, 0.05, 0};
+  img = background_image(sm);
+  const double rho2 = (319.5 * 319.5 + 239.5 * 239.5) / (400.0 * 400.0);
+  EXPECT_NEAR(img.at<std::uint8_t>(479, 639), 127.5 * (1 - 0.3 * rho2 + 0.05 * rho2 * rho2), 0.51);
+}
+
+// 10 % to 90 % rise [px] of the edge profile of the mean of rows [r0, r1) between columns u0, u1.
+double rise_width(const cv::Mat& img, int u0, int u1, int r0, int r1) {
+  const double a = column_mean(img, u0, r0, r1), b = column_mean(img, u1, r0, r1);
+  auto crossing = [&](double level) {
+    for (int u = u0; u < u1; ++u) {
+      const double p = column_mean(img, u, r0, r1), q = column_mean(img, u + 1, r0, r1);
+      if ((p - level) * (q - level) <= 0 && p != q) return u + (p - level) / (p - q);
+    }
+    return std::nan("");
+  };
+  return std::abs(crossing(a + 0.9 * (b - a)) - crossing(a + 0.1 * (b - a)));
+}
+
+TEST(RealisticSensor, PsfBlursAnEdgeByItsSigma) {
+  SceneDescription s = fronto_scene();
+  s.cameras[0].sensor.psf_sigma = 2.0;
+  Renderer r(s);
+  // A Gaussian of sigma 2 px convolved with the 1 px pixel box: sigma^2 + 1/12, and the 10-90 %
+  // rise of a blurred step is 2 * 1.2816 sigma.
+  const double expected = 2 * 1.2816 * std::sqrt(4.0 + 1.0 / 12);
+  EXPECT_NEAR(rise_width(r.render(0, 0), int(kLeftEdge) - 8, int(kLeftEdge) + 8, 200, 280),
+              expected, 0.15 * expected);
+}
+
+TEST(RealisticSensor, BloomSpillsIntoTheNeighbours) {
+  SceneDescription s = fronto_scene(4);
+  s.cameras[0].sensor.full_well = 150;
+  Renderer none(s);
+  s.cameras[0].sensor.bloom = 0.8;
+  Renderer bloom(s);
+  const cv::Mat a = none.render(0, 0), b = bloom.render(0, 0);
+  // The first black column inside the tag's left edge gets charge from the white quiet zone;
+  // a black pixel in the middle of the border cell, 7 px from any white, much less.
+  const int near_u = int(kLeftEdge) + 1, far_u = int(kLeftEdge) + 8;
+  EXPECT_GT(column_mean(b, near_u, 200, 280), column_mean(a, near_u, 200, 280) + 5);
+  EXPECT_LT(column_mean(b, far_u, 200, 280) - column_mean(a, far_u, 200, 280),
+            0.5 * (column_mean(b, near_u, 200, 280) - column_mean(a, near_u, 200, 280)));
+  EXPECT_EQ(b.at<std::uint8_t>(kWhiteV, kWhiteU - 5), 150);  // saturated white stays at the well
+}
+
+TEST(RealisticSensor, SameSeedSameBytesOtherSeedOtherBytes) {
+  auto image = [](std::uint64_t seed, int threads) {
+    SceneDescription s = fronto_scene(4);
+    s.cameras[0].sensor = SensorModel::realistic();
+    s.target().tag.print = PrintModel::realistic();
+    s.imaging.noise = true;
+    s.imaging.seed = seed;
+    s.imaging.threads = threads;
+    Renderer r(s);
+    return r.render(0, 0);
+  };
+  const cv::Mat a = image(3, 2), b = image(3, 1), c = image(4, 2);
+  EXPECT_EQ(cv::countNonZero(a != b), 0);
+  EXPECT_GT(cv::countNonZero(a != c), 1000);
+}
+
+// The fronto-parallel tag moving at v [m/s] along the image's x axis (1 m away: 600 v px/s).
+SceneDescription moving_scene(double v, int spp) {
+  SceneDescription s = fronto_scene(spp);
+  s.target().motion.kind = Trajectory::Kind::Twist;
+  // The flip about x (facing_pose) keeps the object's x axis along the camera's x.
+  s.target().motion.twist << v, 0, 0, 0, 0, 0;
+  return s;
+}
+
+TEST(RealisticTime, MotionBlurWidthIsVelocityTimesExposure) {
+  SceneDescription s = moving_scene(1.0, 16);
+  s.cameras[0].sensor.exposure_time = 1.0 / 60;  // 600 px/s * 1/60 s = 10 px
+  Renderer r(s);
+  const cv::Mat img = r.render(0, 0);
+  // A step blurred by a box of width w has a linear ramp: its 10-90 % rise is 0.8 w (the pixel's
+  // own 1 px box adds a little at the ends of the ramp only).
+  EXPECT_NEAR(rise_width(img, int(kLeftEdge) - 12, int(kLeftEdge) + 12, 200, 280), 8.0, 0.4);
+  // The exposure is centred on the frame's time: the half-way point stays at the true edge.
+  EXPECT_NEAR(edge_position(img, int(kLeftEdge) - 12, int(kLeftEdge) + 12, 200, 280), kLeftEdge,
+              0.25);
+  EXPECT_NEAR(r.truth(0, 0).corners[0]->x(), kLeftEdge, 1e-6);  // truth at the frame's time
+}
+
+TEST(RealisticTime, MovingCameraBlursTheSameWay) {
+  // The camera moving at -1 m/s along its x sees the static tag move at +600 px/s.
+  SceneDescription s = fronto_scene(16);
+  s.cameras[0].motion = Trajectory();
+  s.cameras[0].motion->kind = Trajectory::Kind::Twist;
+  s.cameras[0].motion->twist << -1.0, 0, 0, 0, 0, 0;
+  s.cameras[0].sensor.exposure_time = 1.0 / 60;
+  Renderer r(s);
+  EXPECT_NEAR(rise_width(r.render(0, 0), int(kLeftEdge) - 12, int(kLeftEdge) + 12, 200, 280), 8.0,
+              0.4);
+}
+
+TEST(RealisticTime, RollingShutterShearsAVerticalEdge) {
+  SceneDescription s = moving_scene(1.0, 4);
+  s.cameras[0].sensor.line_delay = 1e-4;  // row r at (r - 239.5) * 1e-4 s: 0.06 px per row
+  Renderer r(s);
+  const cv::Mat img = r.render(0, 0);
+  const double top = edge_position(img, int(kLeftEdge) - 12, int(kLeftEdge) + 12, 200, 210);
+  const double mid = edge_position(img, int(kLeftEdge) - 12, int(kLeftEdge) + 12, 235, 245);
+  const double bottom = edge_position(img, int(kLeftEdge) - 12, int(kLeftEdge) + 12, 270, 280);
+  EXPECT_NEAR(bottom - top, 600 * 1e-4 * 70, 0.2);
+  EXPECT_NEAR(mid, kLeftEdge, 0.15);  // the middle row is exposed at the frame's time
+}
+
+// The tag of fronto_scene, its distance z and a thin lens of focal length 25 mm at f/1 (A =
+// 25 mm) focused at d: the circle of confusion is fx A |1/z - 1/d| px across.
+TEST(RealisticLens, DefocusBlurCircleFollowsTheThinLens) {
+  const double A = 0.025, d = 2.0;
+  SceneDescription s = fronto_scene(36);
+  s.cameras[0].sensor.f_number = 1.0;
+  s.cameras[0].sensor.focal_length_mm = 25;
+  s.cameras[0].sensor.focus_distance = d;
+  Renderer r(s);
+  const double c = 600 * A * std::abs(1 / 1.0 - 1 / d);  // 7.5 px
+  // A step blurred by a uniform disc of radius R: the fraction of the disc past x is
+  // (acos(x / R) - (x / R) sqrt(1 - (x / R)^2)) / pi; its 10-90 % rise is 2 x90 with
+  // (acos(u) - u sqrt(1 - u^2)) / pi = 0.1 at u = x90 / R.
+  double lo = 0, hi = 1;
+  for (int i = 0; i < 60; ++i) {
+    const double u = 0.5 * (lo + hi);
+    ((std::acos(u) - u * std::sqrt(1 - u * u)) / M_PI > 0.1 ? lo : hi) = u;
+  }
+  const double expected = 2 * lo * 0.5 * c;
+  EXPECT_NEAR(rise_width(r.render(0, 0), int(kLeftEdge) - 10, int(kLeftEdge) + 10, 200, 280),
+              expected, 0.1 * expected + 0.3);
+  // In focus (d = 1 m, the tag's distance) the edge is as sharp as the pinhole's.
+  s.cameras[0].sensor.focus_distance = 1.0;
+  Renderer sharp(s), pinhole(fronto_scene(36));
+  EXPECT_NEAR(rise_width(sharp.render(0, 0), int(kLeftEdge) - 10, int(kLeftEdge) + 10, 200, 280),
+              rise_width(pinhole.render(0, 0), int(kLeftEdge) - 10, int(kLeftEdge) + 10, 200, 280),
+              0.1);
+}
+
+}  // namespace
+}  // namespace netvmo::render
