@@ -11,6 +11,7 @@
 //    folder beside the checkout. Skipped, with that reason, where it is not.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -21,6 +22,7 @@
 
 #include "netvmo/pipeline/frontend/photo_recall.hpp"
 #include "netvmo/pipeline/frontend/pnp.hpp"
+#include "test_util.hpp"
 
 namespace netvmo {
 namespace {
@@ -94,6 +96,38 @@ TEST(RealPhotos, DeskPhotoEveryTagKeptAndPosesAgreeWithVisp) {
   EXPECT_EQ(compared, 12);
   std::printf("%d of 12 kept; largest difference to ViSP's poses %.1f mm, %.2f deg\n", compared,
               1e3 * worst_dp, worst_normal);
+}
+
+// netvmo detect --photos on a folder with the desk photo: its report and photos.csv; then a JPEG
+// that cannot be decoded beside it: one line naming the file, exit 1, and the previous results
+// untouched; with --keep-going a warning and the report.
+TEST(RealPhotos, DetectPhotosReportAndBadJpeg) {
+  const fs::path photo = kVispPhotoDir / "AprilTag.pgm";
+  if (!fs::exists(photo)) GTEST_SKIP() << photo << " missing (visp-images-data)";
+  const fs::path dir = test::scratch_dir("photos");
+  fs::create_directories(dir / "photos");
+  fs::copy_file(photo, dir / "photos" / "desk.pgm");
+  const std::string out = (dir / "out").string();
+  const auto ok =
+      test::run_netvmo("detect --photos " + (dir / "photos").string() + " --out " + out, dir, 300);
+  ASSERT_EQ(ok.code, 0) << ok.err;
+  EXPECT_NE(ok.out.find("all"), std::string::npos) << ok.out;
+  EXPECT_NE(ok.out.find("100.0%"), std::string::npos) << ok.out;
+  const std::string csv = test::slurp(dir / "out" / "photos.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 13) << "a header and 12 tags";
+  test::write_text(dir / "photos" / "broken.jpg", "\xff\xd8 not a JPEG");
+  const auto bad =
+      test::run_netvmo("detect --photos " + (dir / "photos").string() + " --out " + out, dir, 300);
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_NE(bad.err.find("broken.jpg: cannot be decoded as an image"), std::string::npos)
+      << bad.err;
+  EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+  EXPECT_EQ(test::slurp(dir / "out" / "photos.csv"), csv) << "results already written changed";
+  const auto kept = test::run_netvmo(
+      "detect --photos " + (dir / "photos").string() + " --out " + out + " --keep-going", dir, 300);
+  EXPECT_EQ(kept.code, 0) << kept.err;
+  EXPECT_NE(kept.err.find("warning"), std::string::npos) << kept.err;
+  fs::remove_all(dir);
 }
 
 fs::path corpus_dir() {

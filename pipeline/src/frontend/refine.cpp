@@ -1,6 +1,5 @@
 #include "netvmo/pipeline/frontend/refine.hpp"
 
-#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "netvmo/pipeline/error.hpp"
@@ -36,12 +35,12 @@ bool refine_edge_lines(const cv::Mat& g, std::array<cv::Point2d, 4>& c, int bord
       if (edge_offset(g, p, n, w, s)) pts.push_back(p + s * n);
     }
     if (pts.size() < 4) return false;
-    if (undistort) {
-      std::vector<cv::Point2d> u;
-      cv::undistortPoints(
-          pts, u, cv::Mat(calib->K), calib->distortion(), cv::noArray(), cv::Mat(calib->K),
-          cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 50, 1e-10));
-      pts.swap(u);
+    if (undistort) {  // ideal pixels: K times the undistorted normalized point
+      pts = io::normalize_points(pts, *calib);
+      for (auto& p : pts) {
+        const cv::Vec3d q = calib->K * cv::Vec3d(p.x, p.y, 1.0);
+        p = cv::Point2d(q[0] / q[2], q[1] / q[2]);
+      }
     }
     // Total least squares line through the points.
     cv::Point2d mean(0, 0);
