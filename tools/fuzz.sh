@@ -10,7 +10,8 @@
 # longer run has not made first; fuzz longer without it to explore). With FUZZ_RUNS=N each target
 # stops after N executions instead (SECONDS_PER_TARGET is then its time cap), e.g.
 #   FUZZ_RUNS=1000000 tools/fuzz.sh 3600        (the README's goal: 10^6 executions per target)
-# FUZZ_TARGETS="a b" runs only those targets.
+# FUZZ_TARGETS="a b" runs only those targets; FUZZ_JOBS=N runs N targets at a time (default 1;
+# each target is one process on one core).
 # Usage: [FUZZ_SEED=N] [FUZZ_RUNS=N] [FUZZ_TARGETS=...] tools/fuzz.sh [SECONDS_PER_TARGET] [BUILD_DIR] [OUT]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -29,30 +30,51 @@ if [ ${#targets[@]} -eq 0 ]; then
   exit 1
 fi
 mkdir -p "$out/crashes" "$out/logs"
-failed=()
+jobs=${FUZZ_JOBS:-1}
 runs=()
 [ -n "${FUZZ_RUNS:-}" ] && runs=(-runs="$FUZZ_RUNS")
-for bin in "${targets[@]}"; do
-  name=${bin##*/fuzz_}
-  if [ -n "${FUZZ_TARGETS:-}" ] && [[ " $FUZZ_TARGETS " != *" $name "* ]]; then continue; fi
+# fuzz_one BIN: runs one target, prints its line, exits non-zero (with the report's first lines)
+# when it found something.
+fuzz_one() {
+  local bin=$1 name=${1##*/fuzz_}
   mkdir -p "$out/corpus/$name"
-  dict=()
-  seed=()
+  local dict=() seed=()
   [ -n "${FUZZ_SEED:-}" ] && seed=(-seed="$FUZZ_SEED")
   [ -f "$src/dict/$name.dict" ] && dict=(-dict="$src/dict/$name.dict")
-  log="$out/logs/$name.log"
+  local log="$out/logs/$name.log" t0 rc=0 execs
   t0=$(date +%s)
-  rc=0
   "$bin" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=16384 \
     -close_fd_mask=1 -print_final_stats=1 -artifact_prefix="$out/crashes/$name-" "${dict[@]}" "${seed[@]}" "${runs[@]}" \
     "$out/corpus/$name" "$src/corpus/$name" >"$log" 2>&1 || rc=$?
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
   echo "fuzz.sh: $name: ${execs:-?} executions in $(($(date +%s) - t0)) s, exit $rc"
   if [ "$rc" -ne 0 ]; then
-    failed+=("$name")
     grep -E "ERROR|runtime error|SUMMARY|Test unit written" "$log" | head -5 || true
+    return 1
   fi
+}
+selected=()
+for bin in "${targets[@]}"; do
+  name=${bin##*/fuzz_}
+  if [ -n "${FUZZ_TARGETS:-}" ] && [[ " $FUZZ_TARGETS " != *" $name "* ]]; then continue; fi
+  selected+=("$bin")
 done
+failed=()
+pids=()
+names=()
+# wait_one: waits for the oldest running target and records it when it failed.
+wait_one() {
+  if ! wait "${pids[0]}"; then failed+=("${names[0]}"); fi
+  pids=("${pids[@]:1}")
+  names=("${names[@]:1}")
+}
+for bin in "${selected[@]}"; do
+  [ ${#pids[@]} -ge "$jobs" ] && wait_one
+  fuzz_one "$bin" &
+  pids+=($!)
+  names+=("${bin##*/fuzz_}")
+done
+while [ ${#pids[@]} -gt 0 ]; do wait_one; done
 if [ ${#failed[@]} -ne 0 ]; then
   echo "fuzz.sh: FAILED: ${failed[*]} (inputs in $out/crashes/, logs in $out/logs/)" >&2
   exit 1
