@@ -386,11 +386,11 @@ TEST(OutputSafety, AStandaloneNodeRestartedWithResumeKeepsItsPredecessorsRows) {
   const auto dir = testing::fresh_dir("resume");
   testing::write_synth_dataset(dir / "one", testing::simple_dataset_spec(1, 30));
   const fs::path out = dir / "node";
-  const double start_epoch =
-      std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count() +
-      1.0;
-  char start_at[40];
-  std::snprintf(start_at, sizeof start_at, "%.6f", start_epoch);
+  // The common start is set only once the node is ready (the handshake `netvmo launch` uses), so
+  // however late a loaded machine lets the node start, it begins at frame 0; the restarted node
+  // reads the same start and joins late.
+  fs::create_directories(dir / "handshake");
+  const fs::path start_file = dir / "handshake" / "start.txt";
   // 30 frames at 30 frames/s at a quarter of real time: 4 s from the common start.
   const std::vector<std::string> argv = {kNetvmo,
                                          "node",
@@ -403,13 +403,30 @@ TEST(OutputSafety, AStandaloneNodeRestartedWithResumeKeepsItsPredecessorsRows) {
                                          "async",
                                          "--speed",
                                          "0.25",
-                                         "--start-at",
-                                         start_at,
+                                         "--start-file",
+                                         start_file.string(),
                                          "--out",
                                          out.string(),
                                          "--timeout",
-                                         "10"};
+                                         "60"};
   const pid_t first = start(argv, dir / "first.log");
+  const auto ready_by = Clock::now() + std::chrono::seconds(60);
+  while (!fs::exists(dir / "handshake" / "node_1.ready") && Clock::now() < ready_by)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  if (!fs::exists(dir / "handshake" / "node_1.ready")) {
+    ::kill(first, SIGKILL);
+    ::waitpid(first, nullptr, 0);
+    FAIL() << "the node was not ready within 60 s: " << test::slurp(dir / "first.log");
+  }
+  {
+    const double start_epoch =
+        std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count() +
+        0.5;
+    char text[40];
+    std::snprintf(text, sizeof text, "%.6f\n", start_epoch);
+    std::ofstream(dir / "handshake" / "start.txt.tmp") << text;
+    fs::rename(dir / "handshake" / "start.txt.tmp", start_file);
+  }
   const fs::path journal = dir / ("node.partial-" + std::to_string(first)) / "node_1.csv.partial";
   const auto until = Clock::now() + std::chrono::seconds(30);
   while (journal_rows(journal).size() < 5 && Clock::now() < until)
