@@ -9,22 +9,6 @@
 
 namespace netvmo::obs {
 
-const char* to_string(MessageVerdict v) {
-  switch (v) {
-    case MessageVerdict::accepted:
-      return "accepted";
-    case MessageVerdict::not_a_neighbour:
-      return "not a neighbour";
-    case MessageVerdict::not_finite:
-      return "pose not finite";
-    case MessageVerdict::not_a_rotation:
-      return "rotation not orthonormal";
-    case MessageVerdict::out_of_order:
-      return "out of order";
-  }
-  return "?";
-}
-
 Vec6 mutual_error(const SE3& g_bar_w_i, const SE3& g_bar_w_j) {
   return kernel::mutual_error(kernel::pose_of(g_bar_w_i), kernel::pose_of(g_bar_w_j));
 }
@@ -37,15 +21,6 @@ Vec6 mutual_sum(const SE3& g_bar_w_i, const std::vector<SE3>& g_bar_w_nb) {
 
 SE3 integrate(const SE3& g_bar, const Vec6& V_wi, const Vec6& u, double h) {
   return kernel::to_se3(kernel::integrate(kernel::pose_of(g_bar), V_wi, u, h));
-}
-
-int frame_substeps(double dt, const ObserverSettings& s, int max_degree) {
-  return s.substeps > 0 ? s.substeps : stable_substeps(dt, s, max_degree);
-}
-
-int stable_substeps(double dt, const ObserverSettings& s, int max_degree) {
-  const double lambda_max = find_estimator(s.estimator).rate_bound(s, max_degree);
-  return std::max(1, static_cast<int>(std::ceil(dt * lambda_max / s.step_factor - 1e-12)));
 }
 
 CameraObserver::CameraObserver(int index, std::vector<int> neighbours, ObserverSettings settings,
@@ -88,10 +63,6 @@ void CameraObserver::publish(EstimateMessage& m, double stamp) {
   m.g_w = g_wi_ * st_.g_bar;
   const auto k = static_cast<size_t>(estimator_->state_size());
   std::copy(st_.consensus.begin(), st_.consensus.begin() + k, m.state.begin());
-}
-
-MessageVerdict check_pose(const SE3& g) {
-  return kernel::check_pose(kernel::pose_of(g));
 }
 
 MessageVerdict CameraObserver::receive(const EstimateMessage& m) {

@@ -12,9 +12,10 @@
 #include <cmath>
 #include <vector>
 
-#include "netvmo/observer/camera_observer.hpp"
+#include "netvmo/observer/estimate_message.hpp"
 #include "netvmo/observer/lie.hpp"
 #include "netvmo/observer/metrics.hpp"
+#include "netvmo/observer/observer_settings.hpp"
 
 namespace netvmo::obs::kernel {
 

@@ -3,7 +3,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "netvmo/observer/camera_observer.hpp"
+#include "netvmo/observer/observer_settings.hpp"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/net/node.hpp"
 

@@ -19,75 +19,14 @@
 #include <vector>
 
 #include "netvmo/observer/error_model.hpp"
+#include "netvmo/observer/estimate_message.hpp"
 #include "netvmo/observer/estimator.hpp"
 #include "netvmo/observer/jacobian.hpp"
 #include "netvmo/observer/lie.hpp"
 #include "netvmo/observer/measurement.hpp"
+#include "netvmo/observer/observer_settings.hpp"
 
 namespace netvmo::obs {
-
-/// Gains and discretisation of the observer. Defaults are the paper's Section 5 gains.
-struct ObserverSettings {
-  /// The estimator, by its registry name (estimator.hpp): vmo (the paper's) or zero-offset.
-  std::string estimator = "vmo";
-  double k_e = 1.0;   ///< visual feedback gain k_e > 0 (zero-offset: alpha, the input gain)
-  double k_s = 50.0;  ///< mutual feedback gain k_s >= 0 (0: independent; zero-offset: beta)
-  /// Visual error model, by its registry name (error_model.hpp): exact, jacobian or pnp.
-  std::string error_model = "exact";
-  FeatureModel features = FeatureModel::square(0.2);  ///< the target's feature points
-  double step_factor = 1.0;  ///< c in h (k_e + 2 k_s d_max) <= c; c < 2 is required
-  int substeps = 0;          ///< sub-steps (exchange rounds) per frame; 0 = from step_factor
-  /// Self-initialisation, the same in process and in a camera's own process. An uninitialised
-  /// camera that sees the target (delta and a PnP pose in set_measurement) starts from its own
-  /// PnP pose; with the image-feature model an initialised estimate whose tag corner comes
-  /// closer to the camera plane than min_feature_depth is re-initialised the same way.
-  bool init_from_measurement = false;
-  /// An uninitialised camera starts, at the beginning of a step (after the round's messages are
-  /// in), from the average of its initialised neighbours' latest estimates mapped into its frame:
-  /// g_bar_i = g_wi^-1 average_pose(g_wj g_bar_j).
-  bool init_from_neighbours = false;
-  double min_feature_depth = 0.05;  ///< [m], see init_from_measurement
-  /// zero-offset: the output is held while the camera's estimate x_delta,i of the fraction of
-  /// cameras that see the target is below this; 0 = 1/(2n), half the smallest non-zero fraction.
-  double hold_threshold = 0.0;
-  /// NetworkedObserver: threads that run the per-camera steps, the calling thread included;
-  /// 0 = one per core (std::thread::hardware_concurrency()). Results are bit-identical for any
-  /// count. A network uses at most one thread per kCamerasPerThread cameras (below that a
-  /// sub-step's synchronisation costs more than the thread saves).
-  int threads = 0;
-};
-
-/// The fewest cameras per thread of NetworkedObserver (ObserverSettings::threads).
-constexpr int kCamerasPerThread = 256;
-
-/// What a camera publishes to its neighbours once per exchange round.
-struct EstimateMessage {
-  int sender = -1;           ///< the publishing camera's index in the network
-  std::uint64_t round = 0;   ///< the sender's exchange round (1, 2, ...)
-  double stamp = 0.0;        ///< the sender's time of this estimate [s]
-  bool initialized = false;  ///< false: the sender has no estimate yet (receivers ignore it)
-  /// The sender's boot (incarnation): a restarted sender counts its rounds from 1 again, so a
-  /// message of a newer incarnation is accepted whatever its round, one of an older is not.
-  std::uint64_t incarnation = 0;
-  SE3 g_w = SE3::Identity();  ///< g_wi g_bar_i: the sender's estimate in the world frame
-  /// The sender's consensus state (Estimator::state_size() values, the rest zero): zero-offset's
-  /// x_i and eta_i. Unused by vmo.
-  ConsensusState state{};
-};
-
-/// Why receive() refused a message (it is then counted and otherwise ignored).
-enum class MessageVerdict {
-  accepted,
-  not_a_neighbour,  ///< the sender is not in N_i (or is the receiver itself)
-  not_finite,       ///< NaN or infinity in the pose or the consensus state
-  not_a_rotation,   ///< the rotation block is not orthonormal with determinant +1
-  out_of_order      ///< a round not newer than the last one accepted from that sender
-};
-const char* to_string(MessageVerdict v);
-
-/// The pose check of receive(): accepted, not_finite or not_a_rotation (|R^T R - I| <= 1e-6,
-/// det R > 0).
-MessageVerdict check_pose(const SE3& g);
 
 /// E_R(g_bar_i^-1 g_bar_{i,j}) with both poses expressed in the world frame through the believed
 /// camera poses: g_bar_i^-1 g_ij g_bar_j = (g_wi g_bar_i)^-1 (g_wj g_bar_j) (eq:input_f-).
@@ -100,13 +39,6 @@ Vec6 mutual_sum(const SE3& g_bar_w_i, const std::vector<SE3>& g_bar_w_nb);
 /// One Lie-group Euler step of (eq:EsRRBM): exp(-h hat(V_wi)) g_bar exp(h hat(u)), the rotation
 /// re-orthonormalised through a unit quaternion.
 SE3 integrate(const SE3& g_bar, const Vec6& V_wi, const Vec6& u, double h);
-
-/// Smallest N with (dt/N) * rate_bound <= step_factor, rate_bound the estimator's
-/// (vmo: k_e + 2 k_s d_max).
-int stable_substeps(double dt, const ObserverSettings& s, int max_degree);
-/// Sub-steps (exchange rounds) of a frame of length dt: s.substeps when set, else
-/// stable_substeps(dt, s, max_degree).
-int frame_substeps(double dt, const ObserverSettings& s, int max_degree);
 
 class InProcessVmo;
 

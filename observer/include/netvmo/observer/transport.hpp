@@ -10,7 +10,7 @@
 
 #include <vector>
 
-#include "netvmo/observer/camera_observer.hpp"
+#include "netvmo/observer/estimate_message.hpp"
 #include "netvmo/observer/graph.hpp"
 
 namespace netvmo::obs {
