@@ -48,7 +48,8 @@ std::vector<std::string> forwarded(const RunCliOptions& o) {
   std::vector<std::string> a = {
       "--ke",       num(o.k_e),      "--ks",     num(o.k_s), "--error",
       o.error,      "--init",        o.init,     "--rounds", std::to_string(o.rounds),
-      "--decimate", num(o.decimate), "--refine", o.refine};
+      "--decimate", num(o.decimate), "--refine", o.refine,   "--estimator",
+      o.estimator};
   if (o.keep_going) a.push_back("--keep-going");
   for (auto& s : search_arguments(o.tracking)) a.push_back(std::move(s));
   return a;
@@ -197,7 +198,7 @@ void add_launch(CLI::App& app, int& exit_code) {
   cmd->callback([o, &exit_code] {
     exit_code = guarded("launch", [&] {
       const auto options = to_image_run_options(o->run);
-      require_paper_observer(options);
+      require_single_estimator(options);
       auto provider = sources::open_dataset_source(o->dataset, {}, options.keep_going);
       sources::require_static_cameras(*provider, "netvmo launch");
       sources::require_single_target(*provider, "netvmo launch");
@@ -424,6 +425,8 @@ void add_merge(CLI::App& app, int& exit_code) {
                          ": no node statistics with the run's options in " + nodes.string());
       RunCliOptions cli;
       try {
+        // Node files written before the estimator was recorded ran the paper's observer.
+        cli.estimator = ref["options"].value("estimator", std::string("vmo"));
         cli.k_e = ref["options"]["k_e"].get<double>();
         cli.k_s = ref["options"]["k_s"].get<double>();
         cli.error = ref["options"]["error"].get<std::string>();

@@ -105,7 +105,7 @@ void add_node(CLI::App& app, int& exit_code) {
     exit_code = guarded("node", [&] {
       net::NodeOptions no;
       no.run = to_image_run_options(o->run);
-      require_paper_observer(no.run);
+      require_single_estimator(no.run);
       io::check_output_apart(o->out, o->dataset);
       // Standalone: the node's own locked staging folder, swapped in at the end (with --resume,
       // the killed predecessor's staging folder is taken over). --in-place (launch): OUT lies in

@@ -35,9 +35,8 @@ struct RunCliOptions {
 /// (not for node and launch, whose transport is DDS with faults of their own).
 void add_run_options(CLI::App& cmd, RunCliOptions& o, bool in_process_transport = true);
 run::ImageRunOptions to_image_run_options(const RunCliOptions& o);
-/// Throws InputError unless the options run the paper's observer alone (`node`, `launch`: the
-/// DDS Estimate type carries no consensus state).
-void require_paper_observer(const run::ImageRunOptions& o);
+// Cameras as processes run one estimator: refuses --compare-estimator (InputError).
+void require_single_estimator(const run::ImageRunOptions& o);
 
 /// Runs the provider, writes the outputs, overlays and plots into dir; returns the summary.
 nlohmann::json run_and_report(sources::NetworkSource& provider, const RunCliOptions& o,

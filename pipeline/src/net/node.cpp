@@ -149,8 +149,10 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   // The same settings, rounds and front end as the in-process run (run_images).
   run::RunnerSettings rs = o.run.runner;
   rs.tag_size = netcfg.target().size;
-  obs::CameraObserver net(self, graph.neighbors(self), run::camera_observer_settings(rs, false));
-  obs::CameraObserver ind(self, {}, run::camera_observer_settings(rs, true));
+  // n: zero-offset's hold threshold 1/(2n) (ObserverSettings::hold_threshold) needs it.
+  obs::CameraObserver net(self, graph.neighbors(self), run::camera_observer_settings(rs, false),
+                          static_cast<int>(n));
+  obs::CameraObserver ind(self, {}, run::camera_observer_settings(rs, true), static_cast<int>(n));
   const SE3 g_wi = netcfg.cameras[si].g_wi;
   for (auto* c : {&net, &ind}) {
     c->set_camera_pose(g_wi);
@@ -352,7 +354,8 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   j["frames"] = frames;
   j["dataset_frames"] = dataset_frames;
   // What the merge of the run's outputs needs (netvmo merge): the same for every node of a run.
-  j["options"] = {{"k_e", o.run.runner.k_e},
+  j["options"] = {{"estimator", o.run.runner.estimator},
+                  {"k_e", o.run.runner.k_e},
                   {"k_s", o.run.runner.k_s},
                   {"error", o.run.runner.error_model},
                   {"init", run::to_string(o.run.runner.init)},
