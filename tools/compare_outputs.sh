@@ -12,6 +12,9 @@
 #   run on that rendered dataset (each build on its own rendering):
 #       estimates.csv, energies.csv, errors.csv, summary.json without its "timing" block
 #   detect on that rendered dataset: detections.csv
+#   sweep on it (k_s 2,20): sweep.csv, inputs.csv
+#   launch on it (lock-step, one process per camera over loopback DDS): estimates.csv,
+#       energies.csv, errors.csv, summary.json without "timing", every node's node_<id>.csv
 #   (not the output folders' .lock files: they hold the writer's pid)
 # Exit status 0 when everything is identical; a CSV file whose every field is the same number
 # written differently (e.g. -0 and 0) counts as identical and is listed; otherwise the
@@ -79,6 +82,8 @@ build "$work/ref-src" "$work/ref-build"
 echo "compare_outputs: building $new_name"
 build "$new_src" "$new_build"
 
+# The launches' DDS domain: one of this run's own (loopback only, as launch always is).
+domain=$((100 + $$ % 100))
 produce() {  # produce NETVMO NAME: outputs in $work/NAME, produced under one common path
   local bin=$1 out=$work/current
   mkdir -p "$out"
@@ -88,10 +93,18 @@ produce() {  # produce NETVMO NAME: outputs in $work/NAME, produced under one co
   "$bin" render "$top/datasets/paper5_render.yaml" --out "$out/dataset" --frames "$frames" --quiet >/dev/null
   "$bin" run "$out/dataset" --out "$out/run" --no-overlays --no-plots >/dev/null 2>&1
   "$bin" detect "$out/dataset" --out "$out/detect" --quiet >/dev/null
+  "$bin" sweep "$out/dataset" --out "$out/sweep" --ks 2,20 --no-plot >/dev/null 2>&1
+  "$bin" launch "$out/dataset" --out "$out/launch" --domain "$domain" --no-overlays --no-plots \
+    --timeout 300 >/dev/null 2>&1
+  # The nodes' logs and statistics hold wall-clock times; the DDS configuration its own path.
+  rm -f "$out"/launch/nodes/*.log "$out"/launch/nodes/*.json "$out/launch/cyclonedds.xml" \
+    "$out/launch/messages.json"
   # Wall-clock timings differ from run to run; everything else must not.
-  awk '/^  "timing": \{/ {skip = 1} !skip {print} skip && /^  \},?$/ {skip = 0}' \
-    "$out/run/summary.json" > "$out/run/summary.notiming.json"
-  rm "$out/run/summary.json"
+  for r in run launch; do
+    awk '/^  "timing": \{/ {skip = 1} !skip {print} skip && /^  \},?$/ {skip = 0}' \
+      "$out/$r/summary.json" > "$out/$r/summary.notiming.json"
+    rm "$out/$r/summary.json"
+  done
   mv "$out" "$work/$2"
 }
 echo "compare_outputs: running the reference"

@@ -134,7 +134,7 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
   std::vector<std::vector<Row>> rows;
   std::vector<fs::path> files;
   for (const auto& c : net.cameras) {
-    files.push_back(nodes_dir / ("node_" + std::to_string(c.id) + ".csv"));
+    files.push_back(node_files(nodes_dir, c.id).csv);
     rows.push_back(read_node_csv(files.back(), allow_gaps || own_clocks));
   }
 

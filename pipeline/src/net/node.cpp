@@ -130,6 +130,15 @@ class RowJournal {
 
 }  // namespace
 
+NodeFiles node_files(const fs::path& dir, int camera_id) {
+  const std::string s = "node_" + std::to_string(camera_id);
+  return {dir / (s + ".csv"), dir / (s + "_links.csv"), dir / (s + ".json"), dir / (s + ".log")};
+}
+
+fs::path node_ready_file(const fs::path& start_file, int camera_id) {
+  return start_file.parent_path() / ("node_" + std::to_string(camera_id) + ".ready");
+}
+
 NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const NodeOptions& o) {
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
@@ -215,10 +224,10 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   transport.wait_for_writers(1 + static_cast<int>(graph.neighbors(self).size()), o.dds.timeout_s);
 
   io::ensure_directory(out_dir);
-  const std::string stem = "node_" + std::to_string(o.camera_id);
+  const NodeFiles files = node_files(out_dir, o.camera_id);
   std::optional<double> start_epoch = o.start_epoch;
   if (async && o.start_file) {  // ready: tell the launcher, then wait for the common start
-    io::write_file_atomic(o.start_file->parent_path() / (stem + ".ready"), "ready\n");
+    io::write_file_atomic(node_ready_file(*o.start_file, o.camera_id), "ready\n");
     start_epoch = read_start(*o.start_file, o.dds.timeout_s);
   }
   NodeSummary summary;
@@ -234,10 +243,10 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
     while (first < frames && frame_time(first) < now_cam) ++first;
   }
   summary.first_frame = first;
-  RowJournal csv(out_dir / (stem + ".csv"), kHeader, o.resume, first);
+  RowJournal csv(files.csv, kHeader, o.resume, first);
   // The effective graph as this camera sees it: after each frame, the neighbours whose estimate
   // is in its mutual term (heard, initialised, not forgotten as stale).
-  RowJournal links(out_dir / (stem + "_links.csv"), "frame,t,neighbours", o.resume, first);
+  RowJournal links(files.links, "frame,t,neighbours", o.resume, first);
   // A node that joins late (a restart) starts from its neighbours, like a blind camera, so that
   // its first estimate is theirs and none of them jumps: its own measurement is held back until
   // it is initialised from them, or, if none has an estimate, for the staleness bound.
@@ -375,7 +384,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   j["first_frame"] = summary.first_frame;
   j["warnings"] = summary.warnings;
   j["notes"] = summary.notes;
-  io::write_file_atomic(out_dir / (stem + ".json"), j.dump(2) + "\n");
+  io::write_file_atomic(files.json, j.dump(2) + "\n");
   return summary;
 }
 

@@ -68,6 +68,17 @@ struct NodeSummary {
   double seconds = 0.0;
 };
 
+/// The files of camera `camera_id`'s node in the folder `dir` it writes to.
+struct NodeFiles {
+  std::filesystem::path csv;    ///< node_<id>.csv: one row per frame (node.cpp's header)
+  std::filesystem::path links;  ///< node_<id>_links.csv: the effective graph after each frame
+  std::filesystem::path json;   ///< node_<id>.json: statistics and the run's options
+  std::filesystem::path log;    ///< node_<id>.log: its standard output and error (launch)
+};
+NodeFiles node_files(const std::filesystem::path& dir, int camera_id);
+/// node_<id>.ready, written next to the common start file once the node is set up (async).
+std::filesystem::path node_ready_file(const std::filesystem::path& start_file, int camera_id);
+
 /// Where a node writes `file` (node_<id>.csv, node_<id>_links.csv) while it runs: the finished
 /// frames, flushed after each, renamed to `file` when the node ends (`file`.partial).
 inline std::filesystem::path partial_path(const std::filesystem::path& file) {

@@ -1,0 +1,262 @@
+#include "netvmo/pipeline/net/launch.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <stdexcept>
+#include <thread>
+
+#include "netvmo/observer/estimate_message.hpp"
+#include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/io/output_dir.hpp"
+#include "netvmo/pipeline/net/node.hpp"
+#include "netvmo/pipeline/run/overlay.hpp"
+#include "netvmo/pipeline/run/run_report.hpp"
+
+namespace netvmo::net {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+double now_epoch() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+std::string num(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+
+std::string last_line(const fs::path& log) {
+  std::ifstream f(log);
+  std::string line, last;
+  while (std::getline(f, line))
+    if (!line.empty()) last = line;
+  return last;
+}
+
+}  // namespace
+
+NodeKill parse_node_kill(const std::string& spec, double restart_after,
+                         const io::NetworkConfig& net) {
+  const auto at = spec.find('@');
+  int id = -1;
+  double t = -1;
+  try {
+    if (at != std::string::npos) {
+      id = std::stoi(spec.substr(0, at));
+      t = std::stod(spec.substr(at + 1));
+    }
+  } catch (const std::exception&) {
+  }
+  if (at == std::string::npos || net.index_of(id) < 0 || !(t >= 0))
+    throw InputError("--kill " + spec + ": expected ID@SECONDS with a camera id of " + net.source);
+  return {id, t, restart_after};
+}
+
+std::vector<std::string> node_argv(const LaunchSettings& s, int camera_id,
+                                   const fs::path& nodes_dir) {
+  std::vector<std::string> argv = {s.exe.string(),
+                                   "node",
+                                   s.dataset.string(),
+                                   "--camera",
+                                   std::to_string(camera_id),
+                                   "--out",
+                                   nodes_dir.string(),
+                                   "--in-place",
+                                   "--domain",
+                                   std::to_string(s.domain),
+                                   "--frames",
+                                   std::to_string(s.frames),
+                                   "--timeout",
+                                   num(s.node_timeout)};
+  for (const auto& a : s.run_arguments) argv.push_back(a);
+  if (s.async)
+    for (auto a :
+         {std::string("--mode"), std::string("async"), std::string("--speed"), num(s.speed),
+          std::string("--stale"), num(s.stale), std::string("--drop"), num(s.drop),
+          std::string("--delay"), num(s.delay), std::string("--seed"), std::to_string(s.seed),
+          std::string("--start-file"), (nodes_dir / "start.txt").string()})
+      argv.push_back(a);
+  return argv;
+}
+
+LaunchOutcome run_launch(const io::NetworkConfig& net, const LaunchSettings& s,
+                         const fs::path& nodes_dir) {
+  const fs::path start_file = nodes_dir / "start.txt";  // async: the common start
+  fs::remove(start_file);
+  std::fflush(stdout);  // before the children inherit the buffer
+  KillPlan plan;
+  if (s.kill) {
+    plan.index = static_cast<size_t>(net.index_of(s.kill->camera_id));
+    plan.kill_at = s.kill->at;  // after the common start (made relative to it below)
+    plan.restart_after = s.kill->restart_after;
+  }
+  std::vector<pid_t> pids;
+  for (const auto& c : net.cameras) {
+    const auto argv = node_argv(s, c.id, nodes_dir);
+    const fs::path log = node_files(nodes_dir, c.id).log;
+    if (s.kill && pids.size() == plan.index) {
+      plan.argv = argv;
+      plan.argv.push_back("--resume");  // keeps the rows it finished before the kill
+      plan.log = log;
+    }
+    pids.push_back(spawn(argv, log));
+  }
+  LaunchOutcome outcome;
+  if (s.async) {
+    // The common start, once every node is ready (or one has ended, or --node-timeout has
+    // passed: then supervise reports it); printed for the record.
+    const double give_up = now_epoch() + s.node_timeout;
+    for (;;) {
+      bool ready = true, ended = false;
+      for (size_t i = 0; i < pids.size(); ++i) {
+        ready = ready && fs::exists(node_ready_file(start_file, net.cameras[i].id));
+        ended = ended || has_exited(pids[i]);
+      }
+      if (ready || ended || now_epoch() > give_up) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    outcome.start_epoch = now_epoch() + kLaunchStartMargin;
+    io::write_file_atomic(start_file, num(outcome.start_epoch) + "\n");
+    plan.kill_at += outcome.start_epoch - now_epoch();  // supervision starts now
+    std::printf(
+        "netvmo launch: async, speed %g, staleness %g s, drop %g, delay %g ms, seed %llu, "
+        "start at %.3f (epoch)\n",
+        s.speed, s.stale, s.drop, s.delay, static_cast<unsigned long long>(s.seed),
+        outcome.start_epoch);
+    std::fflush(stdout);
+  }
+  outcome.nodes = supervise(pids, s.timeout, true, s.kill ? &plan : nullptr);
+  if (s.kill) {  // the injected fault, in wall and camera time
+    const auto& r = outcome.nodes[plan.index];
+    const auto cam_time = [&](double epoch) { return (epoch - outcome.start_epoch) * s.speed; };
+    json events = json::object();
+    events["camera"] = s.kill->camera_id;
+    events["start_epoch"] = outcome.start_epoch;
+    events["speed"] = s.speed;
+    if (r.kill_epoch > 0)
+      events["kill"] = {{"epoch", r.kill_epoch}, {"camera_time", cam_time(r.kill_epoch)}};
+    if (r.restart_epoch > 0)
+      events["restart"] = {{"epoch", r.restart_epoch}, {"camera_time", cam_time(r.restart_epoch)}};
+    io::write_file_atomic(nodes_dir / "events.json", events.dump(2) + "\n");
+  }
+  return outcome;
+}
+
+void check_launch(const LaunchOutcome& outcome, const io::NetworkConfig& net,
+                  const LaunchSettings& s, const fs::path& nodes_dir,
+                  const fs::path& kept_nodes_dir, const std::function<fs::path()>& keep_failed) {
+  // Report the nodes that failed on their own first; the others were stopped because of them,
+  // or by the timeout.
+  std::vector<int> stopped;
+  bool failed = false;
+  for (size_t i = 0; i < outcome.nodes.size(); ++i) {
+    const auto& r = outcome.nodes[i];
+    const int id = net.cameras[i].id;
+    if ((r.finished && r.exit_code == 0) || r.planned_kill) continue;
+    if (r.killed) {
+      stopped.push_back(id);
+      continue;
+    }
+    const fs::path log = node_files(nodes_dir, id).log;
+    std::fprintf(stderr, "netvmo launch: node of camera %d failed (%s): %s [%s]\n", id,
+                 describe(r).c_str(), last_line(log).c_str(),
+                 (kept_nodes_dir / log.filename()).string().c_str());
+    failed = true;
+  }
+  if (failed) throw std::runtime_error("a node failed; see " + (keep_failed() / "nodes").string());
+  if (!stopped.empty()) {
+    std::string ids;
+    for (int id : stopped) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
+    throw std::runtime_error("timeout after " + num(s.timeout) +
+                             " s: stopped the nodes of cameras " + ids + "; see " +
+                             (keep_failed() / "nodes").string());
+  }
+}
+
+json read_node_json(const fs::path& f) {
+  if (!fs::exists(f)) throw InputError(f.string() + ": node statistics not found");
+  std::ifstream in(f);
+  json j;
+  try {
+    in >> j;
+  } catch (const std::exception&) {
+    throw InputError(f.string() + ": unreadable node statistics");
+  }
+  return j;
+}
+
+MergedRun merge_run_outputs(sources::NetworkSource& provider, const run::ImageRunOptions& options,
+                            const fs::path& nodes_dir, const fs::path& dir, int frames,
+                            bool allow_gaps, bool overlays) {
+  const auto& netcfg = provider.network();
+  auto result = merge_nodes(provider, options, nodes_dir, frames, allow_gaps);
+  MergedRun merged;
+  merged.messages = json::object();
+  for (const auto& c : netcfg.cameras) {
+    const fs::path f = node_files(nodes_dir, c.id).json;
+    if (allow_gaps && !fs::exists(f)) {  // killed and not restarted: it never finished
+      merged.messages[std::to_string(c.id)] = nullptr;
+      continue;
+    }
+    const json j = read_node_json(f);
+    merged.messages[std::to_string(c.id)] = j["messages"];
+    for (const auto& w : j["warnings"]) result.warnings.push_back(w.get<std::string>());
+    result.seconds = std::max(result.seconds, j["seconds"].get<double>());
+  }
+  io::ensure_directory(dir);
+  io::write_file_atomic(dir / "messages.json", merged.messages.dump(2) + "\n");
+  if (overlays) {
+    run::OverlayWriter writer(dir, provider);
+    const size_t n = netcfg.cameras.size();
+    for (int k = 0; k < frames; ++k) {
+      std::vector<cv::Mat> images(n);
+      for (size_t i = 0; i < n; ++i) {
+        if (result.frames[static_cast<size_t>(k)][i].read_failed) continue;
+        // Cameras on their own clocks: the image each camera held at this grid time.
+        const int own =
+            result.source_frames.empty() ? k : result.source_frames[static_cast<size_t>(k)][i];
+        if (own >= 0) images[i] = provider.read(i, own);
+      }
+      writer(k, images, {result.frames[static_cast<size_t>(k)]},
+             {&result.history[static_cast<size_t>(k)]});
+    }
+    writer.finish();
+  }
+  for (size_t k = provider.warnings().size(); k < result.warnings.size(); ++k)
+    std::fprintf(stderr, "warning: %s\n", result.warnings[k].c_str());
+  merged.summary = run::write_run_outputs(dir, provider, options, result);
+  return merged;
+}
+
+std::string message_table(const json& messages, const io::NetworkConfig& net) {
+  // Every node reads the one estimates topic: messages of non-neighbours are ignored (and
+  // counted apart from those refused as malformed or out of order).
+  std::string t = "messages: camera    sent  received  dropped  late  non-neighbour  rejected\n";
+  char line[200];
+  for (const auto& c : net.cameras) {
+    const auto& m = messages[std::to_string(c.id)];
+    if (m.is_null()) {
+      std::snprintf(line, sizeof line, "          %6d  (killed, no statistics)\n", c.id);
+      t += line;
+      continue;
+    }
+    unsigned long long rejected = 0, foreign = 0;
+    for (const auto& [k, v] : m["rejected"].items())
+      (k == obs::to_string(obs::MessageVerdict::not_a_neighbour) ? foreign : rejected) +=
+          v.get<unsigned long long>();
+    std::snprintf(line, sizeof line, "          %6d  %6llu  %8llu  %7llu  %4llu  %13llu  %8llu\n",
+                  c.id, m["sent"].get<unsigned long long>(),
+                  m["received"].get<unsigned long long>(), m["dropped"].get<unsigned long long>(),
+                  m["late"].get<unsigned long long>(), foreign, rejected);
+    t += line;
+  }
+  return t;
+}
+
+}  // namespace netvmo::net
