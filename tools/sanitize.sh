@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# The sanitizer build (README "Hardening"): configures BUILD_DIR (default build-asan) with clang,
+# The sanitizer build (docs/hardening.md, "Sanitizers and fuzzing"): configures BUILD_DIR (default build-asan) with clang,
 # AddressSanitizer + UndefinedBehaviorSanitizer (any report is fatal) and the libFuzzer targets,
 # builds everything and runs the whole ctest suite there (the fuzzers' corpora included).
 # Prints the time of each part. Usage: tools/sanitize.sh [BUILD_DIR [CTEST_ARGS...]]
-# (e.g. -E REGEX to leave tests out: .ci/run does, see the README's "Hardening").
+# (e.g. -E REGEX to leave tests out: .ci/run does, see docs/hardening.md, "Commands").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build-asan}

@@ -104,7 +104,8 @@ TEST(EndToEnd, MovingTargetDeltaIsDetectionAndEstimatesStayBounded) {
   const int frames = scene.frames;
   auto provider = sources::make_render_source(scene, frames);
   auto options = quiet_options();
-  options.runner.k_e = 10.0;  // faster tracking of a moving target (README: tracking lag)
+  options.runner.k_e = 10.0;  // faster tracking of a moving target (docs/images.md, "Moving target
+                              // and tracking lag")
   options.runner.k_s = 100.0;
   const auto r = run::run_images(*provider, options);
   ASSERT_EQ(static_cast<int>(r.history.size()), frames);
@@ -151,10 +152,10 @@ TEST(EndToEnd, MovingTargetDeltaIsDetectionAndEstimatesStayBounded) {
 
   // The observer has no model of the target's motion, so it lags: in consensus the average
   // obeys n dp/dt = k_e sum_{i in V_f} (p_oi - p), a lag of v n / (k_e |V_f|) at speed v
-  // (README). Bounded: once initialised, every estimate stays within 0.6 m of the moving g*(t)
-  // (the target moves at ~1.2 m/s; the lag bound with one visible camera is ~0.6 m).
-  // Re-convergence: after each stretch without any detection, the error shrinks once the
-  // target is seen again.
+  // (docs/images.md, "Moving target and tracking lag"). Bounded: once initialised, every estimate
+  // stays within 0.6 m of the moving g*(t) (the target moves at ~1.2 m/s; the lag bound with one
+  // visible camera is ~0.6 m). Re-convergence: after each stretch without any detection, the error
+  // shrinks once the target is seen again.
   auto network_error = [&](size_t k) {
     double e = 0.0;
     for (const auto& c : r.history[k].cameras)
