@@ -52,7 +52,7 @@ void add_demo(CLI::App& app, int& exit_code) {
       io::write_dataset(renderer, dataset, dopt);
       std::printf("running the networked observer on %s\n", shown_dataset.string().c_str());
       auto provider = sources::open_dataset_source(dataset, {}, o->run.keep_going, shown_dataset);
-      const auto summary = run_and_report(*provider, o->run, out);
+      const auto summary = run_and_report(*provider, o->run, out, shown);
       out_dir.commit();
       print_run_summary(summary, shown);
       std::printf("open %s/overlays/mosaic.png, %s/energies.png and %s/errors.png\n",

@@ -489,6 +489,16 @@ TEST_F(SmallDataset, SweepWhosePlotFailsLeavesNothingUnderItsName) {
   EXPECT_NE(c.code, 0);
   EXPECT_EQ(slurp(out / "sweep.csv"), before);
   EXPECT_FALSE(fs::exists(out / "sweep.png"));
+  // netvmo run's plots likewise: the message names the plot under OUT, and OUT is not there.
+  const fs::path run_out = *dir_ / "run_plot_fails";
+  c = run_netvmo_with_failing_gnuplot(
+      "run " + ds.string() + " --out " + run_out.string() + " --no-overlays", *dir_);
+  EXPECT_NE(c.code, 0);
+  EXPECT_NE(c.err.find("netvmo run: error: " + (run_out / "energies.png").string() +
+                       ": gnuplot failed: "),
+            std::string::npos)
+      << c.err;
+  EXPECT_FALSE(fs::exists(run_out));
 }
 
 // On rendered images with exact relative poses the zero-offset estimator ends every camera,
