@@ -4,7 +4,7 @@
 # --speed 0.25 (a delay of D ms wall is D/4 ms of camera time). Writes OUT/sweep.dat (loss,
 # delay_ms, worst camera's final position error [mm] and orientation error [deg], converged 1/0
 # against 1 cm / 1 deg), OUT/decay.dat (worst position error per frame without loss, one block per
-# delay, with the predicted decay rate, README "Loss and delay") and draws OUT/sweep.png with
+# delay, with the predicted decay rate, docs/processes.md, "Loss and delay in async mode") and draws OUT/sweep.png with
 # gnuplot (pngcairo). LOSSES="..." and DELAYS="..." change the grid. Every launch is bounded
 # (--timeout 120, and `timeout`); the Cyclone configuration is launch's own, loopback only. Not run
 # by CI.
@@ -54,7 +54,7 @@ for loss in ${LOSSES:-0 0.1 0.3 0.5}; do
 done
 cat "$dat"
 # Worst camera's position error over camera time without loss, per delay, and the predicted decay
-# rate of the slow (average) mode, k_e |V| / (n + 2 k_s |E| tau) (README "Loss and delay"), with
+# rate of the slow (average) mode, k_e |V| / (n + 2 k_s |E| tau) (docs/processes.md, "Loss and delay in async mode"), with
 # |V| the cameras' mean number seeing the target (lock-step summary), tau = delay / 4 (camera time).
 python3 - "$out" "$ke" "$ks" ${DELAYS:-0 10 50 100} > "$out/decay.dat" <<'PY'
 import csv, json, math, sys

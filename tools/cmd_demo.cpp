@@ -40,19 +40,20 @@ void add_demo(CLI::App& app, int& exit_code) {
       to_image_run_options(o->run);  // option ranges first
       const fs::path scenario = find_scenario(o->scenario);
       io::OutputDir out_dir(o->out, "demo");
+      // Everything is written into the temporary out_dir.path() and renamed to --out at the end:
+      // what is printed (and summary.json's dataset) names the final paths.
       const fs::path out = out_dir.path(), dataset = out / "dataset";
+      const fs::path shown = o->out, shown_dataset = shown / "dataset";
       std::printf("rendering %s into %s\n", scenario.string().c_str(),
-                  (fs::path(o->out) / "dataset").string().c_str());
+                  shown_dataset.string().c_str());
       render::Renderer renderer(io::load_render_scenario(scenario));
       io::DatasetOptions dopt;
       dopt.frames = o->frames;
       io::write_dataset(renderer, dataset, dopt);
-      std::printf("running the networked observer on %s\n",
-                  (fs::path(o->out) / "dataset").string().c_str());
-      auto provider = sources::open_dataset_source(dataset, {}, o->run.keep_going);
-      const auto summary = run_and_report(*provider, o->run, out);
+      std::printf("running the networked observer on %s\n", shown_dataset.string().c_str());
+      auto provider = sources::open_dataset_source(dataset, {}, o->run.keep_going, shown_dataset);
+      const auto summary = run_and_report(*provider, o->run, out, shown);
       out_dir.commit();
-      const fs::path shown = o->out;
       print_run_summary(summary, shown);
       std::printf("open %s/overlays/mosaic.png, %s/energies.png and %s/errors.png\n",
                   shown.string().c_str(), shown.string().c_str(), shown.string().c_str());

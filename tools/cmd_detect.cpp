@@ -276,7 +276,7 @@ int run_detect_photos(DetectOptions o) {
     }
     io::Calibration calib = nominal_calibration(gray.cols, gray.rows);
     if (const fs::path cf = folder / "calib.yaml"; fs::exists(cf)) {
-      if (!calibs.count(folder)) calibs[folder] = load_calibration_opencv(cf);
+      if (!calibs.count(folder)) calibs[folder] = load_calibration_yaml(cf);
       calib = calibs[folder];
       if (calib.width != gray.cols || calib.height != gray.rows)
         throw InputError(f.string() + ": " + std::to_string(gray.cols) + "x" +

@@ -40,7 +40,7 @@ void add_run(CLI::App& app, int& exit_code) {
       io::check_output_apart(o->out, o->dataset);
       io::OutputDir out(o->out, "run");
       auto provider = sources::open_dataset_source(o->dataset, {}, o->run.keep_going);
-      const auto summary = run_and_report(*provider, o->run, out.path());
+      const auto summary = run_and_report(*provider, o->run, out.path(), o->out);
       out.commit();
       print_run_summary(summary, o->out);
       return 0;

@@ -9,7 +9,7 @@
 # inputs (CI sets it: a bounded CI run checks a known sequence and never fails on a finding that a
 # longer run has not made first; fuzz longer without it to explore). With FUZZ_RUNS=N each target
 # stops after N executions instead (SECONDS_PER_TARGET is then its time cap), e.g.
-#   FUZZ_RUNS=1000000 tools/fuzz.sh 3600        (the README's goal: 10^6 executions per target)
+#   FUZZ_RUNS=1000000 tools/fuzz.sh 3600        (docs/hardening.md's goal: 10^6 executions per target)
 # FUZZ_TARGETS="a b" runs only those targets; FUZZ_JOBS=N runs N targets at a time (default 1;
 # each target is one process on one core).
 # Usage: [FUZZ_SEED=N] [FUZZ_RUNS=N] [FUZZ_TARGETS=...] tools/fuzz.sh [SECONDS_PER_TARGET] [BUILD_DIR] [OUT]

@@ -1,9 +1,12 @@
 #include "plot.hpp"
 
+#include <sys/wait.h>
+
 #include <cstdio>
 #include <sstream>
 #include <stdexcept>
 #include <system_error>
+#include <vector>
 
 namespace netvmo::plot {
 namespace fs = std::filesystem;
@@ -19,16 +22,48 @@ std::string quoted(const std::string& s) {
 }
 
 void run_gnuplot(const std::string& script, const fs::path& png) {
-  FILE* gp = popen("gnuplot 2>&1", "w");
-  if (!gp) throw std::runtime_error(png.string() + ": cannot start gnuplot");
-  std::fwrite(script.data(), 1, script.size(), gp);
-  const int status = pclose(gp);
+  // The script goes through a file so that gnuplot's own messages can be read back: a failure
+  // is reported with them, and "not installed" only when the shell cannot find gnuplot.
+  const std::string script_file = partial_path(png) + ".gp";
   std::error_code ec;
-  if (status != 0 || !fs::exists(partial_path(png))) {
+  {
+    std::FILE* f = std::fopen(script_file.c_str(), "w");
+    if (!f) throw std::runtime_error(png.string() + ": cannot write " + script_file);
+    std::fwrite(script.data(), 1, script.size(), f);
+    std::fclose(f);
+  }
+  std::string shell_quoted = "'";
+  for (char c : script_file) shell_quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  shell_quoted += "'";
+  FILE* gp = popen(("gnuplot " + shell_quoted + " 2>&1").c_str(), "r");
+  if (!gp) {
+    fs::remove(script_file, ec);
+    throw std::runtime_error(png.string() + ": cannot start gnuplot");
+  }
+  std::string output;
+  char buf[4096];
+  for (size_t n; (n = std::fread(buf, 1, sizeof buf, gp)) > 0;) output.append(buf, n);
+  const int status = pclose(gp);
+  fs::remove(script_file, ec);
+  const bool ok = status == 0 && fs::exists(partial_path(png));
+  if (!ok) {
     fs::remove(partial_path(png), ec);
-    throw std::runtime_error(png.string() +
-                             ": gnuplot failed (is gnuplot-nox installed? apt-get install "
-                             "gnuplot-nox)");
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 127)
+      throw std::runtime_error(png.string() + ": gnuplot not found (apt-get install gnuplot-nox)");
+    // gnuplot's own message, on one line: its non-blank lines, the last few.
+    std::vector<std::string> lines;
+    std::istringstream in(output);
+    for (std::string l; std::getline(in, l);) {
+      const size_t a = l.find_first_not_of(" \t\r^"), b = l.find_last_not_of(" \t\r");
+      if (a != std::string::npos) lines.push_back(l.substr(a, b - a + 1));
+    }
+    std::string msg;
+    for (size_t i = lines.size() > 3 ? lines.size() - 3 : 0; i < lines.size(); ++i)
+      msg += (msg.empty() ? "" : " | ") + lines[i];
+    if (msg.empty())
+      msg = WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status))
+                              : std::string("killed by a signal");
+    throw std::runtime_error(png.string() + ": gnuplot failed: " + msg);
   }
   fs::rename(partial_path(png), png, ec);
   if (ec) throw std::runtime_error(png.string() + ": " + ec.message());

@@ -10,7 +10,7 @@ namespace netvmo::plot {
 
 /// Runs a gnuplot script that writes to partial_path(png); the PNG is moved into place only
 /// when gnuplot succeeds. Throws std::runtime_error naming the plot if gnuplot is missing or
-/// fails.
+/// fails (then with gnuplot's own message, on one line).
 void run_gnuplot(const std::string& script, const std::filesystem::path& png);
 std::string partial_path(const std::filesystem::path& png);
 /// Quotes a path or text for a gnuplot string literal.

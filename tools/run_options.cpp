@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
+#include <string>
 
 #include "choices.hpp"
 #include "netvmo/observer/estimator.hpp"
@@ -94,7 +96,9 @@ void require_single_estimator(const run::ImageRunOptions& o) {
         "netvmo run");
 }
 
-json run_and_report(sources::NetworkSource& provider, const RunCliOptions& o, const fs::path& dir) {
+namespace {
+json run_and_report_in(sources::NetworkSource& provider, const RunCliOptions& o,
+                       const fs::path& dir) {
   const auto options = to_image_run_options(o);
   for (const auto& w : provider.warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
   std::unique_ptr<run::OverlayWriter> overlays;
@@ -115,6 +119,25 @@ json run_and_report(sources::NetworkSource& provider, const RunCliOptions& o, co
   const json s = run::write_run_outputs(dir, provider, options, result);
   if (!o.no_plots) plot_run(dir, provider.network());
   return s;
+}
+}  // namespace
+
+json run_and_report(sources::NetworkSource& provider, const RunCliOptions& o, const fs::path& dir,
+                    const fs::path& shown) {
+  // A file of dir named in a message (a plot or an overlay that cannot be written) is named as
+  // it would have been under its final folder.
+  const auto renamed = [&](std::string what) {
+    if (!shown.empty() && what.rfind(dir.string(), 0) == 0)
+      what.replace(0, dir.string().size(), shown.string());
+    return what;
+  };
+  try {
+    return run_and_report_in(provider, o, dir);
+  } catch (const InputError& e) {
+    throw InputError(renamed(e.what()));
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(renamed(e.what()));
+  }
 }
 
 namespace {

@@ -39,8 +39,11 @@ run::ImageRunOptions to_image_run_options(const RunCliOptions& o);
 void require_single_estimator(const run::ImageRunOptions& o);
 
 /// Runs the provider, writes the outputs, overlays and plots into dir; returns the summary.
+/// `shown`: the name dir will have when the command ends (dir is an io::OutputDir's temporary
+/// folder), used instead of dir in the message of an error; empty: dir.
 nlohmann::json run_and_report(sources::NetworkSource& provider, const RunCliOptions& o,
-                              const std::filesystem::path& dir);
+                              const std::filesystem::path& dir,
+                              const std::filesystem::path& shown = {});
 
 /// Prints the per-camera table of the summary.
 void print_run_summary(const nlohmann::json& s, const std::filesystem::path& dir);

@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
-# The sanitizer build (README "Hardening"): configures BUILD_DIR (default build-asan) with clang,
-# AddressSanitizer + UndefinedBehaviorSanitizer (any report is fatal) and the libFuzzer targets,
-# builds everything and runs the whole ctest suite there (the fuzzers' corpora included).
-# Prints the time of each part. Usage: [SANITIZE_TARGETS="t1 t2"] tools/sanitize.sh [BUILD_DIR [CTEST_ARGS...]]
+# The sanitizer build (docs/hardening.md, "Sanitizers and fuzzing"): configures BUILD_DIR (default
+# build-asan) with clang, AddressSanitizer + UndefinedBehaviorSanitizer (any report is fatal) and
+# the libFuzzer targets, builds everything and runs the whole ctest suite there (the fuzzers'
+# corpora included). Prints the time of each part.
+# Usage: [SANITIZE_TARGETS="t1 t2"] [SANITIZE_EXCLUDE=REGEX] tools/sanitize.sh [BUILD_DIR [CTEST_ARGS...]]
 # With SANITIZE_TARGETS only those targets and every fuzz target are built, and only their tests
-# run (.ci/run does so to stay within CI's time; see docs/hardening.md). SANITIZE_EXCLUDE=REGEX
-# leaves the tests it matches out; CTEST_ARGS go to ctest as they are.
+# run (.ci/run does so to stay within CI's time). SANITIZE_EXCLUDE leaves the tests it matches
+# out; CTEST_ARGS go to ctest as they are.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build-asan}

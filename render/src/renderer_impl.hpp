@@ -31,7 +31,7 @@ namespace netvmo::render {
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
 // Packet width of the primary and shadow ray queries (Embree ray packets). 16 is native on
-// AVX-512 and emulated with two 8-wide traversals on AVX2 (README.md, "Benchmarks").
+// AVX-512 and emulated with two 8-wide traversals on AVX2 (docs/benchmarks.md, "Renderer").
 constexpr int kPacket = 16;
 using RayHitK = RTCRayHit16;
 using RayK = RTCRay16;

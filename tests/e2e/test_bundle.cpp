@@ -39,7 +39,7 @@ frontend::FrontEnd bundle_front_end(const io::TargetConfig& target) {
 }
 }  // namespace
 
-// Head-on at 2 m (the setting of the README's 0.76 degrees for one 0.2 m tag): four cameras
+// Head-on at 2 m (the setting of docs/frontend.md's 0.76 degrees for one 0.2 m tag): four cameras
 // looking along the primary tag's normal from slightly different places, 2 noise realisations
 // each, 4x4 supersampling. The same images give both estimates: PnP on the primary tag's 4
 // corners and PnP on the 8 corners of both tags.
@@ -96,7 +96,7 @@ TEST(BundleOnRenderedImages, HeadOnBundleResolvesTheTiltOneTagCannot) {
   // The second tag, seen 45 degrees off its normal, is what the 20-40 degree views of
   // FrontEndOnRenderedImages.PnpOfATwentyCentimetreTagAtTwoMetres resolve to 0.5 degrees; with
   // the depth spread of 8 non-coplanar corners the bundle must do better than a third of the
-  // single head-on tag's error (measured: README, "Tag bundles").
+  // single head-on tag's error (measured: docs/images.md, "Tag bundles").
   EXPECT_LT(rms_bundle, rms_single / 3.0);
   EXPECT_LT(max_bundle, 0.25);
   EXPECT_LT(max_bundle_p, 0.005);

@@ -72,7 +72,7 @@ TEST(FrontEndOnRenderedImages, PnpOfATwentyCentimetreTagAtTwoMetres) {
   // Cameras 2 m from the paper5 tag (0.2 m, facing -y), seen from 20, 30 and 40 degrees off its
   // normal, 4x4 supersampling with the default sensor noise. (Head-on, a 0.5 degree tilt moves
   // the 60 px tag's corners by only ~0.05 px, so the tilt is not resolved to 0.5 degrees from
-  // four corners; README, "Front end".)
+  // four corners; docs/frontend.md, "PnP".)
   auto scene = io::load_render_scenario(kSource / "datasets/paper5_render.yaml");
   const render::Pose g_wo = scene.target().motion.at(0.0);
   const render::Vec3 centre = g_wo.translation();
@@ -118,7 +118,8 @@ TEST(FrontEndOnRenderedImages, DetectionAgreesWithGeometricVisibility) {
   // (the border check rejects none of them); a tag with no visible part (out of view or fully
   // occluded) is not.
   // Geometry is the only variable here: cast shadows are switched off, since a hard shadow
-  // edge across a fully visible tag can also defeat the detector (README, confusion table).
+  // edge across a fully visible tag can also defeat the detector (docs/frontend.md, "What the table
+  // shows").
   auto scene = io::load_render_scenario(kSource / "datasets/moving_target.yaml");
   for (auto& light : scene.lights) light.shadows = false;
   render::Renderer r(scene);  // the scenario's own 4 samples per pixel and sensor noise

@@ -25,9 +25,9 @@ const fs::path kSource = NETVMO_SOURCE_DIR;
 
 TEST(FrontEndShadows, NormalizedRetryHalvesShadowMissesWithoutWrongCorners) {
   // moving_target.yaml as rendered (shadows on): frames 81-88 of cameras 3 and 5, where the
-  // cart's shadow edge crosses the fully visible tag (README: the misses of the confusion
-  // table). Each camera is tracked frame by frame, as in `netvmo run`, with and without the
-  // normalised retry.
+  // cart's shadow edge crosses the fully visible tag (docs/frontend.md: the misses of the
+  // confusion table). Each camera is tracked frame by frame, as in `netvmo run`, with and without
+  // the normalised retry.
   auto scene = io::load_render_scenario(kSource / "datasets/moving_target.yaml");
   render::Renderer r(scene);
   frontend::DetectorSettings ds;

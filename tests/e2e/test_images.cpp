@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
@@ -104,7 +105,8 @@ TEST(EndToEnd, MovingTargetDeltaIsDetectionAndEstimatesStayBounded) {
   const int frames = scene.frames;
   auto provider = sources::make_render_source(scene, frames);
   auto options = quiet_options();
-  options.runner.k_e = 10.0;  // faster tracking of a moving target (README: tracking lag)
+  options.runner.k_e = 10.0;  // faster tracking of a moving target (docs/images.md, "Moving target
+                              // and tracking lag")
   options.runner.k_s = 100.0;
   const auto r = run::run_images(*provider, options);
   ASSERT_EQ(static_cast<int>(r.history.size()), frames);
@@ -151,10 +153,10 @@ TEST(EndToEnd, MovingTargetDeltaIsDetectionAndEstimatesStayBounded) {
 
   // The observer has no model of the target's motion, so it lags: in consensus the average
   // obeys n dp/dt = k_e sum_{i in V_f} (p_oi - p), a lag of v n / (k_e |V_f|) at speed v
-  // (README). Bounded: once initialised, every estimate stays within 0.6 m of the moving g*(t)
-  // (the target moves at ~1.2 m/s; the lag bound with one visible camera is ~0.6 m).
-  // Re-convergence: after each stretch without any detection, the error shrinks once the
-  // target is seen again.
+  // (docs/images.md, "Moving target and tracking lag"). Bounded: once initialised, every estimate
+  // stays within 0.6 m of the moving g*(t) (the target moves at ~1.2 m/s; the lag bound with one
+  // visible camera is ~0.6 m). Re-convergence: after each stretch without any detection, the error
+  // shrinks once the target is seen again.
   auto network_error = [&](size_t k) {
     double e = 0.0;
     for (const auto& c : r.history[k].cameras)
@@ -361,6 +363,142 @@ TEST_F(SmallDataset, SweepDetectsOnceAndReplaysTheRun) {
   EXPECT_NE(c.err.find("--ks: 'x' is not a number"), std::string::npos) << c.err;
   EXPECT_EQ(std::count(c.err.begin(), c.err.end(), '\n'), 1) << c.err;
   EXPECT_EQ(slurp(fs::path(out) / "sweep.csv"), first) << "a failure leaves results alone";
+}
+
+namespace {
+// sweep.csv as header names -> column of numbers, one entry per grid point.
+std::map<std::string, std::vector<double>> read_sweep_csv(const fs::path& file) {
+  std::istringstream in(slurp(file));
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> names;
+  std::stringstream hs(line);
+  for (std::string n; std::getline(hs, n, ',');) names.push_back(n);
+  std::map<std::string, std::vector<double>> cols;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;  // between blocks of k_e
+    std::stringstream ls(line);
+    size_t c = 0;
+    for (std::string v; std::getline(ls, v, ','); ++c)
+      cols[c < names.size() ? names[c] : "?"].push_back(std::strtod(v.c_str(), nullptr));
+    EXPECT_EQ(c, names.size()) << line;
+  }
+  return cols;
+}
+
+// Runs netvmo with a `gnuplot` first on PATH that fails the way gnuplot does on a plot whose
+// points are all undefined.
+test::CliResult run_netvmo_with_failing_gnuplot(const std::string& args, const fs::path& scratch) {
+  const fs::path bin = scratch / "failing_gnuplot";
+  fs::create_directories(bin);
+  std::ofstream(bin / "gnuplot") << "#!/bin/sh\ncat > /dev/null\n"
+                                    "echo '         \"sweep.gp\" line 9: all points y value "
+                                    "undefined!' >&2\nexit 1\n";
+  fs::permissions(bin / "gnuplot", fs::perms::owner_all);
+  const auto out = scratch / "stdout.txt", err = scratch / "stderr.txt";
+  const std::string cmd = "PATH='" + bin.string() + "':\"$PATH\" timeout -k 5 600 " +
+                          std::string(NETVMO_BINARY_DIR) + "/netvmo " + args + " > " +
+                          out.string() + " 2> " + err.string();
+  const int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+}  // namespace
+
+// A recorded dataset has no ground truth: netvmo sweep still succeeds, with nan where g* is
+// needed, and tabulates and plots what the measurements define, the same numbers as on the
+// dataset with its truth (they do not read it); it says which columns are undefined.
+TEST_F(SmallDataset, SweepWithoutGroundTruthWritesWhatIsDefined) {
+  const fs::path with = *dir_ / "rendered", without = *dir_ / "no_truth";
+  fs::copy(with, without, fs::copy_options::recursive);
+  for (const char* f : {"target.csv", "truth_cameras.csv", "truth.csv"})
+    ASSERT_TRUE(fs::remove(without / f)) << f;
+  const fs::path out = *dir_ / "sweep_no_truth", ref = *dir_ / "sweep_truth";
+  auto c = test::run_netvmo("sweep " + without.string() + " --out " + out.string() + " --ks 0,5,50",
+                            *dir_);
+  ASSERT_EQ(c.code, 0) << c.out << c.err;
+  EXPECT_TRUE(fs::is_regular_file(out / "sweep.png")) << c.out;
+  EXPECT_TRUE(fs::is_regular_file(out / "inputs.csv"));
+  EXPECT_NE(c.out.find("no ground truth in " + without.string()), std::string::npos) << c.out;
+  const size_t undefined = c.out.find("undefined, nan in sweep.csv and not plotted: ");
+  ASSERT_NE(undefined, std::string::npos) << c.out;
+  const std::string listed = c.out.substr(undefined, c.out.find(';', undefined) - undefined);
+  for (const char* name : {"eps_p", "eps_R", "U_p", "worst_position_mm", "theorem1_eps_p"})
+    EXPECT_NE(listed.find(name), std::string::npos) << name << " not listed: " << listed;
+  for (const char* name : {"eps_p_measured", "disagreement_mm", "last_quarter_step_mm"})
+    EXPECT_EQ(listed.find(name), std::string::npos) << name << " listed: " << listed;
+
+  c = test::run_netvmo(
+      "sweep " + with.string() + " --out " + ref.string() + " --ks 0,5,50 --no-plot", *dir_);
+  ASSERT_EQ(c.code, 0) << c.err;
+  EXPECT_EQ(c.out.find("no ground truth"), std::string::npos) << c.out;
+  auto a = read_sweep_csv(out / "sweep.csv"), b = read_sweep_csv(ref / "sweep.csv");
+  ASSERT_EQ(a["k_s"].size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    for (const char* name :
+         {"eps_p", "eps_R", "U_p", "U_R", "worst_position_mm", "theorem1_eps_p", "theorem1_eps_R"})
+      EXPECT_TRUE(std::isnan(a[name][i])) << name << " at k_s " << a["k_s"][i];
+    if (a["k_s"][i] > 0) {
+      for (const char* name : {"eps_p", "eps_R", "U_p", "worst_position_mm"})
+        EXPECT_TRUE(std::isfinite(b[name][i])) << name << " with truth";
+    }
+    for (const char* name : {"eps_p_measured", "eps_R_measured", "disagreement_mm",
+                             "disagreement_deg", "last_quarter_step_mm", "last_quarter_step_deg"}) {
+      EXPECT_EQ(std::isnan(a[name][i]), std::isnan(b[name][i])) << name;
+      if (!std::isnan(b[name][i])) {
+        EXPECT_EQ(a[name][i], b[name][i]) << name;
+      }
+    }
+    if (a["k_s"][i] == 50) {  // every camera has an estimate: everything measured is defined
+      for (const char* name : {"eps_p_measured", "eps_R_measured", "disagreement_mm"})
+        EXPECT_TRUE(std::isfinite(a[name][i]) && a[name][i] >= 0) << name << " " << a[name][i];
+    }
+  }
+  // The mutual term pulls the cameras together: at k_s = 50 they disagree less than at 5.
+  EXPECT_LT(a["disagreement_mm"][2], a["disagreement_mm"][1]);
+}
+
+// A plot that fails leaves nothing under the result's name (and a previous result intact), and
+// the message is gnuplot's own, not a guess about a missing package.
+TEST_F(SmallDataset, SweepWhosePlotFailsLeavesNothingUnderItsName) {
+  const fs::path ds = *dir_ / "rendered", out = *dir_ / "sweep_plot_fails";
+  auto c = run_netvmo_with_failing_gnuplot(
+      "sweep " + ds.string() + " --out " + out.string() + " --ks 0,50", *dir_);
+  EXPECT_NE(c.code, 0);
+  // One error line (after the progress bars), naming the plot under OUT and gnuplot's message.
+  const size_t error = c.err.find("netvmo sweep: error: ");
+  ASSERT_NE(error, std::string::npos) << c.err;
+  const std::string line = c.err.substr(error);
+  EXPECT_EQ(line.find((out / "sweep.png").string() + ": gnuplot failed: "), 21u) << line;
+  EXPECT_NE(line.find("all points y value undefined"), std::string::npos) << line;
+  EXPECT_EQ(line.find("installed"), std::string::npos) << line;
+  EXPECT_EQ(std::count(line.begin(), line.end(), '\n'), 1) << line;
+  EXPECT_FALSE(fs::exists(out)) << "left " << out;
+  for (const auto& e : fs::directory_iterator(*dir_)) {
+    const std::string n = e.path().filename().string();
+    if (n.rfind(out.filename().string(), 0) == 0) {
+      EXPECT_EQ(n, out.filename().string() + ".lock") << "left " << n;
+    }
+  }
+  // Over a previous result: it stays as it was.
+  c = test::run_netvmo("sweep " + ds.string() + " --out " + out.string() + " --ks 0,50 --no-plot",
+                       *dir_);
+  ASSERT_EQ(c.code, 0) << c.err;
+  const std::string before = slurp(out / "sweep.csv");
+  c = run_netvmo_with_failing_gnuplot(
+      "sweep " + ds.string() + " --out " + out.string() + " --ks 0,5,50", *dir_);
+  EXPECT_NE(c.code, 0);
+  EXPECT_EQ(slurp(out / "sweep.csv"), before);
+  EXPECT_FALSE(fs::exists(out / "sweep.png"));
+  // netvmo run's plots likewise: the message names the plot under OUT, and OUT is not there.
+  const fs::path run_out = *dir_ / "run_plot_fails";
+  c = run_netvmo_with_failing_gnuplot(
+      "run " + ds.string() + " --out " + run_out.string() + " --no-overlays", *dir_);
+  EXPECT_NE(c.code, 0);
+  EXPECT_NE(c.err.find("netvmo run: error: " + (run_out / "energies.png").string() +
+                       ": gnuplot failed: "),
+            std::string::npos)
+      << c.err;
+  EXPECT_FALSE(fs::exists(run_out));
 }
 
 // On rendered images with exact relative poses the zero-offset estimator ends every camera,

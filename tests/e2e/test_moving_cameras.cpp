@@ -39,7 +39,7 @@ run::PoseError final_errors(const run::ImageRunResult& r, std::vector<run::PoseE
 
 // Cameras 1-3 move (a rail, a pan, an arc) and see the static tag; camera 4 moves, drifts and
 // never sees it. With V_wi every camera ends within 1 cm and 0.5 degrees of g*; with V_wi = 0
-// the estimates lag behind the cameras' motion (measured: README "Moving cameras").
+// the estimates lag behind the cameras' motion (measured: docs/images.md, "Moving cameras").
 TEST(EndToEnd, MovingCamerasConvergeToGStarAndNeedTheirVelocity) {
   const fs::path root = test::scratch_dir("moving_cameras");
   const fs::path dir = root / "ds";  // outputs go beside it: an --out inside a dataset is refused
@@ -93,8 +93,8 @@ TEST(EndToEnd, MovingCamerasConvergeToGStarAndNeedTheirVelocity) {
       "worst final error to g*: with V_wi %.2f mm / %.3f deg, V_wi = 0 %.2f mm / %.3f deg\n",
       1e3 * w.position, w.orientation_deg, 1e3 * w0.position, w0.orientation_deg);
   // Measured (spp 1): 2.6 mm / 0.33 deg with V_wi, 19.8 mm / 2.40 deg without, 7.6 and 7.3
-  // times worse (README "Moving cameras"); the test asks for 5 times and for the V_wi = 0 run to
-  // miss the 1 cm bound that the run with V_wi meets.
+  // times worse (docs/images.md, "Moving cameras"); the test asks for 5 times and for the V_wi = 0
+  // run to miss the 1 cm bound that the run with V_wi meets.
   EXPECT_GT(w0.position, 5.0 * w.position);
   EXPECT_GT(w0.orientation_deg, 5.0 * w.orientation_deg);
   EXPECT_GT(w0.position, 0.01);

@@ -95,7 +95,8 @@ TEST(Runner, JacobianModelConvergesFromPnpInitialisation) {
   std::mt19937 rng(3);
   for (int k = 0; k < 300; ++k) r.process(k, k / 30.0, 1.0 / 30, s.inputs(rng, 0.0));
   const auto& last = r.history().back();
-  // The feature model's equilibrium is biased by its first-order reconstruction (README).
+  // The feature model's equilibrium is biased by its first-order reconstruction (docs/observer.md,
+  // "Simulation", exact vs jacobian).
   EXPECT_LT(max_position_error(last, *last.g_star), 0.03);
   EXPECT_LT(max_orientation_error_deg(last, *last.g_star), 1.5);
 }

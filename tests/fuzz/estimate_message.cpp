@@ -48,8 +48,8 @@ bool deserialize(const std::uint8_t* data, std::size_t size, netvmo_msg_Estimate
   // The payload after the header, in 8-byte aligned memory as Cyclone's serdata keeps it, with
   // 8 bytes of slack and a guard after it. Cyclone 0.10.2's normalize byte-swaps the 8-byte
   // field that straddles the end of a truncated big-endian XCDR2 payload before rejecting it
-  // (corpus entry cyclone_xcdr2_bswap_overrun; README "Hardening"): the slack absorbs that, and a
-  // write past the slack stops the fuzzer.
+  // (corpus entry cyclone_xcdr2_bswap_overrun; docs/hardening.md, "Findings, fixed"): the slack
+  // absorbs that, and a write past the slack stops the fuzzer.
   const uint32_t n = static_cast<uint32_t>(size - 4);
   constexpr std::size_t kSlack = 8, kGuard = 64;
   constexpr unsigned char kPattern = 0x5a;

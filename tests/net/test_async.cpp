@@ -23,7 +23,8 @@ namespace {
 constexpr int kFrames = 30;
 // A kill and restart in mid-run, with frames left to re-converge.
 constexpr int kRestartFrames = 45;
-// The run with 30 % drops and 50 ms delays settles more slowly (README): 2 s of camera time.
+// The run with 30 % drops and 50 ms delays settles more slowly (docs/processes.md, "Loss and delay
+// in async mode"): 2 s of camera time.
 constexpr int kSettleFrames = 60;
 
 // Every camera's networked estimate ends within 1 cm and 1 degree of g*.
@@ -79,7 +80,8 @@ TEST_F(Async, NodesConvergeWithDropsDelaysAndAKilledNode) {
   {  // 30 % of the received messages dropped (seeded), the others 50 ms (wall) late: 12.5 ms of
      // camera time at --speed 0.25, ~8 rounds of h = 1/630 s. A constant delay of the
      // neighbours' values does not move the equilibrium of a static target and drops only slow
-     // the consensus (README, "Asynchronous operation"), so the same bound applies once settled.
+     // the consensus (docs/processes.md, "Asynchronous operation"), so the same bound applies once
+     // settled.
     const auto b = net_test::netvmo_bounded(
         common + " --drop 0.3 --delay 50 --seed 7 --out " + (dir / "b").string(), dir, 90);
     ASSERT_EQ(b.code, 0) << b.out << b.err;
@@ -137,13 +139,13 @@ TEST_F(Async, NodesConvergeWithDropsDelaysAndAKilledNode) {
 // nothing before.
 //
 // No jump. In the forward-Euler step every estimate moves to a convex combination of itself,
-// its measurement and its neighbours' latest estimates (h (k_e + 2 k_s d_max) <= 1, README
-// "Asynchronous operation"): no step takes an estimate outside the hull of those values. A node
-// that leaves freezes at its last value, inside its neighbours' hull, so they move no more than
-// they would anyway. A node that returns starts at its neighbours' average x_bar; from there its
-// own measurement x_o pulls it, against the mutual term of its d neighbours, to the quasi-static
-// offset e = k_e / (k_e + k_s d) |x_o - x_bar| (the offset a seeing camera keeps in consensus;
-// 3.2 % of the distance to its fictitious target with d = 3), and its neighbours, convex
+// its measurement and its neighbours' latest estimates (h (k_e + 2 k_s d_max) <= 1,
+// docs/processes.md, "Asynchronous operation"): no step takes an estimate outside the hull of those
+// values. A node that leaves freezes at its last value, inside its neighbours' hull, so they move
+// no more than they would anyway. A node that returns starts at its neighbours' average x_bar; from
+// there its own measurement x_o pulls it, against the mutual term of its d neighbours, to the
+// quasi-static offset e = k_e / (k_e + k_s d) |x_o - x_bar| (the offset a seeing camera keeps in
+// consensus; 3.2 % of the distance to its fictitious target with d = 3), and its neighbours, convex
 // combinations, follow it by at most that much. So each neighbour's largest per-frame change
 // (position and angle, full precision, nodes/node_<id>.csv) in the four frames from the kill
 // and from the return must not exceed its largest per-frame change in the other frames plus e

@@ -115,7 +115,8 @@ TEST(ZeroOffset, FollowsAChangeOfTheVisibleSetAndHoldsWhenAllAreBlind) {
     EXPECT_EQ((zo.obs.estimates_world()[size_t(i)].matrix() - held[size_t(i)].matrix()).norm(), 0)
         << i;
   // What is held is the estimate as x_delta fell below 1/(2n): near the last g*, off by about
-  // (k_e/k_s) times the targets' spread (~0.2 m here, so a few mm; README).
+  // (k_e/k_s) times the targets' spread (~0.2 m here, so a few mm; docs/observer.md, "Start and
+  // hold").
   EXPECT_LT(zo.worst(g_new), 0.005);
 }
 

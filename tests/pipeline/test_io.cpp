@@ -207,6 +207,93 @@ TEST(Calibration, RosCameraInfoEqualsOpenCv) {
   EXPECT_EQ(cv::norm(s.dist - c.dist), 0.0);
 }
 
+// An OpenCV FileStorage file that also carries ROS's distortion_model key (as some converters
+// write) is read as what it is, OpenCV's, with the key checked against its coefficients; the
+// camera_info form of the same camera reads the same. The file's format is picked by content.
+TEST(Calibration, OpenCvFileWithDistortionModelIsReadAsOpenCv) {
+  const auto dir = testing::fresh_dir("calib_cv_model");
+  const std::string cv_head =
+      "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n"
+      "camera_matrix: !!opencv-matrix\n  rows: 3\n  cols: 3\n  dt: d\n"
+      "  data: [610.25, 0, 321.7, 0, 605.5, 238.4, 0, 0, 1]\n";
+  const std::string cv_dist =
+      "distortion_coefficients: !!opencv-matrix\n  rows: 1\n  cols: 5\n  dt: d\n"
+      "  data: [-0.12, 0.05, 0.0004, -0.0003, 0.0021]\n";
+  write(dir / "cv.yaml", cv_head + "distortion_model: plumb_bob\n" + cv_dist);
+  write(dir / "ros.yaml", ros_camera_info());
+  const CalibrationFormat f = detect_yaml_calibration_format(dir / "cv.yaml");
+  EXPECT_EQ(f.kind, CalibrationFormat::opencv) << f.why;
+  EXPECT_NE(f.why.find("%YAML:1.0 (line 1)"), std::string::npos) << f.why;
+  EXPECT_NE(f.why.find("distortion_model (line 10)"), std::string::npos) << f.why;
+  EXPECT_FALSE(looks_like_ros_camera_info(dir / "cv.yaml"));
+  EXPECT_EQ(detect_yaml_calibration_format(dir / "ros.yaml").kind,
+            CalibrationFormat::ros_camera_info);
+  const Calibration c = load_calibration_yaml(dir / "cv.yaml");
+  const Calibration r = load_calibration_yaml(dir / "ros.yaml");
+  EXPECT_EQ(c.width, r.width);
+  EXPECT_EQ(c.height, r.height);
+  EXPECT_EQ(cv::norm(cv::Mat(c.K), cv::Mat(r.K)), 0.0);
+  EXPECT_EQ(cv::norm(c.dist - r.dist), 0.0);
+  EXPECT_DOUBLE_EQ(c.dist[0], -0.12);
+  EXPECT_FALSE(c.fisheye);
+  // Without the header, the tag alone marks it as OpenCV's (whose parser then wants the
+  // header, and the message says which format it was read as); equidistant makes it fisheye.
+  const std::string tagged =
+      "image_width: 640\nimage_height: 480\ndistortion_model: equidistant\n"
+      "camera_matrix: !!opencv-matrix\n  rows: 3\n  cols: 3\n  dt: d\n"
+      "  data: [610.25, 0, 321.7, 0, 605.5, 238.4, 0, 0, 1]\n"
+      "distortion_coefficients: !!opencv-matrix\n  rows: 1\n  cols: 4\n  dt: d\n"
+      "  data: [0.1, -0.02, 0.003, -0.0004]\n";
+  write(dir / "tag.yaml", tagged);
+  EXPECT_EQ(detect_yaml_calibration_format(dir / "tag.yaml").kind, CalibrationFormat::opencv);
+  expect_input_error([&] { load_calibration_yaml(dir / "tag.yaml"); },
+                     {"tag.yaml",
+                      "read as an OpenCV FileStorage file: it has OpenCV's "
+                      "!!opencv-matrix tag (line 4)"});
+  write(dir / "tag.yaml", "%YAML:1.0\n" + tagged);
+  const Calibration e = load_calibration_yaml(dir / "tag.yaml");
+  EXPECT_TRUE(e.fisheye);
+  EXPECT_DOUBLE_EQ(e.dist[3], -0.0004);
+}
+
+// A file that is neither form (OpenCV's header and matrix, but a camera_info matrix for the
+// coefficients), or whose distortion_model disagrees with its coefficients, is refused with one
+// line naming the file and the key, and saying which format it was read as and why.
+TEST(Calibration, MixedOrContradictoryCalibrationNamesFileKeyAndFormat) {
+  const auto dir = testing::fresh_dir("calib_mixed");
+  const std::string head =
+      "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n"
+      "camera_matrix: !!opencv-matrix\n  rows: 3\n  cols: 3\n  dt: d\n"
+      "  data: [610.25, 0, 321.7, 0, 605.5, 238.4, 0, 0, 1]\ndistortion_model: plumb_bob\n";
+  write(dir / "mixed.yaml", head +
+                                "distortion_coefficients:\n  rows: 1\n  cols: 5\n"
+                                "  data: [-0.12, 0.05, 0.0004, -0.0003, 0.0021]\n");
+  expect_input_error([&] { load_calibration_yaml(dir / "mixed.yaml"); },
+                     {"mixed.yaml: distortion_coefficients: no dt", "ROS camera_info matrix",
+                      "read as an OpenCV FileStorage file", "%YAML:1.0 (line 1)"});
+  write(dir / "count.yaml",
+        head +
+            "distortion_coefficients: !!opencv-matrix\n  rows: 1\n  cols: 8\n"
+            "  dt: d\n  data: [-0.12, 0.05, 0.0004, -0.0003, 0.0021, 0.1, 0, 0]\n");
+  expect_input_error([&] { load_calibration_yaml(dir / "count.yaml"); },
+                     {"count.yaml: distortion_coefficients: distortion_model plumb_bob takes",
+                      "got 8", "read as an OpenCV FileStorage file"});
+  write(dir / "model.yaml",
+        std::string(head).replace(head.find("plumb_bob"), 9, "kannala_brandt") +
+            "distortion_coefficients: !!opencv-matrix\n  rows: 1\n  cols: 5\n  dt: d\n"
+            "  data: [-0.12, 0.05, 0.0004, -0.0003, 0.0021]\n");
+  expect_input_error([&] { load_calibration_yaml(dir / "model.yaml"); },
+                     {"model.yaml: distortion_model: 'kannala_brandt' is not supported"});
+  // A camera_info with an OpenCV key in it is refused as a camera_info, saying why it was one.
+  write(dir / "ros.yaml",
+        ros_camera_info("plumb_bob", "[-0.12, 0.05, 0.0004, -0.0003, 0.0021]",
+                        "[1, 0, 0, 0, 1, 0, 0, 0, 1]",
+                        "[610.25, 0, 321.7, 0, 605.5, 238.4, 0, 0, 1]", "lens_model: pinhole\n"));
+  expect_input_error([&] { load_calibration_yaml(dir / "ros.yaml"); },
+                     {"ros.yaml", "lens_model", "read as a ROS camera_info file",
+                      "distortion_model key (line 8)"});
+}
+
 // rational_polynomial (8 coefficients) is OpenCV's rational model: the same as an OpenCV file
 // with 8 coefficients, and undistortion inverts it.
 TEST(Calibration, RosRationalPolynomial) {

@@ -142,6 +142,44 @@ TEST(OutputSafety, ASecondCommandOnTheSameOutputFailsPlainly) {
   }
 }
 
+// Every path a command prints names what is there when it has ended: the demo, run and sweep
+// build their output in a temporary sibling, but print (and record in summary.json) the final
+// names.
+TEST(OutputSafety, PrintedPathsExistWhenTheCommandEnds) {
+  const auto dir = testing::fresh_dir("printed_paths");
+  // The number of paths printed under dir, each of which must exist.
+  const auto check = [&](const test::CliResult& c, const std::string& what) {
+    EXPECT_EQ(c.code, 0) << what << ": " << c.err;
+    EXPECT_EQ(c.out.find(".partial"), std::string::npos) << what << ": " << c.out;
+    int paths = 0;
+    std::istringstream words(c.out);
+    for (std::string w; words >> w;) {
+      if (w.rfind(dir.string(), 0) != 0) continue;
+      while (!w.empty() && (w.back() == ':' || w.back() == ',' || w.back() == '/')) w.pop_back();
+      EXPECT_TRUE(fs::exists(w)) << what << " printed " << w << " which does not exist";
+      ++paths;
+    }
+    return paths;
+  };
+  const fs::path demo = dir / "demo";
+  auto c = test::run_netvmo("demo --out " + demo.string() + " --frames 3", dir, 300);
+  EXPECT_GE(check(c, "demo"), 6) << c.out;  // dataset (3 times), results, mosaic and two plots
+  EXPECT_NE(c.out.find((demo / "dataset").string() + ": 3 frames"), std::string::npos) << c.out;
+  const auto s = nlohmann::json::parse(test::slurp(demo / "summary.json"));
+  EXPECT_EQ(s["dataset"].get<std::string>(), (demo / "dataset").string());
+  c = test::run_netvmo("run " + (demo / "dataset").string() + " --out " + (dir / "run").string(),
+                       dir, 300);
+  EXPECT_GE(check(c, "run"), 1) << c.out;
+  for (int i = 0; i < 2; ++i) {  // detected, then reused from the previous result
+    c = test::run_netvmo(
+        "sweep " + (demo / "dataset").string() + " --out " + (dir / "sweep").string() + " --ks 50",
+        dir, 300);
+    EXPECT_GE(check(c, "sweep"), 2) << c.out;
+  }
+  EXPECT_NE(c.out.find("reusing " + (dir / "sweep" / "inputs.csv").string()), std::string::npos)
+      << c.out;
+}
+
 TEST(OutputSafety, TheOutputFolderMayNotBeOrHoldOrLieInTheDataset) {
   const auto dir = testing::fresh_dir("apart");
   testing::write_synth_dataset(dir / "ds", testing::simple_dataset_spec(2, 3));

@@ -4,7 +4,7 @@
 // some clutter and Gaussian noise (sigma 2), drawn by warping the tag bitmap with the
 // homography of its projected corners (exact geometry is tested elsewhere; this is for timing).
 // BM_FrontEndSequence: rendered sequences tracked frame by frame, before / after the
-// full-resolution and shadow searches (README, recall against tag size).
+// full-resolution and shadow searches (docs/frontend.md, "Small tags: recall against tag size").
 #include <apriltag/apriltag.h>
 #include <apriltag/tag36h11.h>
 #include <benchmark/benchmark.h>

@@ -10,8 +10,8 @@
 //   dx_i/dt   = -alpha (x_i - r_i) - beta sum_j a_ij (x_i - x_j) - sum_j a_ij (eta_i - eta_j)
 //   deta_i/dt =  alpha beta sum_j a_ij (x_i - x_j).
 // For constant inputs on a connected graph every x_i converges to the average (1/n) sum_j r_j
-// from any initial x, eta (proof in README.md, "The zero-offset estimator"). The estimate is the
-// ratio of the first 12 components to the 13th, x_delta,i -> |V_f|/n:
+// from any initial x, eta (proof in docs/observer.md, "The zero-offset estimator"). The estimate is
+// the ratio of the first 12 components to the 13th, x_delta,i -> |V_f|/n:
 //   p_bar_w,i = x_p,i / x_delta,i -> (1/|V_f|) sum_{j in V_f} p_wo,j = p*,
 //   R_bar_w,i = proj_SO(3)(x_R,i)  -> proj_SO(3)(sum_{j in V_f} R_wo,j) = R*  (eq:g_ave),
 // the projection being invariant to the positive factor x_delta,i. While x_delta,i is below the

@@ -54,6 +54,12 @@ cv::Mat read_matrix(const cv::FileNode& n, const std::string& file, const char* 
   if (r < 1 || c < 1 || r * c > max_elements)
     throw InputError(what + "expected at most " + std::to_string(max_elements) +
                      " numbers, got rows " + std::to_string(r) + " x cols " + std::to_string(c));
+  // A matrix without its element type is a ROS camera_info matrix (rows, cols, data) in a file
+  // that is otherwise OpenCV's: OpenCV would read it as a plain map and fail on the conversion.
+  if (const cv::FileNode dt = n["dt"]; dt.empty() || dt.isNone())
+    throw InputError(what +
+                     "no dt: a ROS camera_info matrix (rows, cols, data) in an OpenCV "
+                     "FileStorage file (an opencv-matrix has rows, cols, dt and data)");
   cv::Mat m;
   n >> m;
   return m;
@@ -252,6 +258,35 @@ Calibration load_calibration_opencv(const fs::path& path) {
     if (n != 4 && n != 5 && n != 8 && n != 12 && n != 14)
       throw InputError(file + ": distortion_coefficients: expected 4, 5 or 8 numbers, got " +
                        std::to_string(n));
+    // distortion_model (ROS camera_info's key, which some converters also write into OpenCV
+    // files): must agree with the coefficients and lens_model.
+    if (const cv::FileNode dm = fsr["distortion_model"]; !dm.empty() && !dm.isNone()) {
+      const std::string model = dm.isString() ? std::string(dm) : std::string("(not a string)");
+      const char* expected = nullptr;
+      bool ok = false;
+      if (model == "plumb_bob") {
+        ok = !c.fisheye && (n == 4 || n == 5);
+        expected = "4 or 5 pinhole coefficients (k1 k2 p1 p2 [k3])";
+      } else if (model == "rational_polynomial") {
+        ok = !c.fisheye && n == 8;
+        expected = "8 pinhole coefficients (k1 k2 p1 p2 k3 k4 k5 k6)";
+      } else if (model == "equidistant") {
+        ok = n == 4;
+        expected = "4 fisheye coefficients (k1..k4)";
+        if (ok && !c.fisheye && !fsr["lens_model"].empty())
+          throw InputError(file +
+                           ": distortion_model: equidistant contradicts lens_model: pinhole");
+        c.fisheye = true;
+      } else {
+        throw InputError(file + ": distortion_model: '" + model +
+                         "' is not supported (supported: plumb_bob, rational_polynomial, "
+                         "equidistant)");
+      }
+      if (!ok)
+        throw InputError(file + ": distortion_coefficients: distortion_model " + model + " takes " +
+                         expected + ", got " + std::to_string(n) +
+                         (c.fisheye && model != "equidistant" ? " with lens_model: fisheye" : ""));
+    }
     for (int i = 0; i < n; ++i) {
       const double v = D.at<double>(0, i);
       if (i < 5)
@@ -301,15 +336,59 @@ std::vector<double> ros_matrix(MapReader& parent, const std::string& key, int ro
 
 }  // namespace
 
-bool looks_like_ros_camera_info(const fs::path& path) {
+CalibrationFormat detect_yaml_calibration_format(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   std::string line;
-  while (std::getline(in, line)) {
-    if (line.rfind("distortion_model", 0) != 0) continue;
-    const size_t colon = line.find_first_not_of(" \t", 16);
-    if (colon != std::string::npos && line[colon] == ':') return true;
+  // line[at..] starts with key, then optional blanks and ':'.
+  const auto is_key = [](const std::string& l, size_t at, const char* key) {
+    const size_t len = std::strlen(key);
+    if (l.compare(at, len, key) != 0) return false;
+    const size_t colon = l.find_first_not_of(" \t", at + len);
+    return colon != std::string::npos && l[colon] == ':';
+  };
+  std::string opencv_mark;
+  size_t ros_line = 0;
+  for (size_t line_no = 1; std::getline(in, line); ++line_no) {
+    const std::string where = " (line " + std::to_string(line_no) + ")";
+    if (line_no == 1 && line.rfind("%YAML:", 0) == 0 && opencv_mark.empty())
+      opencv_mark =
+          "it starts with OpenCV's " + line.substr(0, std::min<size_t>(line.size(), 9)) + where;
+    const size_t first = line.find_first_not_of(" \t");
+    if (first == std::string::npos || line[first] == '#') continue;
+    if (opencv_mark.empty() && line.find("!!opencv-matrix") != std::string::npos)
+      opencv_mark = "it has OpenCV's !!opencv-matrix tag" + where;
+    if (opencv_mark.empty() && first > 0 && is_key(line, first, "dt"))
+      opencv_mark = "it has an OpenCV matrix's dt key" + where;
+    if (!ros_line && first == 0 && is_key(line, 0, "distortion_model")) ros_line = line_no;
   }
-  return false;
+  if (!opencv_mark.empty())
+    return {
+        CalibrationFormat::opencv,
+        opencv_mark + (ros_line ? ", so its distortion_model (line " + std::to_string(ros_line) +
+                                      ") is read as OpenCV's, checked against the coefficients"
+                                : std::string())};
+  if (ros_line)
+    return {CalibrationFormat::ros_camera_info,
+            "it has a top-level distortion_model key (line " + std::to_string(ros_line) +
+                ") and no mark of OpenCV FileStorage (%YAML:1.0, !!opencv-matrix, dt)"};
+  return {CalibrationFormat::opencv,
+          "it has no top-level distortion_model key (ROS camera_info's)"};
+}
+
+bool looks_like_ros_camera_info(const fs::path& path) {
+  return detect_yaml_calibration_format(path).kind == CalibrationFormat::ros_camera_info;
+}
+
+Calibration load_calibration_yaml(const fs::path& path) {
+  if (!fs::is_regular_file(path)) throw InputError(path.string() + ": calibration file not found");
+  const CalibrationFormat format = detect_yaml_calibration_format(path);
+  try {
+    return format.kind == CalibrationFormat::ros_camera_info ? load_calibration_ros(path)
+                                                             : load_calibration_opencv(path);
+  } catch (const InputError& e) {
+    throw InputError(std::string(e.what()) + " [read as " + format.name() + ": " + format.why +
+                     "]");
+  }
 }
 
 Calibration load_calibration_ros(const fs::path& path) {

@@ -64,6 +64,7 @@ bool legacy_output(const fs::path& dir, const std::string& command) {
       {"merge", {"summary.json", "estimates.csv", "messages.json"}},
       {"render", {"network.yaml", "truth.csv", "target.csv", "truth_cameras.csv"}},
       {"detect", {"detections.csv"}},
+      {"sweep", {"sweep.csv", "inputs.csv"}},
       {"simulate", {"summary.json", "energies.csv", "orientation_x.csv"}},
   };
   for (const auto& [name, files] : kFiles) {

@@ -72,7 +72,8 @@ std::optional<std::string> step_factor_warning(int substeps, double step_factor)
 }
 
 int checked_rounds(double dt, double k_e, double k_s, int max_degree, int rounds) {
-  // Gershgorin: lambda_max(k_e Delta + k_s L) <= k_e + 2 k_s d_max (README, "Discretisation").
+  // Gershgorin: lambda_max(k_e Delta + k_s L) <= k_e + 2 k_s d_max (docs/observer.md,
+  // "Discretisation and stability").
   const double bound = k_e + 2.0 * k_s * max_degree;
   if (!std::isfinite(bound) || !(k_e > 0) || !(k_s >= 0))
     throw InputError("--ke " + std::to_string(k_e) + ", --ks " + std::to_string(k_s) +

@@ -152,7 +152,7 @@ std::optional<RecordedInputs> read_inputs_cache(const fs::path& file,
 }
 
 SweepContext sweep_context(const io::NetworkConfig& net, const RecordedInputs& in) {
-  SweepContext c{network_graph(net), {}, 0.0, 0, {}, 0};
+  SweepContext c{network_graph(net), {}, 0.0, 0, {}, 0, false, {}, 0};
   for (const auto& cam : net.cameras) c.g_wi.push_back(cam.g_wi);
   c.W = obs::paper_W(c.graph).value;
   c.diameter = c.graph.diameter();
@@ -164,7 +164,16 @@ SweepContext sweep_context(const io::NetworkConfig& net, const RecordedInputs& i
     }
     if (!fict.empty()) c.spread = obs::spread(fict, obs::average_pose(fict));
     c.n_visible = static_cast<int>(fict.size());
+    std::vector<SE3> measured;  // the same through the measured g_io (PnP)
+    for (size_t i = 0; i < in.frames.back().size(); ++i) {
+      const auto& z = in.frames.back()[i];
+      if (z.delta && z.g_io_pnp) measured.push_back(c.g_wi[i] * *z.g_io_pnp);
+    }
+    if (!measured.empty()) c.measured_spread = obs::spread(measured, obs::average_pose(measured));
+    c.n_measured = static_cast<int>(measured.size());
   }
+  for (const auto& frame : in.frames)
+    for (const auto& z : frame) c.truth = c.truth || z.g_io_true.has_value();
   return c;
 }
 
@@ -177,6 +186,8 @@ SweepPoint sweep_point(const SweepContext& c, RunnerSettings settings, const Rec
   p.rounds = runner.substeps(in.dt);
   p.step_factor = runner.step_factor(in.dt);
   p.eps_p = p.eps_R = p.U_p = p.U_R = p.worst_position_m = p.worst_orientation_deg = nan;
+  p.eps_p_measured = p.eps_R_measured = p.disagreement_m = p.disagreement_deg = nan;
+  if (!c.truth) p.eps_p_tail = p.eps_R_tail = nan;
   for (size_t k = 0; k < in.frames.size(); ++k)
     runner.process(static_cast<int>(k), k * in.dt, in.dt, in.frames[k], in.targets[k]);
   const auto& h = runner.history();
@@ -198,9 +209,47 @@ SweepPoint sweep_point(const SweepContext& c, RunnerSettings settings, const Rec
       p.worst_orientation_deg = std::max(p.worst_orientation_deg, e.orientation_deg);
     }
   }
+  // Without truth: against the measured average, between cameras, and from frame to frame.
+  for (size_t k = 0; k < h.size(); ++k) {
+    const auto& cams = h[k].cameras;
+    bool all = !cams.empty();
+    std::vector<SE3> est, measured;
+    for (const auto& cam : cams) {
+      all = all && cam.initialized;
+      est.push_back(cam.est_w);
+      if (cam.pnp_w) measured.push_back(*cam.pnp_w);
+    }
+    if (k >= tail && k > 0 && h[k - 1].cameras.size() == cams.size()) {
+      for (size_t i = 0; i < cams.size(); ++i) {
+        if (!cams[i].initialized || !h[k - 1].cameras[i].initialized) continue;
+        const auto e = pose_error(cams[i].est_w, h[k - 1].cameras[i].est_w);
+        p.last_quarter_step_m = std::max(p.last_quarter_step_m, e.position);
+        p.last_quarter_step_deg = std::max(p.last_quarter_step_deg, e.orientation_deg);
+      }
+    }
+    if (!all) continue;
+    if (h[k].central_w) {
+      const obs::EpsLevels eps =
+          obs::eps_levels(est, *h[k].central_w, obs::spread(measured, *h[k].central_w),
+                          static_cast<int>(measured.size()));
+      p.eps_p_measured = eps.eps_p;
+      p.eps_R_measured = eps.eps_R;
+    }
+    if (k + 1 == h.size()) {
+      p.disagreement_m = p.disagreement_deg = 0.0;
+      for (size_t i = 0; i < est.size(); ++i)
+        for (size_t j = i + 1; j < est.size(); ++j) {
+          const auto e = pose_error(est[i], est[j]);
+          p.disagreement_m = std::max(p.disagreement_m, e.position);
+          p.disagreement_deg = std::max(p.disagreement_deg, e.orientation_deg);
+        }
+    }
+  }
+  if (h.size() < 2) p.last_quarter_step_m = p.last_quarter_step_deg = nan;
   const double k_ratio =
       settings.k_s > 0 ? settings.k_e / settings.k_s : std::numeric_limits<double>::infinity();
-  p.bound = obs::theorem1_bound(k_ratio, c.spread, c.W, c.diameter, c.n_visible);
+  p.bound = c.truth ? obs::theorem1_bound(k_ratio, c.spread, c.W, c.diameter, c.n_visible)
+                    : obs::Theorem1Bound{nan, nan};
   return p;
 }
 
@@ -229,19 +278,54 @@ std::vector<double> parse_gain_list(const std::string& option, const std::string
 void write_sweep_csv(const fs::path& file, const std::vector<SweepPoint>& points) {
   io::AtomicFile f(file);
   f << "k_e,k_s,k,rounds,step_factor,eps_p,eps_R,eps_p_last_quarter,eps_R_last_quarter,U_p,U_R,"
-       "worst_position_mm,worst_orientation_deg,theorem1_eps_p,theorem1_eps_R\n";
-  char b[512];
+       "worst_position_mm,worst_orientation_deg,theorem1_eps_p,theorem1_eps_R,eps_p_measured,"
+       "eps_R_measured,disagreement_mm,disagreement_deg,last_quarter_step_mm,"
+       "last_quarter_step_deg\n";
+  char b[768];
   for (size_t i = 0; i < points.size(); ++i) {
     const auto& p = points[i];
     if (i && p.k_e != points[i - 1].k_e) f << '\n';  // one block per k_e (gnuplot's lines)
     std::snprintf(
-        b, sizeof b, "%g,%g,%.9g,%d,%.4g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,%.9g,%.9g\n",
+        b, sizeof b,
+        "%g,%g,%.9g,%d,%.4g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,"
+        "%.6g,%.6g\n",
         p.k_e, p.k_s, p.k_s > 0 ? p.k_e / p.k_s : std::numeric_limits<double>::infinity(), p.rounds,
         p.step_factor, p.eps_p, p.eps_R, p.eps_p_tail, p.eps_R_tail, p.U_p, p.U_R,
-        p.worst_position_m * 1000.0, p.worst_orientation_deg, p.bound.eps_p, p.bound.eps_R);
+        p.worst_position_m * 1000.0, p.worst_orientation_deg, p.bound.eps_p, p.bound.eps_R,
+        p.eps_p_measured, p.eps_R_measured, p.disagreement_m * 1000.0, p.disagreement_deg,
+        p.last_quarter_step_m * 1000.0, p.last_quarter_step_deg);
     f << b;
   }
   f.commit();
+}
+
+std::vector<SweepColumn> sweep_columns(const std::vector<SweepPoint>& points) {
+  using V = double (*)(const SweepPoint&);
+  const std::vector<std::pair<const char*, V>> cols = {
+      {"eps_p", [](const SweepPoint& p) { return p.eps_p; }},
+      {"eps_R", [](const SweepPoint& p) { return p.eps_R; }},
+      {"eps_p_last_quarter", [](const SweepPoint& p) { return p.eps_p_tail; }},
+      {"eps_R_last_quarter", [](const SweepPoint& p) { return p.eps_R_tail; }},
+      {"U_p", [](const SweepPoint& p) { return p.U_p; }},
+      {"U_R", [](const SweepPoint& p) { return p.U_R; }},
+      {"worst_position_mm", [](const SweepPoint& p) { return p.worst_position_m; }},
+      {"worst_orientation_deg", [](const SweepPoint& p) { return p.worst_orientation_deg; }},
+      {"theorem1_eps_p", [](const SweepPoint& p) { return p.bound.eps_p; }},
+      {"theorem1_eps_R", [](const SweepPoint& p) { return p.bound.eps_R; }},
+      {"eps_p_measured", [](const SweepPoint& p) { return p.eps_p_measured; }},
+      {"eps_R_measured", [](const SweepPoint& p) { return p.eps_R_measured; }},
+      {"disagreement_mm", [](const SweepPoint& p) { return p.disagreement_m; }},
+      {"disagreement_deg", [](const SweepPoint& p) { return p.disagreement_deg; }},
+      {"last_quarter_step_mm", [](const SweepPoint& p) { return p.last_quarter_step_m; }},
+      {"last_quarter_step_deg", [](const SweepPoint& p) { return p.last_quarter_step_deg; }},
+  };
+  std::vector<SweepColumn> out;
+  for (size_t c = 0; c < cols.size(); ++c) {
+    bool defined = false;
+    for (const auto& p : points) defined = defined || std::isfinite(cols[c].second(p));
+    out.push_back({cols[c].first, static_cast<int>(c) + 6, defined});
+  }
+  return out;
 }
 
 }  // namespace netvmo::run

@@ -230,10 +230,7 @@ Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera, bool k
     const fs::path cdir = dir / "calib";
     const fs::path yaml = cdir / (name + ".yaml"), yml = cdir / (name + ".yml"),
                    xml = cdir / (name + ".xml");
-    const auto load_yaml = [](const fs::path& p) {
-      return io::looks_like_ros_camera_info(p) ? io::load_calibration_ros(p)
-                                               : io::load_calibration_opencv(p);
-    };
+    const auto load_yaml = [](const fs::path& p) { return io::load_calibration_yaml(p); };
     if (fs::exists(yaml)) {
       cam.calib = load_yaml(yaml);
     } else if (fs::exists(yml)) {

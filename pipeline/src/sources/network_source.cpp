@@ -21,8 +21,10 @@ std::string fmt(double v) {
 
 class DatasetProvider final : public NetworkSource {
  public:
-  DatasetProvider(const fs::path& dir, std::optional<int> only_camera, bool keep_going)
-      : ds_(open_dataset(dir, only_camera, keep_going)) {
+  DatasetProvider(const fs::path& dir, std::optional<int> only_camera, bool keep_going,
+                  const fs::path& shown_as)
+      : ds_(open_dataset(dir, only_camera, keep_going)),
+        name_(shown_as.empty() ? dir.string() : shown_as.string()) {
     const fs::path cams = dir / "truth_cameras.csv";
     targets_.resize(ds_.network.targets.size());
     if (fs::exists(dir / "target.csv") && fs::exists(cams)) {
@@ -84,7 +86,7 @@ class DatasetProvider final : public NetworkSource {
   std::optional<double> listed_time(size_t i, int frame) const override {
     return ds_.listed_time(i, frame);
   }
-  std::string name() const override { return ds_.dir.string(); }
+  std::string name() const override { return name_; }
   // target.csv's times have 6 decimals: a time within half of that is the row's.
   std::optional<obs::SE3> target_truth_at(double t, size_t target) const override {
     const TargetTruth& tt = targets_.at(target);
@@ -112,6 +114,7 @@ class DatasetProvider final : public NetworkSource {
   }
 
   Dataset ds_;
+  std::string name_;  // name(): the dataset folder, or what it is shown as
   struct TargetTruth {
     std::map<int, obs::SE3> by_frame;
     std::vector<double> times;  ///< the file's rows in time order
@@ -218,9 +221,9 @@ void require_single_target(const NetworkSource& source, const std::string& what)
 }
 
 std::unique_ptr<NetworkSource> open_dataset_source(const fs::path& dir,
-                                                   std::optional<int> only_camera,
-                                                   bool keep_going) {
-  return std::make_unique<DatasetProvider>(dir, only_camera, keep_going);
+                                                   std::optional<int> only_camera, bool keep_going,
+                                                   const fs::path& shown_as) {
+  return std::make_unique<DatasetProvider>(dir, only_camera, keep_going, shown_as);
 }
 
 }  // namespace netvmo::sources

@@ -67,7 +67,7 @@ class Estimator {
   virtual void check(const ObserverSettings& s, const ErrorModel& model, int network_size) const;
   /// An upper bound on the spectral radius of the linearised dynamics for any graph of largest
   /// degree d_max: sub-steps h with h * rate_bound <= 1 are stable and non-oscillating for the
-  /// forward-Euler discretisation (README, "Discretisation and stability").
+  /// forward-Euler discretisation (docs/observer.md, "Discretisation and stability").
   virtual double rate_bound(const ObserverSettings& s, int max_degree) const = 0;
   /// A new measurement (cv.z) arrived; it is held until the next one.
   virtual void measured(const CameraView& cv, EstimatorState& st) const = 0;

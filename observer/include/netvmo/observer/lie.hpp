@@ -3,7 +3,7 @@
 // Equation labels refer to the paper "Vision-Based Cooperative Estimation of Averaged 3D
 // Target Pose under Imperfect Visibility" (Hatanaka, Nishi, Fujita); e.g. (eq:ER).
 //
-// Conventions (README.md, "Layout and conventions"):
+// Conventions (docs/extending.md, "Layout and conventions"):
 //  - g_ab maps coordinates in frame b to frame a, homogeneous [R p; 0 1].
 //  - Twists and error vectors are ordered [v; w] (position first), as in E_R(g) = [p; e_R(R)].
 #pragma once

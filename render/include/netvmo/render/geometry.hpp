@@ -3,8 +3,8 @@
 // exp and log) are observer/'s, the project's one Lie-group implementation, used here under
 // render's names.
 //
-// Conventions (README.md, "Layout and conventions"): g_ab maps frame-b coordinates to frame a;
-// rotations are rotation vectors (axis * angle); twists are ordered [v; w].
+// Conventions (docs/extending.md, "Layout and conventions"): g_ab maps frame-b coordinates to frame
+// a; rotations are rotation vectors (axis * angle); twists are ordered [v; w].
 #pragma once
 
 #include <Eigen/Core>

@@ -28,8 +28,9 @@ struct DetectorSettings {
   int bits_corrected = 2;           ///< error bits the decoder may correct (libapriltag default)
   /// libapriltag qtp.min_white_black_diff: local contrast (gray levels) below which a region is
   /// not thresholded. libapriltag's default is 5; 20 skips the quad fitting of sensor-noise
-  /// clusters (about 5x faster on 640x480 frames with noise sigma 2, see the README's front-end
-  /// benchmark) and still finds tags whose black/white contrast is 40 gray levels or more (tested).
+  /// clusters (about 5x faster on 640x480 frames with noise sigma 2, see docs/benchmarks.md,
+  /// "Front end") and still finds tags whose black/white contrast is 40 gray levels or more
+  /// (tested).
   int min_white_black_diff = 20;
   // Acceptance of the target tag
   int target_id = 0;  ///< the target's (primary) tag id
@@ -57,7 +58,7 @@ struct DetectorSettings {
   /// A side fails when the inner edge of its black border (measured where the adjacent data
   /// cell is white) lies further than this from one cell inside the side [px]. Measured on
   /// rendered frames: at most 0.49 px on fully visible tags, at least 0.68 px on quads with
-  /// a corner more than 1 px off (README, front end).
+  /// a corner more than 1 px off (docs/frontend.md, "What the table shows").
   double border_max_thickness_error = 0.6;
   /// Blur allowance of the thickness test [px of offset per px of measured blur]: when every
   /// measured side (at least 3, and every side with a white data cell next to it) looks thinner

@@ -83,10 +83,12 @@ struct TrackingSettings {
   int window_pad = 24;          ///< ... plus this many pixels on every side
   int full_frame_every = 30;    ///< a full-frame search at least this often (frames)
   /// Window searched at decimate 1 when the last tag's narrowest side is below this [px]
-  /// (0: never). 40 px covers the sizes decimate 2 misses (README, recall against tag size).
+  /// (0: never). 40 px covers the sizes decimate 2 misses (docs/frontend.md, "Small tags: recall
+  /// against tag size").
   double full_res_below_px = 40.0;
   /// Full-resolution acquisition pass every this many blind frames (0: never). 10 adds one
-  /// full-resolution search per 10 frames of a camera that sees nothing (README, ms/frame).
+  /// full-resolution search per 10 frames of a camera that sees nothing (docs/frontend.md, "Small
+  /// tags: recall against tag size", ms/frame).
   int acquire_every = 10;
   /// A second window search on a locally normalised copy when the window search fails.
   bool shadow_retry = true;

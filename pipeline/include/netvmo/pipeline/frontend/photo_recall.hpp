@@ -1,6 +1,6 @@
 // The front end judged against libapriltag on real photos: every tag libapriltag itself decodes
-// in a photo is a reference, and the front end should keep every fully visible one (README,
-// real photos; `netvmo detect --photos`).
+// in a photo is a reference, and the front end should keep every fully visible one
+// (docs/frontend.md, "Real photos"; `netvmo detect --photos`).
 #pragma once
 
 #include <array>

@@ -10,14 +10,16 @@
 //    (3x3), `distortion_coefficients` (4, 5 or 8 numbers; 12/14 accepted when the coefficients
 //    past the 8th are all zero); optional `lens_model`: pinhole (the default) or fisheye (then
 //    distortion_coefficients are cv::fisheye's 4, k1..k4; `netvmo render` writes the key only for
-//    fisheye cameras).
+//    fisheye cameras); optional `distortion_model` (as some converters write: plumb_bob,
+//    rational_polynomial or equidistant, checked against the coefficients and lens_model).
 //  - ROS camera_info YAML (as written by ROS's camera_calibration, read with yaml-cpp), detected
-//    by its top-level `distortion_model` key: `image_width`, `image_height`, `camera_name`,
-//    `camera_matrix`, `distortion_model` (plumb_bob: 5 coefficients, rational_polynomial: 8,
-//    equidistant: 4, cv::fisheye's k1..k4),
-//    `distortion_coefficients`, `rectification_matrix` (must be the identity: a monocular
-//    camera's; the images are used raw), `projection_matrix` (3x4, checked, not used: it
-//    describes rectified images), each matrix as {rows, cols, data}.
+//    by its top-level `distortion_model` key in a file without any mark of OpenCV FileStorage
+//    (the `%YAML:1.0` first line, the `!!opencv-matrix` tag, a matrix's `dt` key): `image_width`,
+//    `image_height`, `camera_name`, `camera_matrix`, `distortion_model` (plumb_bob: 5 coefficients,
+//    rational_polynomial: 8, equidistant: 4, cv::fisheye's k1..k4), `distortion_coefficients`,
+//    `rectification_matrix` (must be the identity: a monocular camera's; the images are used raw),
+//    `projection_matrix` (3x4, checked, not used: it describes rectified images), each matrix as
+//    {rows, cols, data}.
 //  - ViSP XML (vpXmlParserCamera), camera name `cam_<id>`: the projection with distortion if
 //    the file has one, otherwise without. ViSP's distortion model is a single radial term:
 //    u = u0 + px x (1 + kud r^2), which is OpenCV's model with k1 = kud and the others zero;
@@ -58,8 +60,24 @@ Calibration load_calibration_visp_xml(const std::filesystem::path& file,
                                       const std::string& camera_name);
 /// Reads a ROS camera_info YAML calibration file (see the top of this header).
 Calibration load_calibration_ros(const std::filesystem::path& file);
-/// True when a .yaml/.yml file is a ROS camera_info (a top-level `distortion_model` key).
+/// The format a .yaml/.yml calibration file is read as, and why (for messages).
+struct CalibrationFormat {
+  enum Kind { opencv, ros_camera_info } kind = opencv;
+  std::string why;  ///< e.g. "it starts with OpenCV's %YAML:1.0 (line 1)"
+  const char* name() const {
+    return kind == opencv ? "an OpenCV FileStorage file" : "a ROS camera_info file";
+  }
+};
+/// Picks the format of a .yaml/.yml calibration file by its content: any mark of OpenCV
+/// FileStorage (a first line `%YAML:1.0`, a `!!opencv-matrix` tag, a matrix's `dt` key) makes it
+/// OpenCV's, whatever else it holds (a `distortion_model` key too); otherwise a top-level
+/// `distortion_model` key makes it a ROS camera_info; otherwise OpenCV's.
+CalibrationFormat detect_yaml_calibration_format(const std::filesystem::path& file);
+/// True when detect_yaml_calibration_format() takes the file for a ROS camera_info.
 bool looks_like_ros_camera_info(const std::filesystem::path& file);
+/// Reads a .yaml/.yml calibration file in the format detect_yaml_calibration_format() picks;
+/// an error names the file and key and ends with the format it was read as and why.
+Calibration load_calibration_yaml(const std::filesystem::path& file);
 /// Writes an OpenCV FileStorage YAML calibration (the format `netvmo render` writes).
 void save_calibration_opencv(const std::filesystem::path& file, const Calibration& calib);
 

@@ -2,7 +2,7 @@
 // traffic on this machine: the loopback interface only, multicast off, unicast discovery with
 // the single peer 127.0.0.1. Every process netvmo starts gets it through CYCLONEDDS_URI.
 // Deployments over several machines adapt datasets/cyclonedds_multihost.template.xml instead
-// (README); netvmo never uses that template by itself.
+// (docs/processes.md, "Several machines"); netvmo never uses that template by itself.
 #pragma once
 
 #include <filesystem>

@@ -137,9 +137,10 @@ std::optional<std::string> step_factor_warning(int substeps, double step_factor)
 inline constexpr int kMaxRoundsPerFrame = 10000;
 
 /// The exchange rounds per frame of a run: `rounds`, or when 0 the smallest N with
-/// h (k_e + 2 k_s d_max) <= 1, h = dt / N (the README's step-factor rule). Throws InputError
-/// naming --rounds (or --ke/--ks when the gains need too many) with the stable range when the
-/// count exceeds kMaxRoundsPerFrame or the gains are not finite.
+/// h (k_e + 2 k_s d_max) <= 1, h = dt / N (the step-factor rule of docs/observer.md,
+/// "Discretisation and stability"). Throws InputError naming --rounds (or --ke/--ks when the gains
+/// need too many) with the stable range when the count exceeds kMaxRoundsPerFrame or the gains are
+/// not finite.
 int checked_rounds(double dt, double k_e, double k_s, int max_degree, int rounds);
 
 /// Body velocity that carries a camera from g_k to g_k1 in dt along the geodesic:

@@ -124,8 +124,12 @@ void require_single_target(const NetworkSource& source, const std::string& what)
 /// network.yaml's `targets:`, id its primary tag's) and truth_cameras.csv (true camera poses per
 /// frame, or one per camera in older datasets) when both are present; believed camera poses per
 /// frame from cameras.csv when present. `only_camera`, `keep_going`: see open_dataset.
+/// `shown_as`: the source's name() (summary.json's `dataset`) when not empty, e.g. the final path
+/// of a dataset that is read from an output folder's temporary copy (io::OutputDir) and is
+/// renamed when the command ends; empty: `dir`.
 std::unique_ptr<NetworkSource> open_dataset_source(const std::filesystem::path& dir,
                                                    std::optional<int> only_camera = {},
-                                                   bool keep_going = false);
+                                                   bool keep_going = false,
+                                                   const std::filesystem::path& shown_as = {});
 
 }  // namespace netvmo::sources
