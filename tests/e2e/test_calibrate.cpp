@@ -21,6 +21,7 @@
 #include <sys/wait.h>
 
 #include "netvmo/pipeline/calib/calibrate.hpp"
+#include "netvmo/pipeline/calib/g_star_uncertainty.hpp"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/dataset_writer.hpp"
 #include "netvmo/pipeline/io/render_scenario.hpp"
@@ -32,6 +33,7 @@
 
 namespace fs = std::filesystem;
 using namespace netvmo;
+using json = nlohmann::json;
 
 namespace {
 
@@ -247,11 +249,15 @@ TEST(Calibrate, FullLoopRenderCalibrateRun) {
   fs::copy_file(out / "network.yaml", calibrated / "network.yaml");
   fs::copy_file(out / "cameras.csv", calibrated / "cameras.csv");
 
-  const auto final_error = [](const fs::path& d) {
+  json localisation;
+  const auto final_error = [&](const fs::path& d) {
     auto provider = sources::open_dataset_source(d);
     run::ImageRunOptions o;
     o.progress = false;
     const auto r = run::run_images(*provider, o);
+    if (d == calibrated)
+      localisation = calib::g_star_localisation_summary(
+          *provider, r, calib::read_calibration_covariances(out / "calibration.json"), "x");
     const auto& last = r.history.back();
     EXPECT_TRUE(last.g_wo_true.has_value());
     obs::Vec3 worst = obs::Vec3::Zero();  // position [m], orientation [rad]
@@ -269,6 +275,18 @@ TEST(Calibrate, FullLoopRenderCalibrateRun) {
       1e3 * believed[0], believed[1] * 180 / M_PI, 1e3 * cal[0], cal[1] * 180 / M_PI);
   EXPECT_LE(cal[0], believed[0]);
   EXPECT_LE(cal[1], believed[1]);
+  // The calibration's own prediction of g*'s distance to the truth: the measured distance is
+  // |N(0, S)| with RMS sqrt(tr S); above 5 x that only with probability < 1e-4 (3 dof).
+  ASSERT_TRUE(localisation.contains("final")) << localisation.dump();
+  const auto& f = localisation["final"];
+  std::printf("g* to the truth: %.2f mm measured, %.2f mm RMS predicted\n",
+              1e3 * f["measured_position_m"].get<double>(),
+              1e3 * f["predicted_rms_position_m"].get<double>());
+  EXPECT_GT(f["predicted_rms_position_m"].get<double>(), 0.0);
+  EXPECT_LT(f["measured_position_m"].get<double>(),
+            5 * f["predicted_rms_position_m"].get<double>());
+  EXPECT_LT(f["measured_orientation_deg"].get<double>(),
+            5 * f["predicted_rms_orientation_deg"].get<double>());
 
   // A map with a duplicate id: one line naming the file, the key and the row; the previous
   // result stays as it was.
