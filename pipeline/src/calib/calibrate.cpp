@@ -676,6 +676,58 @@ std::vector<double> row(const obs::Vec3& v) {
   return {v.x(), v.y(), v.z()};
 }
 
+// Error in the covariance's coordinates (header): [p_est - p_true; log(R_true^T R_est)].
+obs::Vec6 pose_error(const obs::SE3& est, const obs::SE3& truth) {
+  obs::Vec6 e;
+  e.head<3>() = est.translation() - truth.translation();
+  e.tail<3>() = obs::log_so3(truth.linear().transpose() * est.linear());
+  return e;
+}
+
+json error_json(const obs::Vec6& e, const Mat6* cov) {
+  json j = {{"error", std::vector<double>(e.data(), e.data() + 6)},
+            {"position_mm", 1e3 * e.head<3>().norm()},
+            {"orientation_deg", e.tail<3>().norm() * 180.0 / M_PI}};
+  if (cov && cov->diagonal().minCoeff() > 0) j["d2"] = e.dot(cov->ldlt().solve(e));
+  return j;
+}
+
+// On rendered data (truth_cameras.csv): each camera's error against the truth, and for the map
+// case the naive per-frame solvePnP average's. Without a map the estimate lives in the frame the
+// reference camera fixes: the truth is mapped into it (X_ref X_ref,true^-1), static cameras only.
+void truth_errors(sources::Dataset& ds, const CalibrationResult& r, json& cameras) {
+  const fs::path file = ds.dir / "truth_cameras.csv";
+  if (!fs::exists(file)) return;
+  std::map<int, obs::SE3> truth0;
+  for (const auto& row : io::read_camera_truth_csv(file))
+    if (row.frame <= 0) truth0[row.camera] = row.g_wi;
+  // X_true of camera i: g_wi,true(0) B(0)^-1 (static: g_wi,true).
+  const auto X_true = [&](size_t i) -> std::optional<obs::SE3> {
+    const auto it = truth0.find(r.cameras[i].id);
+    if (it == truth0.end()) return std::nullopt;
+    return r.cameras[i].moving ? obs::SE3(it->second * ds.camera_pose(i, 0).inverse()) : it->second;
+  };
+  obs::SE3 frame = obs::SE3::Identity();
+  if (!r.with_map) {
+    for (size_t i = 0; i < r.cameras.size(); ++i)
+      if (r.cameras[i].reference) {
+        const auto t = X_true(i);
+        if (!t) return;
+        frame = r.cameras[i].X * t->inverse();
+      }
+  }
+  for (size_t i = 0; i < r.cameras.size(); ++i) {
+    const auto& c = r.cameras[i];
+    const auto t = X_true(i);
+    if (!c.ok || !t || (!r.with_map && c.moving)) continue;
+    const obs::SE3 truth = frame * *t;
+    cameras[i]["vs_truth"] =
+        error_json(pose_error(c.X, truth), c.reference ? nullptr : &c.covariance);
+    if (c.naive_pnp)
+      cameras[i]["naive_pnp"]["vs_truth"] = error_json(pose_error(*c.naive_pnp, truth), nullptr);
+  }
+}
+
 }  // namespace
 
 CalibrationResult calibrate(sources::Dataset& ds, const std::optional<TagMap>& map,
@@ -766,6 +818,7 @@ void write_calibration(const fs::path& dir, sources::Dataset& ds, const Calibrat
                          {"r_wi", row(obs::log_so3(c.naive_pnp->linear()))}};
     j["cameras"].push_back(cj);
   }
+  truth_errors(ds, r, j["cameras"]);
   io::write_file_atomic(dir / "calibration.json", j.dump(2) + "\n");
   for (const auto& c : r.cameras) {
     std::ostringstream csv;
