@@ -172,7 +172,7 @@ void print_run_summary(const json& s, const fs::path& dir) {
     std::printf(
         "g* to the true target (target %d, last frame): %.1f mm, %.3f deg measured; "
         "localisation alone (calibration covariances, first order): %.1f mm, %.3f deg RMS\n",
-        s.contains("targets") ? s["targets"][0]["target"].get<int>() : 0,
+        s.contains("targets") ? s["targets"][0]["target"].get<int>() : s.value("target", 0),
         1e3 * f["measured_position_m"].get<double>(), f["measured_orientation_deg"].get<double>(),
         1e3 * f["predicted_rms_position_m"].get<double>(),
         f["predicted_rms_orientation_deg"].get<double>());

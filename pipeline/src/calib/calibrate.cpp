@@ -846,6 +846,20 @@ void write_calibration(const fs::path& dir, sources::Dataset& ds, const Calibrat
     }
     io::write_file_atomic(dir / "cameras.csv", csv.str());
   }
+  // timestamps.csv names cameras too: a camera left out (--keep-going) must leave it as well.
+  bool any_times = false;
+  for (const auto& c : ds.cameras) any_times = any_times || !c.times.empty();
+  if (any_times && calibrated.cameras.size() < ds.cameras.size()) {
+    std::ostringstream csv;
+    csv << io::kTimestampsHeader << "\n";
+    for (size_t i = 0; i < ds.cameras.size(); ++i) {
+      if (calibrated.index_of(r.cameras[i].id) < 0) continue;
+      for (int f = 0; f < ds.camera_frame_count(i); ++f)
+        if (const auto t = ds.listed_time(i, f))
+          csv << io::format_timestamp_row(r.cameras[i].id, f, *t) << "\n";
+    }
+    io::write_file_atomic(dir / "timestamps.csv", csv.str());
+  }
 }
 
 std::string camera_line(const CameraResult& c) {

@@ -138,7 +138,8 @@ io::NetworkConfig calibrated_network(const io::NetworkConfig& net, const Calibra
 
 /// Writes into `dir` (an io::OutputDir's folder): network.yaml, calibration.json,
 /// residuals_cam_<id>.csv (frame, tag, corner, du, dv, used) and, when some camera moves,
-/// cameras.csv with every frame's pose X B(t) (truth_io's format).
+/// cameras.csv with every frame's pose X B(t) (truth_io's format); when a camera was left out
+/// and the dataset has timestamps.csv, timestamps.csv without it.
 void write_calibration(const std::filesystem::path& dir, sources::Dataset& ds,
                        const CalibrationResult& r, const io::NetworkConfig& calibrated);
 
