@@ -34,6 +34,10 @@ void add_run(CLI::App& app, int& exit_code) {
       ->required();
   cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
   add_run_options(*cmd, o->run);
+  cmd->add_option("--calibration", o->run.calibration,
+                  "netvmo calibrate's calibration.json: summary.json's g_star_localisation says "
+                  "what the cameras' localisation error alone contributes to the distance between "
+                  "g* and the true target pose (first order), next to the measured distance");
   cmd->callback([o, &exit_code] {
     exit_code = guarded("run", [&] {
       to_image_run_options(o->run);  // option ranges first

@@ -8,6 +8,8 @@ packages=(
   libeigen3-dev libembree-dev libapriltag-dev libvisp-dev libopencv-dev
   libgtest-dev libbenchmark-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   gnuplot-nox clang-format cyclonedds-dev cyclonedds-tools
+  # netvmo calibrate's bundle adjustment and pose covariance (Ceres Solver).
+  libceres-dev
   # A real photo of printed tags every machine can have (ViSP's AprilTag.pgm, read in place by
   # the test RealPhotos.DeskPhoto*; GPL-2 data of Debian's ViSP packaging, not copied here).
   visp-images-data

@@ -29,6 +29,9 @@ struct RunCliOptions {
   std::string refine = frontend::to_string(frontend::DetectorSettings{}.refinement);
   frontend::TrackingSettings tracking;
   run::TransportSettings transport;
+  /// `run --calibration`: netvmo calibrate's calibration.json, whose covariances are propagated
+  /// into g* in the summary (empty: none).
+  std::string calibration;
 };
 
 /// Adds the options of `netvmo run`; `in_process_transport`: also --transport, --drop, --seed
