@@ -617,8 +617,9 @@ CalibrationResult calibrate_without_map(sources::Dataset& ds, const CalibrationS
       for (const auto& [key, g] : g_io)
         if (key.second == k && cam_known[key.first]) {
           // Y_k = g_wb = X B(t) g_ib.
+          const size_t cam = key.first;  // structured bindings are not captured before C++20
           const auto& o = *std::find_if(ba.seen.begin(), ba.seen.end(), [&](const TagSeen& t) {
-            return t.cam == key.first && t.body == k;
+            return t.cam == cam && t.body == k;
           });
           ba.Y[k] = ba.X[key.first] * o.B_inv.inverse() * g;
           body_known[k] = grew = true;
@@ -630,8 +631,9 @@ CalibrationResult calibrate_without_map(sources::Dataset& ds, const CalibrationS
       std::vector<obs::SE3> cands;
       for (const auto& [key, g] : g_io)
         if (key.first == i && body_known[key.second]) {
+          const size_t body = key.second;  // structured bindings are not captured before C++20
           const auto& o = *std::find_if(ba.seen.begin(), ba.seen.end(), [&](const TagSeen& t) {
-            return t.cam == i && t.body == key.second;
+            return t.cam == i && t.body == body;
           });
           cands.push_back(ba.Y[key.second] * g.inverse() * o.B_inv);  // X = Y g_ib^-1 B^-1
         }
