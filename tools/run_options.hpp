@@ -38,7 +38,8 @@ struct RunCliOptions {
 /// (not for node and launch, whose transport is DDS with faults of their own).
 void add_run_options(CLI::App& cmd, RunCliOptions& o, bool in_process_transport = true);
 run::ImageRunOptions to_image_run_options(const RunCliOptions& o);
-// Cameras as processes run one estimator: refuses --compare-estimator (InputError).
+// Cameras as processes run the paper's observer alone: refuses another --estimator (the DDS
+// Estimate type carries no consensus state) and --compare-estimator (InputError).
 void require_single_estimator(const run::ImageRunOptions& o);
 
 /// Runs the provider, writes the outputs, overlays and plots into dir; returns the summary.

@@ -84,9 +84,6 @@ void make_waitset(dds_entity_t participant, dds_entity_t reader, dds_entity_t& r
   check(dds_waitset_attach(waitset, readcond, 0), "attach read condition");
 }
 
-static_assert(sizeof(netvmo_msg_Estimate::state) / sizeof(double) == obs::kConsensusStateSize,
-              "pipeline/idl/NetvmoEstimate.idl: state[] must hold obs::kConsensusStateSize values");
-
 obs::EstimateMessage from_sample(const netvmo_msg_Estimate& s) {
   obs::EstimateMessage m;
   m.sender = s.sender;
@@ -99,7 +96,6 @@ obs::EstimateMessage from_sample(const netvmo_msg_Estimate& s) {
     m.g_w.translation()(r) = s.position[r];
     for (int c = 0; c < 3; ++c) m.g_w.linear()(r, c) = s.rotation[3 * r + c];
   }
-  std::copy(std::begin(s.state), std::end(s.state), m.state.begin());
   return m;
 }
 
@@ -114,7 +110,6 @@ netvmo_msg_Estimate to_sample(const obs::EstimateMessage& m) {
     s.position[r] = m.g_w.translation()(r);
     for (int c = 0; c < 3; ++c) s.rotation[3 * r + c] = m.g_w.linear()(r, c);
   }
-  std::copy(m.state.begin(), m.state.end(), std::begin(s.state));
   return s;
 }
 
