@@ -6,6 +6,8 @@
 //    tag36h11 tags (ids 8-19) on a desk, seen about 55 degrees off the sheet's normal, with
 //    ViSP's own pose estimates of each tag beside it (ground_truth_pose.txt; the camera
 //    parameters and tag size are those of ViSP's regression test of that file).
+//  - RealPhotos.PhotosInTheRepository: the 29 photos of datasets/real_photos/photos (part of the
+//    corpus below, with their licences), in every CI run.
 //  - RealPhotos.Corpus: the corpus of datasets/real_photos/MANIFEST.md, assembled by
 //    tools/real_photos.sh, where it is: $NETVMO_REAL_PHOTOS, else real_photos/ in the shared
 //    folder beside the checkout. Skipped, with that reason, where it is not.
@@ -19,6 +21,7 @@
 #include <fstream>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
+#include <vector>
 
 #include "netvmo/pipeline/frontend/photo_recall.hpp"
 #include "netvmo/pipeline/frontend/pnp.hpp"
@@ -135,6 +138,37 @@ fs::path corpus_dir() {
   return fs::path(NETVMO_SOURCE_DIR).parent_path() / "shared" / "real_photos";
 }
 
+/// Recall against libapriltag over every photo below `dir` (a folder's calib.yaml is its photos'
+/// camera), every eligible loss printed with its reason.
+PhotoRecall recall_over(const fs::path& dir) {
+  PhotoRecall total;
+  std::vector<fs::path> photos;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    const std::string ext = e.path().extension().string();
+    if (e.is_regular_file() && (ext == ".png" || ext == ".jpg" || ext == ".JPG"))
+      photos.push_back(e.path());
+  }
+  std::sort(photos.begin(), photos.end());
+  for (const fs::path& photo : photos) {
+    const cv::Mat gray = cv::imread(photo.string(), cv::IMREAD_GRAYSCALE);
+    EXPECT_FALSE(gray.empty()) << photo;
+    if (gray.empty()) continue;
+    io::Calibration calib = nominal_calibration(gray.cols, gray.rows);
+    if (fs::exists(photo.parent_path() / "calib.yaml"))
+      calib = io::load_calibration_opencv(photo.parent_path() / "calib.yaml");
+    const auto results = evaluate_photo(gray, calib, DetectorSettings{}, TrackingSettings{});
+    for (const auto& t : results)
+      if (t.eligible && t.status != TargetStatus::detected)
+        std::printf("lost: %s/%s id %d (%.0f px): %s\n",
+                    photo.parent_path().filename().string().c_str(),
+                    photo.filename().string().c_str(), t.ref.id, t.ref.narrowest, t.reason.c_str());
+    total.add(results);
+  }
+  std::printf("%d photos, %d eligible tags, %d kept (%.1f %%)\n", total.photos, total.eligible,
+              total.kept, 100.0 * total.recall());
+  return total;
+}
+
 // Recall against libapriltag on every eligible tag of the corpus, with every loss listed.
 // The figure the front end reaches (docs/frontend.md) is asserted not to fall: 92 % of the
 // 395 eligible tags measured when the model of the print was introduced (the goal, 99 %, is
@@ -145,26 +179,24 @@ TEST(RealPhotos, Corpus) {
   if (!fs::is_directory(dir))
     GTEST_SKIP() << dir << " missing: assemble the corpus with tools/real_photos.sh "
                  << "(datasets/real_photos/MANIFEST.md) and point NETVMO_REAL_PHOTOS at it";
-  PhotoRecall total;
-  for (const auto& e : fs::recursive_directory_iterator(dir)) {
-    const std::string ext = e.path().extension().string();
-    if (!e.is_regular_file() || (ext != ".png" && ext != ".jpg" && ext != ".JPG")) continue;
-    const cv::Mat gray = cv::imread(e.path().string(), cv::IMREAD_GRAYSCALE);
-    ASSERT_FALSE(gray.empty()) << e.path();
-    io::Calibration calib = nominal_calibration(gray.cols, gray.rows);
-    if (fs::exists(e.path().parent_path() / "calib.yaml"))
-      calib = io::load_calibration_opencv(e.path().parent_path() / "calib.yaml");
-    const auto results = evaluate_photo(gray, calib, DetectorSettings{}, TrackingSettings{});
-    for (const auto& t : results)
-      if (t.eligible && t.status != TargetStatus::detected)
-        std::printf("lost: %s id %d (%.0f px): %s\n", e.path().filename().string().c_str(),
-                    t.ref.id, t.ref.narrowest, t.reason.c_str());
-    total.add(results);
-  }
+  const PhotoRecall total = recall_over(dir);
   ASSERT_GT(total.eligible, 0);
-  std::printf("%d photos, %d eligible tags, %d kept (%.1f %%)\n", total.photos, total.eligible,
-              total.kept, 100.0 * total.recall());
   EXPECT_GE(total.recall(), 0.92);
+  for (double d : total.corner_differences) EXPECT_LT(d, 1.65);
+}
+
+// The part of the corpus this repository holds (datasets/real_photos/photos: 29 photos of 8 sets
+// from 5 repositories, chosen by set and file name, not by result; MANIFEST.md, "In this
+// repository"), so every CI run judges the front end on real photos. libapriltag finds 206
+// eligible tags there; the front end kept 192 (93.2 %) when this test was written, and may not
+// keep fewer (the goal, 99 %, is not reached: every loss is printed with its reason).
+TEST(RealPhotos, PhotosInTheRepository) {
+  const fs::path dir = fs::path(NETVMO_SOURCE_DIR) / "datasets" / "real_photos" / "photos";
+  ASSERT_TRUE(fs::is_directory(dir)) << dir;
+  const PhotoRecall total = recall_over(dir);
+  EXPECT_EQ(total.photos, 29);
+  EXPECT_EQ(total.eligible, 206) << "libapriltag's own eligible tags";
+  EXPECT_GE(total.kept, 192);
   for (double d : total.corner_differences) EXPECT_LT(d, 1.65);
 }
 
