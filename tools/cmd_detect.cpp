@@ -209,7 +209,7 @@ int run_detect(DetectOptions o) {
   std::printf(" %10s %10s\n", "other_ids", "unreadable");
   for (size_t c = 0; c < ds.cameras.size(); ++c) {
     const CameraStats& st = stats[c];
-    const std::string src = ds.cameras[c].source->path().filename().string();
+    const std::string src = ds.cameras[c].source->label();
     const double rate = st.frames ? 100.0 * st.detected / st.frames : 0.0;
     const double mm = st.detected ? st.margin_sum / st.detected : 0.0;
     std::printf("%-8d %-28s %7d %7d %9d %5.1f%% %11.1f", ds.cameras[c].id, src.c_str(), st.frames,

@@ -10,6 +10,8 @@ packages=(
   gnuplot-nox clang-format cyclonedds-dev cyclonedds-tools
   # netvmo calibrate's bundle adjustment and pose covariance (Ceres Solver).
   libceres-dev
+  # rosbag2 bags as datasets (their sqlite3 storage).
+  libsqlite3-dev
   # A real photo of printed tags every machine can have (ViSP's AprilTag.pgm, read in place by
   # the test RealPhotos.DeskPhoto*; GPL-2 data of Debian's ViSP packaging, not copied here).
   visp-images-data

@@ -79,7 +79,7 @@ int main(int argc, char** argv) {
                                    cv::Point(cvCeil(x1 + g) + 1, cvCeil(y1 + g) + 1)) &
                           cv::Rect(0, 0, image.cols, image.rows);
     const int cam = static_cast<int>(net.cameras.size()) + 1;
-    net.cameras.push_back({cam, obs::SE3::Identity(), std::nullopt});
+    net.cameras.push_back({cam, obs::SE3::Identity(), std::nullopt, {}, {}});
     io::Calibration calib;
     calib.width = crop.width;
     calib.height = crop.height;

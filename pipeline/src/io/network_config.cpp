@@ -1,6 +1,7 @@
 #include "netvmo/pipeline/io/network_config.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <climits>
 #include <cmath>
 #include <map>
@@ -194,6 +195,15 @@ NetworkConfig load_network_config(const std::filesystem::path& file) {
       cam.fps = f->number();
       if (!(*cam.fps > 0)) f->fail("must be positive");
     }
+    for (const char* key : {"image_topic", "camera_info_topic"})
+      if (auto t = c.find(key)) {
+        const std::string name = t->string();
+        if (name.size() < 2 || name[0] != '/' ||
+            std::any_of(name.begin(), name.end(),
+                        [](unsigned char ch) { return std::isspace(ch); }))
+          t->fail("'" + name + "' is not a ROS topic name (a leading '/', no white space)");
+        (std::string(key) == "image_topic" ? cam.image_topic : cam.camera_info_topic) = name;
+      }
     c.finish();
     net.cameras.push_back(cam);
   }
@@ -228,6 +238,9 @@ std::string network_yaml(const NetworkConfig& net) {
     y << YAML::Key << "r_wi" << YAML::Value << YAML::Flow
       << std::vector<double>{r.x(), r.y(), r.z()};
     if (c.fps) y << YAML::Key << "fps" << YAML::Value << *c.fps;
+    if (c.image_topic) y << YAML::Key << "image_topic" << YAML::Value << *c.image_topic;
+    if (c.camera_info_topic)
+      y << YAML::Key << "camera_info_topic" << YAML::Value << *c.camera_info_topic;
     y << YAML::EndMap;
   }
   y << YAML::EndSeq;

@@ -563,7 +563,7 @@ NetworkConfig scene_network_config(const render::SceneDescription& scene, int fr
         target.bundle.push_back({e.tag.id, e.tag.size, e.g_ot});
     net.targets.push_back(target);
   }
-  for (const auto& c : scene.cameras) net.cameras.push_back({c.id, c.g_wi_believed, c.fps});
+  for (const auto& c : scene.cameras) net.cameras.push_back({c.id, c.g_wi_believed, c.fps, {}, {}});
   net.edges = scene.edges;
   net.source = "the scene";
   return net;

@@ -3,11 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <set>
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/truth_io.hpp"
 #include "netvmo/pipeline/io/yaml_reader.hpp"
+#include "netvmo/pipeline/ros/image_msgs.hpp"
+#include "netvmo/pipeline/ros/rosbag.hpp"
 #include "stream_util.hpp"
 
 namespace netvmo::sources {
@@ -66,6 +69,10 @@ size_t listed_camera(const Dataset& ds, const fs::path& file, const Row& r) {
 // A camera that timestamps.csv does not list takes its stream's own times (a video's
 // timestamps), else frame / its fps; the notes say which.
 void own_or_index_times(Dataset& ds, const std::set<int>& listed, const fs::path& file) {
+  const bool bag = ros::RosBag::is_bag(ds.dir);
+  const std::string own = bag ? "its bag topic's header.stamp times" : "its video's own timestamps";
+  const std::string own_on_fps =
+      bag ? "its bag topic's header.stamp times" : "its video's timestamps";
   for (size_t i = 0; i < ds.cameras.size(); ++i) {
     auto& cam = ds.cameras[i];
     if (listed.count(cam.id)) continue;
@@ -81,14 +88,13 @@ void own_or_index_times(Dataset& ds, const std::set<int>& listed, const fs::path
     for (size_t k = 0; k < t.size() && on_fps_clock; ++k)
       on_fps_clock = std::abs(t[k] - static_cast<double>(k) / fps) <= 1e-3;
     if (on_fps_clock) {
-      ds.notes.push_back(why + ": its video's timestamps are frame index / its fps (" +
+      ds.notes.push_back(why + ": " + own_on_fps + " are frame index / its fps (" +
                          io::format_number(fps) + " frames/s) within 1 ms, taken exactly (" +
                          cam.source->path().string() + ")");
       continue;
     }
     if (!t.empty()) {
-      ds.notes.push_back(why + ": its times are its video's own timestamps (" +
-                         cam.source->path().string() + ")");
+      ds.notes.push_back(why + ": its times are " + own + " (" + cam.source->path().string() + ")");
       cam.times = std::move(t);
       continue;
     }
@@ -170,6 +176,54 @@ void read_camera_poses(Dataset& ds) {
   }
 }
 
+// A rosbag2 bag's dataset: every camera of network.yaml names an image topic of the bag, of an
+// image type, and a camera_info_topic, where it names one, of CameraInfo. Returns the origin of
+// the dataset's times: the earliest header.stamp of the cameras' first images [ns].
+std::int64_t check_bag_topics(const fs::path& dir, const io::NetworkConfig& net) {
+  const ros::RosBag bag(dir);
+  const std::string file = (dir / "network.yaml").string();
+  std::string images;
+  for (const auto& t : bag.topics())
+    if (t.type == ros::kImageType || t.type == ros::kCompressedImageType)
+      images += (images.empty() ? "" : ", ") + t.name;
+  std::optional<std::int64_t> origin;
+  for (size_t i = 0; i < net.cameras.size(); ++i) {
+    const auto& cc = net.cameras[i];
+    const std::string key = file + ": cameras[" + std::to_string(i) + "].";
+    if (!cc.image_topic)
+      throw InputError(key + "image_topic: missing (" + dir.string() +
+                       " is a rosbag2 bag, metadata.yaml: each camera names its image topic; "
+                       "the bag's: " +
+                       (images.empty() ? "none" : images) + ")");
+    const ros::BagTopic* t = bag.find_topic(*cc.image_topic);
+    if (!t)
+      throw InputError(key + "image_topic: " + *cc.image_topic + " is not in the bag (its image " +
+                       "topics: " + (images.empty() ? "none" : images) + ")");
+    if (t->type != ros::kImageType && t->type != ros::kCompressedImageType)
+      throw InputError(key + "image_topic: " + *cc.image_topic + " is " + t->type + ", not " +
+                       ros::kImageType + " or " + ros::kCompressedImageType);
+    if (cc.camera_info_topic) {
+      const ros::BagTopic* ci = bag.find_topic(*cc.camera_info_topic);
+      if (!ci || ci->type != ros::kCameraInfoType || ci->message_count == 0)
+        throw InputError(key + "camera_info_topic: " + *cc.camera_info_topic +
+                         (ci ? " is " + ci->type + " with " + std::to_string(ci->message_count) +
+                                   " message(s), not a " + ros::kCameraInfoType + " topic"
+                             : " is not in the bag"));
+    }
+    if (const auto first = bag_topic_first_stamp(dir, *cc.image_topic))
+      origin = std::min(origin.value_or(*first), *first);
+  }
+  return origin.value_or(0);
+}
+
+// The calibration a bag's camera_info_topic gives: its first message's.
+io::Calibration bag_calibration(const fs::path& dir, const std::string& topic) {
+  const ros::RosBag bag(dir);
+  const auto msgs = bag.messages(topic);
+  return ros::decode_camera_info(bag.read(msgs.at(0)), dir.string() + ":" + topic + " message 0 (" +
+                                                           bag.where(msgs.at(0)) + ")");
+}
+
 }  // namespace
 
 obs::SE3 Dataset::camera_pose(size_t camera_index, int frame) const {
@@ -215,6 +269,22 @@ Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera, bool k
   Dataset ds;
   ds.dir = dir;
   ds.network = io::load_network_config(dir / "network.yaml");
+  const bool bag = ros::RosBag::is_bag(dir);
+  const std::int64_t origin = bag ? check_bag_topics(dir, ds.network) : 0;
+  if (bag)
+    ds.notes.push_back(dir.string() + " is a rosbag2 bag: every camera's images are its " +
+                       "image_topic's messages, their times header.stamp less " +
+                       std::to_string(origin / 1'000'000'000) + "." +
+                       std::to_string(1'000'000'000 + origin % 1'000'000'000).substr(1) +
+                       " s (the earliest first image's)");
+  for (size_t i = 0; i < ds.network.cameras.size() && !bag; ++i)
+    for (const auto& [key, topic] :
+         {std::pair{"image_topic", ds.network.cameras[i].image_topic},
+          std::pair{"camera_info_topic", ds.network.cameras[i].camera_info_topic}})
+      if (topic)
+        throw InputError((dir / "network.yaml").string() + ": cameras[" + std::to_string(i) + "]." +
+                         key + ": only a rosbag2 bag's dataset names topics (" + dir.string() +
+                         " has no metadata.yaml)");
 
   std::set<std::string> declared;
   for (const auto& cc : ds.network.cameras) {
@@ -238,15 +308,34 @@ Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera, bool k
     } else if (fs::exists(xml)) {
       cam.calib = looks_like_opencv_storage(xml) ? io::load_calibration_opencv(xml)
                                                  : io::load_calibration_visp_xml(xml, name);
+    } else if (bag && cc.camera_info_topic) {
+      cam.calib = bag_calibration(dir, *cc.camera_info_topic);
     } else {
       throw InputError(yaml.string() + ": calibration not found for camera " +
                        std::to_string(cc.id) + " (also looked for " + name + ".yml and " + name +
-                       ".xml)");
+                       ".xml" + (bag ? "; network.yaml names no camera_info_topic for it)" : ")"));
     }
-    // Frames: exactly one entry of one registered stream kind (image folder, video, ...).
+    // Frames: a bag's image topic, or exactly one entry of one registered stream kind (image
+    // folder, video, ...).
     std::vector<std::pair<const StreamKind*, fs::path>> found;
     for (const auto* kind : stream_kinds())
       for (const auto& p : kind->find(dir, name)) found.emplace_back(kind, p);
+    if (bag) {
+      if (!found.empty())
+        throw InputError(found[0].second.string() + ": camera " + std::to_string(cc.id) +
+                         " has both this " + found[0].first->name + " and the bag's topic " +
+                         *cc.image_topic + "; keep one");
+      try {
+        cam.source = open_bag_topic(dir, *cc.image_topic, origin);
+      } catch (const InputError& e) {
+        if (!keep_going) throw;
+        ds.warnings.push_back(std::string(e.what()) + "; camera " + std::to_string(cc.id) +
+                              " is blind for the whole run (--keep-going)");
+        cam.source = std::make_unique<UnreadableStream>(dir / *cc.image_topic);
+      }
+      ds.cameras.push_back(std::move(cam));
+      continue;
+    }
     if (found.empty()) {
       std::string kinds;
       for (const auto* kind : stream_kinds())

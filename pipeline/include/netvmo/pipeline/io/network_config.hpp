@@ -12,6 +12,10 @@
 //     - {id: 1, p_wi: [x, y, z], r_wi: [rx, ry, rz]}   # r_wi: rotation vector of R_wi
 //       fps: 15                               # optional: this camera's own frame rate (> 0;
 //                                             #   default: the dataset's fps)
+//       image_topic: /cam1/image_raw          # a rosbag2 bag's dataset only: the camera's
+//                                             #   sensor_msgs Image or CompressedImage topic
+//       camera_info_topic: /cam1/camera_info  # optional, a bag's: its calibration, where
+//                                             #   calib/ has none
 //   edges: [[1, 2], [2, 3]]                   # undirected communication graph (camera ids)
 //
 // Read strictly: a misspelt or unknown key anywhere is an InputError naming network.yaml and
@@ -71,6 +75,9 @@ struct CameraConfig {
   int id = 0;                            ///< positive, unique
   obs::SE3 g_wi = obs::SE3::Identity();  ///< believed pose of camera i in the world
   std::optional<double> fps;             ///< its own frame rate, when it differs from the dataset's
+  /// In a rosbag2 bag's dataset (sources/dataset.hpp): the topics of its images and of its
+  /// camera info (ROS names: a leading '/', no white space).
+  std::optional<std::string> image_topic, camera_info_topic;
 };
 
 struct NetworkConfig {

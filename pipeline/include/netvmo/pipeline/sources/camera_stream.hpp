@@ -8,9 +8,11 @@
 // pipeline/src/sources/stream_kinds.cpp.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,6 +31,8 @@ class CameraStream {
   virtual std::string frame_name(int frame) const = 0;
   /// The folder or video file.
   virtual const std::filesystem::path& path() const = 0;
+  /// A short name for tables: the folder's or file's name (a bag topic's name).
+  virtual std::string label() const { return path().filename().string(); }
   /// Missing frames found when opening (numeric image names with gaps), ascending.
   virtual std::vector<int> missing_frames() const { return {}; }
   /// The stream's own time [s] of every frame (a video's presentation timestamps), or empty
@@ -45,6 +49,15 @@ class CameraStream {
 std::unique_ptr<CameraStream> open_image_folder(const std::filesystem::path& dir);
 /// Video file via cv::VideoCapture. Throws InputError naming the file if it cannot be opened.
 std::unique_ptr<CameraStream> open_video(const std::filesystem::path& file);
+
+/// A rosbag2 bag's image topic (sensor_msgs Image or CompressedImage; ros/rosbag.hpp): frame k is
+/// its k-th message as recorded, own_times() its header.stamp less `origin_ns` [s]. Throws
+/// InputError naming the bag for a missing topic or a bag that cannot be read.
+std::unique_ptr<CameraStream> open_bag_topic(const std::filesystem::path& bag_dir,
+                                             const std::string& topic, std::int64_t origin_ns);
+/// header.stamp [ns since the epoch] of a bag topic's first message (nullopt when it has none).
+std::optional<std::int64_t> bag_topic_first_stamp(const std::filesystem::path& bag_dir,
+                                                  const std::string& topic);
 
 /// A kind of camera stream found in a dataset folder.
 struct StreamKind {

@@ -14,6 +14,10 @@
 //                                       network.yaml pose
 //   timestamps.csv                      optional: every image's time (truth_io.hpp); without
 //                                       it, a video's own times or frame / fps (a note)
+// or, instead of the cameras' entries, a rosbag2 bag: metadata.yaml and its .db3 files
+// (ros/rosbag.hpp), each camera's frames the messages of its network.yaml `image_topic`, their
+// times header.stamp less the earliest first image's, its calibration calib/ or the first
+// message of its `camera_info_topic` (docs/datasets.md, "rosbag2 bags").
 //
 // Frame-count rule (never a silent shift of frames):
 //  - Image folder, all file stems numeric (e.g. 000042.png): the number IS the frame index
