@@ -84,12 +84,13 @@ void write_inputs_cache(const fs::path& file, const sources::NetworkSource& prov
     for (size_t i = 0; i < in.frames[k].size(); ++i) {
       const auto& z = in.frames[k][i];
       f << k << ',' << i << ',' << (z.delta ? 1 : 0);
-      for (int j = 0; j < 8; ++j) num(z.f.size() == 8 ? z.f[j] : 0.0);
-      f << ',' << (z.g_io_pnp ? 1 : 0);
       const SE3 g = z.g_io_pnp ? *z.g_io_pnp : SE3::Identity();
-      for (int j = 0; j < 3; ++j) num(g.translation()[j]);
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) num(g.linear()(r, c));
+      const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> r = g.linear();
+      // The number columns: f0..f7, pnp (1 or 0, as %.17g writes them), px..pz, r00..r22.
+      Eigen::Matrix<double, 21, 1> cells;
+      cells << (z.f.size() == 8 ? z.f : Eigen::VectorXd::Zero(8)), (z.g_io_pnp ? 1.0 : 0.0),
+          g.translation(), Eigen::Map<const Eigen::Matrix<double, 9, 1>>(r.data());
+      for (const double v : cells) num(v);
       f << '\n';
     }
   f.commit();
