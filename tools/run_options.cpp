@@ -96,10 +96,6 @@ void require_single_estimator(const run::ImageRunOptions& o) {
     throw InputError("--estimator " + o.runner.estimator +
                      ": cameras as processes run the paper's observer (vmo) only; the DDS "
                      "Estimate type does not carry the consensus state yet (use netvmo run)");
-  if (!o.runner.compare_estimators.empty())
-    throw InputError(
-        "--compare-estimator: cameras as processes run one estimator; compare with "
-        "netvmo run");
 }
 
 namespace {
