@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -9,7 +10,6 @@
 #include "netvmo/observer/estimator.hpp"
 #include "netvmo/pipeline/calib/g_star_uncertainty.hpp"
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/io/atomic_file.hpp"
 #include "netvmo/pipeline/run/overlay.hpp"
 #include "netvmo/pipeline/run/run_report.hpp"
 #include "run_plots.hpp"
@@ -96,10 +96,6 @@ void require_single_estimator(const run::ImageRunOptions& o) {
     throw InputError("--estimator " + o.runner.estimator +
                      ": cameras as processes run the paper's observer (vmo) only; the DDS "
                      "Estimate type does not carry the consensus state yet (use netvmo run)");
-  if (!o.runner.compare_estimators.empty())
-    throw InputError(
-        "--compare-estimator: cameras as processes run one estimator; compare with "
-        "netvmo run");
 }
 
 namespace {
@@ -124,12 +120,10 @@ json run_and_report_in(sources::NetworkSource& provider, const RunCliOptions& o,
   // Where the image times came from (a camera without timestamps.csv rows or video timestamps:
   // frame / fps), once the run has succeeded.
   for (const auto& note : provider.notes()) std::fprintf(stderr, "note: %s\n", note.c_str());
-  json s = run::write_run_outputs(dir, provider, options, result);
-  if (!o.calibration.empty()) {
-    s["g_star_localisation"] =
-        calib::g_star_localisation_summary(provider, result, covariances, o.calibration);
-    io::write_file_atomic(dir / "summary.json", s.dump(2) + "\n");
-  }
+  std::optional<json> localisation;
+  if (!o.calibration.empty())
+    localisation = calib::g_star_localisation_summary(provider, result, covariances, o.calibration);
+  json s = run::write_run_outputs(dir, provider, options, result, localisation);
   if (!o.no_plots) plot_run(dir, provider.network());
   return s;
 }

@@ -4,8 +4,8 @@
 
 #include "netvmo/pipeline/calib/calibrate.hpp"
 #include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/io/network_config.hpp"
 #include "netvmo/pipeline/io/yaml_reader.hpp"
-#include "netvmo/render/tag_family.hpp"
 
 namespace netvmo::calib {
 
@@ -19,16 +19,12 @@ TagMap load_tag_map(const std::filesystem::path& file) {
     auto t = tv.map();
     MapTag tag;
     const auto fam = t.get("family");
-    tag.family = fam.string();
-    if (!render::find_tag_family(tag.family))
-      fam.fail("unsupported tag family '" + tag.family +
-               "' (supported: " + render::tag_family_names() + ")");
+    tag.family = io::read_tag_family(fam);
     if (!map.tags.empty() && tag.family != map.tags[0].family)
       fam.fail("family " + tag.family + ": every map tag must use the first tag's family (" +
                map.tags[0].family + ")");
     const auto id = t.get("id");
-    tag.id = id.integer();
-    if (tag.id < 0) id.fail("must not be negative");
+    tag.id = io::read_tag_id(id);
     if (!ids.insert(tag.id).second)
       id.fail("duplicate tag id " + std::to_string(tag.id) + " (each map tag once)");
     const auto size = t.get("size");

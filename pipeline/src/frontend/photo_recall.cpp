@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <map>
 #include <opencv2/imgproc.hpp>
-#include <stdexcept>
 
+#include "netvmo/pipeline/frontend/tag_detector.hpp"
 #include "netvmo/render/tag_family.hpp"
 
 namespace netvmo::frontend {
@@ -14,14 +14,15 @@ namespace netvmo::frontend {
 std::vector<ReferenceTag> reference_detections(const cv::Mat& gray, const std::string& family) {
   CV_Assert(gray.type() == CV_8UC1);
   const render::TagFamilyPtr fam = render::create_tag_family(family);
-  apriltag_detector_t* td = apriltag_detector_create();
-  if (!td) throw std::runtime_error("libapriltag: cannot create the detector");
-  apriltag_detector_add_family_bits(td, fam.get(), 2);
-  td->quad_decimate = 1.0f;
-  td->quad_sigma = 0.0f;
-  td->nthreads = 1;
-  td->refine_edges = true;
-  td->decode_sharpening = 0.25;
+  DetectorSettings reference;  // libapriltag's defaults but for quad_decimate
+  reference.bits_corrected = 2;
+  reference.quad_decimate = 1.0;
+  reference.quad_sigma = 0.0;
+  reference.nthreads = 1;
+  reference.refine_edges = true;
+  reference.decode_sharpening = 0.25;
+  reference.min_white_black_diff = 5;
+  apriltag_detector_t* td = create_apriltag_detector(fam.get(), reference);
   image_u8_t im{gray.cols, gray.rows, static_cast<int32_t>(gray.step[0]),
                 const_cast<uint8_t*>(gray.ptr<uint8_t>())};
   zarray_t* dets = apriltag_detector_detect(td, &im);
@@ -30,12 +31,12 @@ std::vector<ReferenceTag> reference_detections(const cv::Mat& gray, const std::s
   for (int i = 0; dets && i < zarray_size(dets); ++i) {
     apriltag_detection_t* det = nullptr;
     zarray_get(dets, i, &det);
+    const TagDetection d = to_tag_detection(*det);
     ReferenceTag r;
-    r.id = det->id;
-    r.hamming = det->hamming;
-    r.margin = det->decision_margin;
-    for (size_t k = 0; k < 4; ++k)  // libapriltag's pixel centres are at +0.5 (tag_detector.hpp)
-      r.corners[k] = cv::Point2d(det->p[k][0] - 0.5, det->p[k][1] - 0.5);
+    r.id = d.id;
+    r.hamming = d.hamming;
+    r.margin = d.margin;
+    r.corners = d.corners;
     r.narrowest = narrowest_side(r.corners);
     // The quiet zone is one cell beyond each side: every corner pushed one cell outwards from
     // the centre (along the diagonal, sqrt(2) cells) must lie in the image.

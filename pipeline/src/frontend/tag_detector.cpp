@@ -26,6 +26,33 @@ constexpr double kMaxNormalizedDisagreement = 0.35;
 
 }  // namespace
 
+apriltag_detector* create_apriltag_detector(apriltag_family* family, const DetectorSettings& s) {
+  apriltag_detector_t* td = apriltag_detector_create();
+  if (!td) throw std::runtime_error("libapriltag: cannot create the detector");
+  apriltag_detector_add_family_bits(td, family, s.bits_corrected);
+  td->quad_decimate = static_cast<float>(s.quad_decimate);
+  td->quad_sigma = static_cast<float>(s.quad_sigma);
+  td->nthreads = s.nthreads;
+  td->refine_edges = s.refine_edges;
+  td->decode_sharpening = s.decode_sharpening;
+  td->qtp.min_white_black_diff = s.min_white_black_diff;
+  td->debug = false;
+  return td;
+}
+
+TagDetection to_tag_detection(const apriltag_detection& det, cv::Point origin) {
+  TagDetection d;
+  d.id = det.id;
+  d.hamming = det.hamming;
+  d.margin = det.decision_margin;
+  for (int k = 0; k < 4; ++k)
+    d.corners[static_cast<size_t>(k)] = cv::Point2d(det.p[k][0] - kApriltagPixelOffset + origin.x,
+                                                    det.p[k][1] - kApriltagPixelOffset + origin.y);
+  d.center = cv::Point2d(det.c[0] - kApriltagPixelOffset + origin.x,
+                         det.c[1] - kApriltagPixelOffset + origin.y);
+  return d;
+}
+
 struct TagDetector::Impl {
   DetectorSettings s;
   render::TagFamilyPtr family{nullptr, nullptr};
@@ -37,16 +64,7 @@ struct TagDetector::Impl {
   explicit Impl(DetectorSettings settings) : s(std::move(settings)) {
     validate(s);
     family = render::create_tag_family(s.family);
-    td = apriltag_detector_create();
-    if (!td) throw std::runtime_error("libapriltag: cannot create the detector");
-    apriltag_detector_add_family_bits(td, family.get(), s.bits_corrected);
-    td->quad_decimate = static_cast<float>(s.quad_decimate);
-    td->quad_sigma = static_cast<float>(s.quad_sigma);
-    td->nthreads = s.nthreads;
-    td->refine_edges = s.refine_edges;
-    td->decode_sharpening = s.decode_sharpening;
-    td->qtp.min_white_black_diff = s.min_white_black_diff;
-    td->debug = false;
+    td = create_apriltag_detector(family.get(), s);
     patterns.push_back(tag_pattern(s.family, s.target_id));
     for (int id : s.bundle_ids) patterns.push_back(tag_pattern(s.family, id));
   }
@@ -141,16 +159,7 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
   for (int i = 0; i < zarray_size(dets); ++i) {
     apriltag_detection_t* det = nullptr;
     zarray_get(dets, i, &det);
-    TagDetection d;
-    d.id = det->id;
-    d.hamming = det->hamming;
-    d.margin = det->decision_margin;
-    for (int k = 0; k < 4; ++k)
-      d.corners[static_cast<size_t>(k)] = cv::Point2d(det->p[k][0] - kApriltagPixelOffset + roi.x,
-                                                      det->p[k][1] - kApriltagPixelOffset + roi.y);
-    d.center = cv::Point2d(det->c[0] - kApriltagPixelOffset + roi.x,
-                           det->c[1] - kApriltagPixelOffset + roi.y);
-    out.all.push_back(d);
+    out.all.push_back(to_tag_detection(*det, roi.tl()));
   }
   apriltag_detections_destroy(dets);
 

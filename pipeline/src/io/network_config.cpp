@@ -22,6 +22,20 @@ int read_camera_id(const Value& id, std::set<int>& seen) {
   return v;
 }
 
+std::string read_tag_family(const Value& family) {
+  std::string name = family.string();
+  if (!render::find_tag_family(name))
+    family.fail("unsupported tag family '" + name + "' (supported: " + render::tag_family_names() +
+                ")");
+  return name;
+}
+
+int read_tag_id(const Value& id) {
+  const int v = id.integer();
+  if (v < 0) id.fail("must not be negative");
+  return v;
+}
+
 std::vector<std::pair<int, int>> read_edges(const Value& edges, const std::set<int>& ids) {
   std::vector<std::pair<int, int>> out;
   std::set<std::pair<int, int>> seen;
@@ -75,14 +89,8 @@ namespace {
 TargetConfig read_target(const Value& v) {
   auto t = v.map();
   TargetConfig target;
-  const auto fam = t.get("family");
-  target.family = fam.string();
-  if (!render::find_tag_family(target.family))
-    fam.fail("unsupported tag family '" + target.family +
-             "' (supported: " + render::tag_family_names() + ")");
-  const auto id = t.get("id");
-  target.id = id.integer();
-  if (target.id < 0) id.fail("must not be negative");
+  target.family = read_tag_family(t.get("family"));
+  target.id = read_tag_id(t.get("id"));
   const auto size = t.get("size");
   target.size = size.number();
   if (!(target.size > 0)) size.fail("must be positive (metres)");
@@ -92,8 +100,7 @@ TargetConfig read_target(const Value& v) {
       auto m = bv.map();
       BundleTag tag;
       const auto bid = m.get("id");
-      tag.id = bid.integer();
-      if (tag.id < 0) bid.fail("must not be negative");
+      tag.id = read_tag_id(bid);
       if (!tag_ids.insert(tag.id).second)
         bid.fail("tag id " + std::to_string(tag.id) + " listed twice in the target" +
                  (tag.id == target.id ? " (it is the primary tag's id)" : ""));

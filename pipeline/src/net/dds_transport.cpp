@@ -119,6 +119,24 @@ std::string label(const std::vector<int>& labels, int i) {
              : "#" + std::to_string(i);
 }
 
+// rt/netvmo/camera_<camera>/average_pose (geometry_msgs/msg/PoseStamped), for its writer
+// (DdsTransport) and its reader (PoseStampedReader).
+dds_entity_t create_average_pose_topic(dds_entity_t participant, const std::string& camera) {
+  const std::string name = "rt/netvmo/camera_" + camera + "/average_pose";
+  const dds_entity_t topic = dds_create_topic(
+      participant, &geometry_msgs_msg_dds__PoseStamped__desc, name.c_str(), nullptr, nullptr);
+  check(topic, "create pose topic");
+  return topic;
+}
+
+// The average pose's QoS: reliable, with the history of its side.
+dds_qos_t* average_pose_qos(dds_history_kind_t history, int32_t depth) {
+  dds_qos_t* q = dds_create_qos();
+  dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+  dds_qset_history(q, history, depth);
+  return q;
+}
+
 }  // namespace
 
 obs::EstimateMessage decode_estimate(const netvmo_msg_Estimate& s, std::uint64_t own_digest,
@@ -156,13 +174,8 @@ DdsTransport::DdsTransport(int self, std::vector<int> neighbours, std::vector<in
     dds_delete_qos(rq);
     check(reader_, "create reader");
     make_waitset(participant_, reader_, readcond_, waitset_);
-    const std::string pose_topic = "rt/netvmo/camera_" + label(labels_, self_) + "/average_pose";
-    pose_topic_ = dds_create_topic(participant_, &geometry_msgs_msg_dds__PoseStamped__desc,
-                                   pose_topic.c_str(), nullptr, nullptr);
-    check(pose_topic_, "create pose topic");
-    dds_qos_t* pq = dds_create_qos();
-    dds_qset_reliability(pq, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
-    dds_qset_history(pq, DDS_HISTORY_KEEP_LAST, 10);
+    pose_topic_ = create_average_pose_topic(participant_, label(labels_, self_));
+    dds_qos_t* pq = average_pose_qos(DDS_HISTORY_KEEP_LAST, 10);
     pose_writer_ = dds_create_writer(participant_, pose_topic_, pq, nullptr);
     dds_delete_qos(pq);
     check(pose_writer_, "create pose writer");
@@ -335,13 +348,8 @@ PoseStampedReader::PoseStampedReader(int domain, int camera_id) {
   participant_ = dds_create_participant(static_cast<dds_domainid_t>(domain), nullptr, nullptr);
   check(participant_, "create participant (check CYCLONEDDS_URI)");
   try {
-    const std::string name = "rt/netvmo/camera_" + std::to_string(camera_id) + "/average_pose";
-    topic_ = dds_create_topic(participant_, &geometry_msgs_msg_dds__PoseStamped__desc, name.c_str(),
-                              nullptr, nullptr);
-    check(topic_, "create pose topic");
-    dds_qos_t* q = dds_create_qos();
-    dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
-    dds_qset_history(q, DDS_HISTORY_KEEP_ALL, 0);
+    topic_ = create_average_pose_topic(participant_, std::to_string(camera_id));
+    dds_qos_t* q = average_pose_qos(DDS_HISTORY_KEEP_ALL, 0);
     reader_ = dds_create_reader(participant_, topic_, q, nullptr);
     dds_delete_qos(q);
     check(reader_, "create pose reader");

@@ -224,7 +224,8 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
 }
 
 json write_run_outputs(const fs::path& dir, const sources::NetworkSource& provider,
-                       const ImageRunOptions& options, const ImageRunResult& result) {
+                       const ImageRunOptions& options, const ImageRunResult& result,
+                       const std::optional<json>& g_star_localisation) {
   io::ensure_directory(dir);
   const io::NetworkConfig& net = provider.network();
   const size_t n = net.cameras.size();
@@ -297,6 +298,7 @@ json write_run_outputs(const fs::path& dir, const sources::NetworkSource& provid
     f.commit();
   }
   json s = run_summary(provider, options, result);
+  if (g_star_localisation) s["g_star_localisation"] = *g_star_localisation;
   io::write_file_atomic(dir / "summary.json", s.dump(2) + "\n");
   return s;
 }

@@ -84,12 +84,13 @@ void write_inputs_cache(const fs::path& file, const sources::NetworkSource& prov
     for (size_t i = 0; i < in.frames[k].size(); ++i) {
       const auto& z = in.frames[k][i];
       f << k << ',' << i << ',' << (z.delta ? 1 : 0);
-      for (int j = 0; j < 8; ++j) num(z.f.size() == 8 ? z.f[j] : 0.0);
-      f << ',' << (z.g_io_pnp ? 1 : 0);
       const SE3 g = z.g_io_pnp ? *z.g_io_pnp : SE3::Identity();
-      for (int j = 0; j < 3; ++j) num(g.translation()[j]);
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) num(g.linear()(r, c));
+      const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> r = g.linear();
+      // The number columns: f0..f7, pnp (1 or 0, as %.17g writes them), px..pz, r00..r22.
+      Eigen::Matrix<double, 21, 1> cells;
+      cells << (z.f.size() == 8 ? z.f : Eigen::VectorXd::Zero(8)), (z.g_io_pnp ? 1.0 : 0.0),
+          g.translation(), Eigen::Map<const Eigen::Matrix<double, 9, 1>>(r.data());
+      for (const double v : cells) num(v);
       f << '\n';
     }
   f.commit();
@@ -177,6 +178,14 @@ SweepContext sweep_context(const io::NetworkConfig& net, const RecordedInputs& i
   return c;
 }
 
+namespace {
+// A pair of columns (position [m], orientation [deg]) raised to a pose error where it is larger.
+void raise_to(const PoseError& e, double& position_m, double& orientation_deg) {
+  position_m = std::max(position_m, e.position);
+  orientation_deg = std::max(orientation_deg, e.orientation_deg);
+}
+}  // namespace
+
 SweepPoint sweep_point(const SweepContext& c, RunnerSettings settings, const RecordedInputs& in) {
   NetworkRunner runner(c.graph, c.g_wi, settings);
   const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -204,9 +213,7 @@ SweepPoint sweep_point(const SweepContext& c, RunnerSettings settings, const Rec
     }
     p.worst_position_m = p.worst_orientation_deg = 0.0;
     for (const auto& cam : h[k].cameras) {
-      const auto e = pose_error(cam.est_w, *h[k].g_star);
-      p.worst_position_m = std::max(p.worst_position_m, e.position);
-      p.worst_orientation_deg = std::max(p.worst_orientation_deg, e.orientation_deg);
+      raise_to(pose_error(cam.est_w, *h[k].g_star), p.worst_position_m, p.worst_orientation_deg);
     }
   }
   // Without truth: against the measured average, between cameras, and from frame to frame.
@@ -222,9 +229,8 @@ SweepPoint sweep_point(const SweepContext& c, RunnerSettings settings, const Rec
     if (k >= tail && k > 0 && h[k - 1].cameras.size() == cams.size()) {
       for (size_t i = 0; i < cams.size(); ++i) {
         if (!cams[i].initialized || !h[k - 1].cameras[i].initialized) continue;
-        const auto e = pose_error(cams[i].est_w, h[k - 1].cameras[i].est_w);
-        p.last_quarter_step_m = std::max(p.last_quarter_step_m, e.position);
-        p.last_quarter_step_deg = std::max(p.last_quarter_step_deg, e.orientation_deg);
+        raise_to(pose_error(cams[i].est_w, h[k - 1].cameras[i].est_w), p.last_quarter_step_m,
+                 p.last_quarter_step_deg);
       }
     }
     if (!all) continue;
@@ -239,9 +245,7 @@ SweepPoint sweep_point(const SweepContext& c, RunnerSettings settings, const Rec
       p.disagreement_m = p.disagreement_deg = 0.0;
       for (size_t i = 0; i < est.size(); ++i)
         for (size_t j = i + 1; j < est.size(); ++j) {
-          const auto e = pose_error(est[i], est[j]);
-          p.disagreement_m = std::max(p.disagreement_m, e.position);
-          p.disagreement_deg = std::max(p.disagreement_deg, e.orientation_deg);
+          raise_to(pose_error(est[i], est[j]), p.disagreement_m, p.disagreement_deg);
         }
     }
   }

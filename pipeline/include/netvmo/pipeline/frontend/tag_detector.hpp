@@ -22,7 +22,22 @@
 #include "netvmo/pipeline/frontend/refine.hpp"
 #include "netvmo/pipeline/io/calibration.hpp"
 
+// libapriltag's types (apriltag/apriltag.h), for the set-up and conversion below.
+struct apriltag_detector;
+struct apriltag_family;
+struct apriltag_detection;
+
 namespace netvmo::frontend {
+
+/// A libapriltag detector searching `family` with the libapriltag settings of `s`
+/// (bits_corrected, quad_decimate, quad_sigma, nthreads, refine_edges, decode_sharpening,
+/// min_white_black_diff; no debug output). `family` must outlive it: apriltag_detector_destroy()
+/// it first. Throws std::runtime_error when libapriltag cannot create it.
+apriltag_detector* create_apriltag_detector(apriltag_family* family, const DetectorSettings& s);
+
+/// One libapriltag detection in OpenCV pixels (pixel convention above), found in an image
+/// region whose top-left pixel is `origin` of the whole image.
+TagDetection to_tag_detection(const apriltag_detection& det, cv::Point origin = {});
 
 /// How one search is done (the front end's tracking window and acquisition pass use these).
 struct SearchOptions {

@@ -106,6 +106,13 @@ int read_camera_id(const Value& id, std::set<int>& seen);
 /// An `edges:` list, in every file that has one: pairs [i, j] of camera ids in `ids`, no
 /// self-loop, no edge twice. Fails naming the entry.
 std::vector<std::pair<int, int>> read_edges(const Value& edges, const std::set<int>& ids);
+/// The `family` of a tag, in every file that names tags (network.yaml's targets, a
+/// calibration's MAP.yaml): a tag family render supports. Fails naming the key and the supported
+/// families.
+std::string read_tag_family(const Value& family);
+/// The `id` of a tag, in the same files (targets, bundles, MAP.yaml's tags): a non-negative
+/// integer. Fails naming the key.
+int read_tag_id(const Value& id);
 
 /// network.yaml text of a configuration (what load_network_config reads back).
 std::string network_yaml(const NetworkConfig& net);

@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 #include "netvmo/pipeline/run/image_run.hpp"
@@ -33,9 +34,12 @@ nlohmann::json run_summary(const sources::NetworkSource& provider, const ImageRu
 /// (frame,t,U_p,U_R, only frames with ground truth), errors.csv (frame,t and per camera the
 /// networked observer's position [mm] and orientation [deg] error to g*) and summary.json, each
 /// atomically. Several targets: each CSV has a `target` column (the primary tag's id) after
-/// `t`, its rows target after target. Returns the summary.
-nlohmann::json write_run_outputs(const std::filesystem::path& dir,
-                                 const sources::NetworkSource& provider,
-                                 const ImageRunOptions& options, const ImageRunResult& result);
+/// `t`, its rows target after target. `g_star_localisation` (`netvmo run --calibration`'s
+/// block, calib::g_star_localisation_summary()), when given, is the summary's key of that name.
+/// Returns the summary.
+nlohmann::json write_run_outputs(
+    const std::filesystem::path& dir, const sources::NetworkSource& provider,
+    const ImageRunOptions& options, const ImageRunResult& result,
+    const std::optional<nlohmann::json>& g_star_localisation = std::nullopt);
 
 }  // namespace netvmo::run
