@@ -147,6 +147,13 @@ TEST(RosBag, ImageEncodingsDecodeToTheirGray) {
       {"m: encoding: 'bayer_rggb8' is not read", "mono8"});
   expect_input_error([&] { gray("mono8", 2, 1, {1, 2}); }, {"m: step: 1 bytes is less than a row"});
   expect_input_error([&] { gray("rgb8", 2, 6, {1, 2, 3}); }, {"m: data: 3 bytes"});
+  // An odd step of 16-bit pixels (found by the fuzz target ros_messages: OpenCV threw from
+  // cv::Mat's constructor, outside any InputError).
+  expect_input_error(
+      [&] {
+        gray("mono16", 2, 5, {1, 2, 3, 4, 5});
+      },
+      {"m: step: 5 bytes is not a whole number of 16-bit pixels"});
 }
 
 // The bytes are ROS 2's CDR: a std_msgs/Header {stamp {sec 1, nanosec 2}, frame_id "ab"} is the

@@ -47,13 +47,24 @@ bool decode(const dds_topic_descriptor_t& desc, const std::uint8_t* data, std::s
   const bool bswap = little != (DDSRT_ENDIAN == DDSRT_LITTLE_ENDIAN);
   const ddsi_sertype_default st = sertype(desc);
   // The payload in 8-byte aligned memory, as Cyclone's serdata keeps it, with 8 bytes of slack
-  // after it: Cyclone 0.10.2's normalize byte-swaps the 8-byte field that straddles the end of a
-  // truncated big-endian XCDR2 payload before rejecting it (docs/hardening.md, "Findings").
+  // and a guard after it: Cyclone 0.10.2's normalize byte-swaps the 8-byte field that straddles
+  // the end of a truncated big-endian XCDR2 payload before rejecting it (docs/hardening.md,
+  // "Findings"); the slack absorbs that, and a write past it refuses the message.
   const uint32_t n = static_cast<uint32_t>(size - 4);
-  std::vector<std::uint64_t> buf((n + 8 + 7) / 8 + 1, 0);
-  std::memcpy(buf.data(), data + 4, n);
+  constexpr std::size_t kSlack = 8, kGuard = 64;
+  constexpr unsigned char kPattern = 0x5a;
+  std::vector<std::uint64_t> buf((n + kSlack + kGuard + 7) / 8);
+  auto* bytes = reinterpret_cast<unsigned char*>(buf.data());
+  std::memset(bytes, kPattern, buf.size() * 8);
+  std::memcpy(bytes, data + 4, n);
   uint32_t actual = 0;
-  if (!dds_stream_normalize(buf.data(), n, bswap, xcdr, &st, false, &actual)) {
+  const bool valid = dds_stream_normalize(buf.data(), n, bswap, xcdr, &st, false, &actual);
+  for (std::size_t k = n + kSlack; k < buf.size() * 8; ++k)
+    if (bytes[k] != kPattern) {
+      why_not = std::string(kWrotePastThePayload) + " (" + desc.m_typename + ")";
+      return false;
+    }
+  if (!valid) {
     why_not = "malformed or truncated CDR data for " + std::string(desc.m_typename);
     return false;
   }

@@ -102,6 +102,9 @@ cv::Mat decode_gray(const std::string& type, const std::vector<std::uint8_t>& ms
   if (static_cast<uint64_t>(im->data._length) < im->step * h)
     throw InputError(where + ": data: " + std::to_string(im->data._length) + " bytes, step x " +
                      "height needs " + std::to_string(im->step * h));
+  if (enc == "mono16" && im->step % 2 != 0)
+    throw InputError(where + ": step: " + std::to_string(im->step) +
+                     " bytes is not a whole number of 16-bit pixels");
   const int type_cv = channels == 1     ? CV_8UC1
                       : enc == "mono16" ? CV_16UC1
                       : channels == 2   ? CV_8UC2

@@ -11,6 +11,11 @@
 
 namespace netvmo::ros {
 
+/// The start of decode()'s why_not when Cyclone's normalize wrote beyond the payload's 8 bytes
+/// of slack (a defect of the middleware that a fuzzer must see).
+inline constexpr const char* kWrotePastThePayload =
+    "Cyclone DDS's normalize wrote past the payload";
+
 /// Reads a serialized message of type `desc` into `sample` (zeroed first) as Cyclone DDS's receive
 /// path does: checks and byte-swaps the payload (dds_stream_normalize), then reads it
 /// (dds_stream_read_sample), which allocates its strings and sequences. Encapsulations CDR_BE,
