@@ -242,6 +242,28 @@ TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
 
 // Cameras as processes run the paper's observer alone (the DDS Estimate type carries no
 // consensus state): another estimator is one line, and no output is left.
+// A rosbag2 bag of the same dataset (netvmo bag, PNG CompressedImage and CameraInfo topics)
+// launched lock-step: every node opens only its camera's topic, all on the same time origin,
+// and the merged estimates are `netvmo run`'s on the folder.
+TEST_F(Launch, ABagLaunchesAsItsFolderRuns) {
+  const fs::path ds = *dir_ / "ds", bag = *dir_ / "bag", run = *dir_ / "run_for_bag",
+                 launch = *dir_ / "launch_bag";
+  const auto b = net_test::netvmo_bounded(
+      "bag " + ds.string() + " --out " + bag.string() + " --encoding png", *dir_, 120);
+  ASSERT_EQ(b.code, 0) << b.err;
+  const auto r1 =
+      net_test::netvmo_bounded("run " + ds.string() + " --out " + run.string(), *dir_, 120);
+  ASSERT_EQ(r1.code, 0) << r1.err;
+  const int domain = net_test::loopback_domain(*dir_);
+  const auto r2 =
+      net_test::netvmo_bounded("launch " + bag.string() + " --out " + launch.string() +
+                                   " --domain " + std::to_string(domain) + " --timeout 90",
+                               *dir_, 120);
+  ASSERT_EQ(r2.code, 0) << r2.out << r2.err;
+  for (const char* f : {"estimates.csv", "energies.csv", "errors.csv"})
+    EXPECT_EQ(csv_difference(run / f, launch / f), 0.0) << f;
+}
+
 TEST_F(Launch, AnotherEstimatorIsRefusedInOneLine) {
   const fs::path ds = *dir_ / "ds";
   const int domain = net_test::loopback_domain(*dir_);

@@ -77,7 +77,8 @@ TEST(RosBag, EveryEncodingReadsBackAsTheFolder) {
 }
 
 // The netvmo command on a bag: `bag` writes it, `run` on it writes the folder's estimates, byte
-// for byte.
+// for byte, and `detect` and `sweep` the folder's detections.csv and sweep.csv (launch on a bag:
+// Launch.ABagLaunchesAsItsFolderRuns).
 TEST(RosBag, RunOnTheBagEqualsRunOnTheFolder) {
   const fs::path dir = test::scratch_dir("rosbag_run");
   synth_folder(dir / "ds", 3, 8);
@@ -97,6 +98,20 @@ TEST(RosBag, RunOnTheBagEqualsRunOnTheFolder) {
     EXPECT_EQ(test::slurp(dir / "out_ds" / f), test::slurp(dir / "out_bag" / f)) << f;
     EXPECT_FALSE(test::slurp(dir / "out_bag" / f).empty()) << f;
   }
+  // detect and sweep too.
+  for (const char* what : {"ds", "bag"}) {
+    const std::string in = (dir / what).string(), tag = std::string("_") + what;
+    const auto d =
+        test::run_netvmo("detect " + in + " --out " + (dir / ("det" + tag)).string(), dir, 300);
+    ASSERT_EQ(d.code, 0) << what << ": " << d.err;
+    const auto s = test::run_netvmo(
+        "sweep " + in + " --out " + (dir / ("sweep" + tag)).string() + " --ks 2,20", dir, 300);
+    ASSERT_EQ(s.code, 0) << what << ": " << s.err;
+  }
+  EXPECT_EQ(test::slurp(dir / "det_ds" / "detections.csv"),
+            test::slurp(dir / "det_bag" / "detections.csv"));
+  EXPECT_EQ(test::slurp(dir / "sweep_ds" / "sweep.csv"),
+            test::slurp(dir / "sweep_bag" / "sweep.csv"));
   fs::remove_all(dir);
 }
 
