@@ -119,14 +119,16 @@ RosBag::RosBag(const fs::path& dir) : dir_(dir) {
     if (sqlite3_open_v2(f.c_str(), &db->db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK)
       throw InputError(f.string() +
                        ": cannot be opened as an SQLite database: " + sqlite3_errmsg(db->db));
+    // One pass over the messages counts them per topic (the table has no index on topic_id).
     Statement topics(db->db,
-                     "SELECT t.name, t.type, t.serialization_format, "
-                     "(SELECT COUNT(*) FROM messages m WHERE m.topic_id = t.id) FROM topics t",
+                     "SELECT t.name, t.type, IFNULL(c.n, 0) FROM topics t LEFT JOIN "
+                     "(SELECT topic_id, COUNT(*) AS n FROM messages GROUP BY topic_id) c "
+                     "ON c.topic_id = t.id",
                      f.string());
     while (topics.step()) {
       auto& e = in_db[text(topics.get(), 0)];
       e.first = text(topics.get(), 1);
-      e.second += static_cast<std::uint64_t>(sqlite3_column_int64(topics.get(), 3));
+      e.second += static_cast<std::uint64_t>(sqlite3_column_int64(topics.get(), 2));
     }
     // Every message belongs to a topic of the table (a truncated file fails here too).
     Statement orphans(db->db,

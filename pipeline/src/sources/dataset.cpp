@@ -331,7 +331,7 @@ Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera, bool k
         if (!keep_going) throw;
         ds.warnings.push_back(std::string(e.what()) + "; camera " + std::to_string(cc.id) +
                               " is blind for the whole run (--keep-going)");
-        cam.source = std::make_unique<UnreadableStream>(dir / *cc.image_topic);
+        cam.source = std::make_unique<UnreadableStream>(dir.string() + ":" + *cc.image_topic);
       }
       ds.cameras.push_back(std::move(cam));
       continue;
