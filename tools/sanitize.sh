@@ -3,10 +3,11 @@
 # build-asan) with clang, AddressSanitizer + UndefinedBehaviorSanitizer (any report is fatal) and
 # the libFuzzer targets, builds everything and runs the whole ctest suite there (the fuzzers'
 # corpora included). Prints the time of each part.
-# Usage: [SANITIZE_TARGETS="t1 t2"] [SANITIZE_EXCLUDE=REGEX] tools/sanitize.sh [BUILD_DIR [CTEST_ARGS...]]
+# Usage: [SANITIZE_TARGETS="t1 t2"] [SANITIZE_EXCLUDE=REGEX] [SANITIZE_CMAKE_ARGS="-D..."]
+#        tools/sanitize.sh [BUILD_DIR [CTEST_ARGS...]]
 # With SANITIZE_TARGETS only those targets and every fuzz target are built, and only their tests
 # run (.ci/run does so to stay within CI's time). SANITIZE_EXCLUDE leaves the tests it matches
-# out; CTEST_ARGS go to ctest as they are.
+# out; SANITIZE_CMAKE_ARGS go to cmake's configure; CTEST_ARGS go to ctest as they are.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build-asan}
@@ -27,12 +28,15 @@ export OPENCV_VIDEOIO_PRIORITY_GPHOTO2=0
 # the build 15 % slower.
 flags="-O2 -gline-tables-only -DNDEBUG"
 
+read -r -a extra_cmake <<<"${SANITIZE_CMAKE_ARGS:-}"
+
 TIMEFORMAT="sanitize.sh: %R s wall, %U s user CPU, %S s system CPU"
 echo "sanitize.sh: configure and build ($build)"
 time {
   cmake -S . -B "$build" -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
     -DCMAKE_BUILD_TYPE=RelWithDebInfo -DNETVMO_FUZZ=ON -DNETVMO_BUILD_BENCHMARKS=OFF "${launcher[@]}" \
-    "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=$flags" "-DCMAKE_C_FLAGS_RELWITHDEBINFO=$flags"
+    "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=$flags" "-DCMAKE_C_FLAGS_RELWITHDEBINFO=$flags" \
+    "${extra_cmake[@]}"
   if [ -n "${SANITIZE_TARGETS:-}" ]; then
     mapfile -t fuzzers < <(cmake --build "$build" --target help | sed -n 's/^\.\.\. \(fuzz_[a-z_]*\)$/\1/p')
     # shellcheck disable=SC2086
