@@ -42,6 +42,7 @@ struct DetectOptions {
   std::string refinement = to_string(DetectorSettings{}.refinement);
   bool no_border_check = false;
   bool no_edge_bias = false;
+  bool no_shared_deviation = false;
   bool keep_going = false;
   bool quiet = false;
   bool photos = false;  ///< DATASET is a folder of photos (run_detect_photos)
@@ -97,6 +98,7 @@ int run_detect(DetectOptions o) {
   o.det.refinement = parse_refinement(o.refinement);
   o.det.border_check = !o.no_border_check;
   o.det.border_edge_bias = !o.no_edge_bias;
+  o.det.border_shared_deviation = !o.no_shared_deviation;
   io::check_output_apart(o.out, o.dataset);
   io::OutputDir out(o.out, "detect");
   Dataset ds = open_dataset(o.dataset, {}, o.keep_going);
@@ -240,6 +242,7 @@ int run_detect_photos(DetectOptions o) {
   o.det.refinement = parse_refinement(o.refinement);
   o.det.border_check = !o.no_border_check;
   o.det.border_edge_bias = !o.no_edge_bias;
+  o.det.border_shared_deviation = !o.no_shared_deviation;
   const fs::path root(o.dataset);
   if (!fs::is_directory(root)) throw InputError(o.dataset + ": not a folder of photos");
   std::vector<fs::path> files;
@@ -260,7 +263,7 @@ int run_detect_photos(DetectOptions o) {
   csv << "file,id,hamming,libapriltag_margin,narrowest_px,fully_visible,eligible,status,"
          "corner_difference_px,reason,check_e0,check_e1,check_e2,check_e3,expected_e0,"
          "expected_e1,expected_e2,expected_e3,edge_bias_x,edge_bias_y,edge_blur,scatter_x,scatter_"
-         "y,check_reason\n";
+         "y,se0,se1,se2,se3,shared_deviation,check_reason\n";
   std::map<fs::path, io::Calibration> calibs;  // a folder's calib.yaml
   std::map<fs::path, PhotoRecall> by_folder;
   PhotoRecall total;
@@ -309,6 +312,9 @@ int run_detect_photos(DetectOptions o) {
           b.expected_thickness_error[0], b.expected_thickness_error[1],
           b.expected_thickness_error[2], b.expected_thickness_error[3], b.edge_bias[0],
           b.edge_bias[1], b.edge_blur, b.edge_bias_scatter[0], b.edge_bias_scatter[1]);
+      csv << buf;
+      std::snprintf(buf, sizeof buf, "%.3f,%.3f,%.3f,%.3f,%.3f,", b.thickness_se[0],
+                    b.thickness_se[1], b.thickness_se[2], b.thickness_se[3], b.shared_deviation);
       csv << buf << check_reason << "\n";
     }
   }
@@ -441,6 +447,14 @@ void add_detect(CLI::App& app, int& exit_code) {
                   "Border check with the print's model: a side's limit is at least this x the "
                   "scatter of the print's edges measured on its cells (0: the fixed limit), 0 to "
                   "20")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 20.0));
+  cmd->add_flag("--no-shared-deviation", o->no_shared_deviation,
+                "Border check: do not take the deviation every side shares (a print's border "
+                "thinner or thicker than its cells) off each side");
+  cmd->add_option("--border-significance", o->det.border_significance,
+                  "Border check: a side fails only where its thickness error also exceeds this "
+                  "many of its own standard errors (0: off), 0 to 20")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 20.0));
   cmd->add_option("--refine", o->refinement,

@@ -170,10 +170,10 @@ PhotoRecall recall_over(const fs::path& dir) {
 }
 
 // Recall against libapriltag on every eligible tag of the corpus, with every loss listed.
-// The figure the front end reaches (docs/frontend.md) is asserted not to fall: 92 % of the
-// 395 eligible tags measured when the model of the print was introduced (the goal, 99 %, is
-// not reached: the losses are listed); no kept tag's corners more than 1.6 px from
-// libapriltag's.
+// The figure the front end reaches (docs/frontend.md) is asserted not to fall: 96.7 % of the
+// 395 eligible tags (382) measured when the shared border deviation and the significance test
+// were introduced (92.4 % before; the goal, 99 %, is not reached: the losses are listed); no
+// kept tag's corners more than 1.6 px from libapriltag's.
 TEST(RealPhotos, Corpus) {
   const fs::path dir = corpus_dir();
   if (!fs::is_directory(dir))
@@ -181,22 +181,23 @@ TEST(RealPhotos, Corpus) {
                  << "(datasets/real_photos/MANIFEST.md) and point NETVMO_REAL_PHOTOS at it";
   const PhotoRecall total = recall_over(dir);
   ASSERT_GT(total.eligible, 0);
-  EXPECT_GE(total.recall(), 0.92);
+  EXPECT_GE(total.kept, 382);
   for (double d : total.corner_differences) EXPECT_LT(d, 1.65);
 }
 
 // The part of the corpus this repository holds (datasets/real_photos/photos: 29 photos of 8 sets
 // from 5 repositories, chosen by set and file name, not by result; MANIFEST.md, "In this
 // repository"), so every CI run judges the front end on real photos. libapriltag finds 206
-// eligible tags there; the front end kept 192 (93.2 %) when this test was written, and may not
-// keep fewer (the goal, 99 %, is not reached: every loss is printed with its reason).
+// eligible tags there; the front end keeps 202 (98.1 %; 192 before the shared border deviation
+// and the significance test) and may not keep fewer (the goal, 99 %, is not reached: every
+// loss is printed with its reason).
 TEST(RealPhotos, PhotosInTheRepository) {
   const fs::path dir = fs::path(NETVMO_SOURCE_DIR) / "datasets" / "real_photos" / "photos";
   ASSERT_TRUE(fs::is_directory(dir)) << dir;
   const PhotoRecall total = recall_over(dir);
   EXPECT_EQ(total.photos, 29);
   EXPECT_EQ(total.eligible, 206) << "libapriltag's own eligible tags";
-  EXPECT_GE(total.kept, 192);
+  EXPECT_GE(total.kept, 202);
   for (double d : total.corner_differences) EXPECT_LT(d, 1.65);
 }
 

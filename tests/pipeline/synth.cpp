@@ -165,7 +165,13 @@ cv::Mat render_tags(const Calibration& calib, const std::vector<SynthTag>& tags,
             const double cy = (p.half - q.y()) / p.cell + p.bm.border;  // bitmap row (+y up)
             if (cx < -wq || cy < -wq || cx >= p.bm.total + wq || cy >= p.bm.total + wq) continue;
             best = lambda;
-            if (cx >= 0 && cy >= 0 && cx < p.bm.total && cy < p.bm.total)
+            // Distance into the black square from its outer edge [cells] (< 0 outside it).
+            const double in =
+                std::min(std::min(cx, cy), std::min(p.bm.total - cx, p.bm.total - cy)) -
+                p.bm.border;
+            if (opt.border_width != 1.0 && in >= 0.0 && in < std::max(1.0, opt.border_width))
+              value = in < opt.border_width ? opt.black : opt.white;
+            else if (cx >= 0 && cy >= 0 && cx < p.bm.total && cy < p.bm.total)
               value = printed_white(p.bm.bits, cx, cy, opt.ink_spread) ? opt.white : opt.black;
             else
               value = opt.white;

@@ -42,6 +42,11 @@ struct SynthOptions {
   /// Ink spread of the print [cells]: the black grows by this much on every edge (negative:
   /// shrinks), its corners rounded (a Euclidean dilation of the black cells); |value| < 0.5.
   double ink_spread = 0.0;
+  /// Width of the printed black border ring [cells], its outer edge where the bitmap puts it:
+  /// a print whose border is thinner (< 1) or thicker (> 1) than its data cells on every side,
+  /// the data cells left in place (1: as the bitmap; a border wider than 1 covers the data
+  /// cells next to it).
+  double border_width = 1.0;
   /// render_camera_picture: motion over the exposure [px], the image displacement of the scene
   /// during the exposure (a line kernel in linear light, before the tone curve); 0: none.
   cv::Point2d motion_blur{0.0, 0.0};

@@ -257,6 +257,8 @@ TEST(BorderCheck, BlurredTagThinnedByTheToneCurveKeptWrongSideRejected) {
   DetectorSettings fixed = with_check(true);
   fixed.border_blur_allowance = 0.0;
   fixed.border_edge_bias = false;
+  fixed.border_shared_deviation = false;
+  fixed.border_significance = 0.0;
   const DetectorSettings dflt = with_check(true);
   const cv::Mat pattern = tag_pattern("tag36h11", 0);
   int fixed_rejects = 0, wrong_quads = 0;
@@ -352,6 +354,8 @@ TEST(BorderCheck, InkSpreadAndMotionBlurKeptWrongSideRejected) {
   DetectorSettings fixed = with_check(true);
   fixed.border_blur_allowance = 0.0;
   fixed.border_edge_bias = false;
+  fixed.border_shared_deviation = false;
+  fixed.border_significance = 0.0;
   const DetectorSettings dflt = with_check(true);
   const cv::Mat pattern = tag_pattern("tag36h11", 0);
   int correct = 0, fixed_rejects = 0, wrong_quads = 0, wrong_kept_fixed = 0;
@@ -403,6 +407,76 @@ TEST(BorderCheck, InkSpreadAndMotionBlurKeptWrongSideRejected) {
               fixed_rejects, correct, wrong_quads, wrong_kept_fixed);
   EXPECT_GT(fixed_rejects, 0) << "the fixed limit kept every tag: the test shows nothing";
   EXPECT_GT(wrong_quads, 100);
+}
+
+// The real photos' other failure made by the synthesizer: a print whose black border is
+// thinner or thicker than its data cells on every side (the printer's rounding of the bitmap,
+// toner, a relief print's walls, resampling), in linear light and under the tone curve, at
+// three poses up to 61 degrees off the normal. The print's model of the cells (edge bias) does not
+// explain it: without the shared deviation every such tag is rejected; with it every one is kept,
+// and every quad of the same pictures with one side moved 1 or 1.5 px (a corner more than 1 px off)
+// is still rejected, because one side then deviates alone.
+TEST(BorderCheck, BorderThinnerOrThickerThanACellOnEverySideKeptWrongSideRejected) {
+  const auto calib = testing::test_calibration();
+  // At 57 degrees with the tilt about the tag's x axis (InkSpreadAndMotionBlur's third pose)
+  // the sides' deviations, in cells, differ by 0.03 cell and the least deviating one
+  // underestimates the print's: that tag is rejected (docs/frontend.md, known limits).
+  const std::vector<obs::SE3> poses = {
+      testing::facing_pose(1.6, 0.1, -0.05, {0.2, -0.1, 0.5}),
+      testing::facing_pose(2.0, -0.15, 0.1, {-0.2, 0.25, -1.0}),
+      testing::facing_pose(1.1, -0.05, 0.05, {0.15, -1.05, 2.0}),  // 61 degrees
+  };
+  DetectorSettings unshared = with_check(true);
+  unshared.border_shared_deviation = false;
+  const DetectorSettings dflt = with_check(true);
+  const cv::Mat pattern = tag_pattern("tag36h11", 0);
+  int correct = 0, unshared_rejects = 0, wrong_quads = 0;
+  for (double width : {0.88, 1.12})
+    for (double gamma : {1.0, 2.2})
+      for (size_t p = 0; p < poses.size(); ++p) {
+        const std::string what = "border " + std::to_string(width) + " cell, gamma " +
+                                 std::to_string(gamma) + ", pose " + std::to_string(p);
+        testing::SynthOptions opt;
+        opt.black = 12.0;
+        opt.noise_sigma = 2.0;
+        opt.seed = static_cast<unsigned>(700 + p);
+        opt.border_width = width;
+        const cv::Mat img =
+            testing::render_camera_picture(calib, {{0, kSize, poses[p], {}}}, opt, 0.6, gamma);
+        const auto truth = testing::project_corners(calib, poses[p], kSize);
+        const auto a = TagDetector(with_check(false)).detect(img, &calib);
+        ASSERT_EQ(a.status, TargetStatus::detected) << what;
+        const auto& c = a.target()->corners;
+        ASSERT_LT(max_corner_error(c, truth), 1.0) << what << ": not a correct quad";
+        const BorderCheck bu = check_border(img, c, pattern, 8, unshared, &calib);
+        const BorderCheck bd = check_border(img, c, pattern, 8, dflt, &calib);
+        std::printf(
+            "%s: corners %.2f px off, thickness errors %.2f %.2f %.2f %.2f, shared %.3f cell; "
+            "without it: %s\n",
+            what.c_str(), max_corner_error(c, truth), bd.thickness_error[0], bd.thickness_error[1],
+            bd.thickness_error[2], bd.thickness_error[3], bd.shared_deviation,
+            bu.ok ? "kept" : bu.reason.c_str());
+        ++correct;
+        unshared_rejects += !bu.ok;
+        EXPECT_TRUE(bd.ok) << what << ": " << bd.reason;
+        EXPECT_EQ(bd.shared_deviation < 0.0, width < 1.0) << what << ": " << describe(bd);
+        EXPECT_EQ(TagDetector(dflt).detect(img, &calib).status, TargetStatus::detected) << what;
+        for (size_t k = 0; k < 4; ++k) {
+          if (std::isnan(bd.thickness_error[k])) continue;  // no white data cell next to it
+          for (double d : {-1.5, -1.0, 1.0, 1.5}) {
+            const auto w = testing::move_side(c, k, d);
+            if (max_corner_error(w, truth) <= 1.0) continue;
+            ++wrong_quads;
+            const BorderCheck bw = check_border(img, w, pattern, 8, dflt, &calib);
+            EXPECT_FALSE(bw.ok) << what << ", side " << k << " moved " << d
+                                << " px: " << describe(bw);
+          }
+        }
+      }
+  std::printf("without the shared deviation %d of %d correct quads rejected; %d wrong quads\n",
+              unshared_rejects, correct, wrong_quads);
+  EXPECT_GT(unshared_rejects, correct / 2) << "the print's border passes without the model";
+  EXPECT_GT(wrong_quads, 60);
 }
 
 // Families without a black border ring inside a white one are not checked.

@@ -33,13 +33,26 @@ constexpr int kMinEdgeBiasPairs = 4;
 /// the corners: with 2x2 supersampled or aliased images a short stretch of edge carries up to
 /// ~0.25 px of quantisation error, which extrapolation would amplify. With the points spanning
 /// less than 2 cells, their median. NaN for fewer than 4 points.
-double end_offset(const std::vector<double>& t, const std::vector<double>& r) {
+double end_offset(const std::vector<double>& t, const std::vector<double>& r,
+                  double* standard_error = nullptr) {
   const size_t k = r.size();
+  if (standard_error) *standard_error = std::numeric_limits<double>::quiet_NaN();
   if (k < 4) return std::numeric_limits<double>::quiet_NaN();
   const auto [tmin, tmax] = std::minmax_element(t.begin(), t.end());
-  if (*tmax - *tmin < 2.0) return median(r);
+  // The points of one data cell share that cell's print: one independent measurement a cell.
+  const double per_cell = 5.0;
+  if (*tmax - *tmin < 2.0) {
+    const double m = median(r);
+    if (standard_error) {
+      double ss = 0.0;
+      for (double x : r) ss += (x - m) * (x - m);
+      *standard_error = std::sqrt(ss / static_cast<double>(k - 1)) *
+                        std::sqrt(per_cell / static_cast<double>(k)) * 1.2533;
+    }
+    return m;
+  }
   std::vector<char> use(k, 1);
-  double a = 0.0, b = 0.0;
+  double a = 0.0, b = 0.0, se = std::numeric_limits<double>::quiet_NaN();
   for (int pass = 0; pass < 2; ++pass) {
     double s0 = 0, st = 0, stt = 0, sr = 0, str = 0;
     for (size_t i = 0; i < k; ++i)
@@ -51,10 +64,21 @@ double end_offset(const std::vector<double>& t, const std::vector<double>& r) {
     b = (s0 * str - st * sr) / det;
     a = (sr - b * st) / s0;
     std::vector<double> res(k);
-    for (size_t i = 0; i < k; ++i) res[i] = std::abs(r[i] - a - b * t[i]);
+    double ss = 0.0;
+    for (size_t i = 0; i < k; ++i) {
+      res[i] = std::abs(r[i] - a - b * t[i]);
+      if (use[i]) ss += res[i] * res[i];
+    }
+    {
+      const double sigma = std::sqrt(ss / std::max(1.0, s0 - 2.0));
+      const double tbar = st / s0, sxx = stt - s0 * tbar * tbar;
+      const double tend = std::abs(*tmin - tbar) > std::abs(*tmax - tbar) ? *tmin : *tmax;
+      se = sigma * std::sqrt(per_cell) * std::sqrt(1.0 / s0 + (tend - tbar) * (tend - tbar) / sxx);
+    }
     const double cut = std::max(0.3, 3.0 * 1.4826 * median(res));
     for (size_t i = 0; i < k; ++i) use[i] = res[i] <= cut;
   }
+  if (standard_error) *standard_error = se;
   const double r0 = a + b * *tmin, r1 = a + b * *tmax;
   return std::abs(r0) >= std::abs(r1) ? r0 : r1;
 }
@@ -327,7 +351,7 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
   std::vector<double> near, spreads;
   // Per side: the measured inner-edge offsets, where along the side (cells) and where on the
   // tag (object cell coordinates) each was measured.
-  std::array<std::vector<double>, 4> offsets, ts;
+  std::array<std::vector<double>, 4> offsets, ts, cells;
   std::array<std::vector<cv::Point2d>, 4> where;
   for (int k = 0; k < 4; ++k) {
     const size_t ks = static_cast<size_t>(k);
@@ -405,12 +429,13 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
         if (!clean_step(start, win, sv)) continue;
       }
       offsets[ks].push_back(sv);
+      cells[ks].push_back(cell);
       ts[ks].push_back(edge_t[ks][i]);
       where[ks].push_back(S[k] + edge_t[ks][i] * D[k] - 1.0 * O[k]);
       const double spread = edge_spread(gray, e + sv * nin, nin, 0.5 * cell);
       if (!std::isnan(spread)) spreads.push_back(spread);
     }
-    out.thickness_error[ks] = end_offset(ts[ks], offsets[ks]);
+    out.thickness_error[ks] = end_offset(ts[ks], offsets[ks], &out.thickness_se[ks]);
   }
   out.aliased = near_side >= 16 && intermediate < 0.1 * near_side;
   out.thickness_limit = s.border_max_thickness_error + (out.aliased ? 0.5 : 0.0);
@@ -474,7 +499,7 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
         const double b = std::clamp(bias.at(axis, where[k][i], out.edge_bias[axis]), -limit, limit);
         r[i] -= 2.0 * (b - b_mean) * (1.0 - 1.0 / n);
       }
-      shared[k] = end_offset(ts[k], r);
+      shared[k] = end_offset(ts[k], r, &out.thickness_se[k]);
       // A print whose edges are irregular (a real printer, JPEG) scatters the border's edges
       // as much as its cells': the limit is at least border_scatter_allowance x that scatter.
       out.side_limit[k] =
@@ -497,9 +522,38 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
     c = out.common_offset;
   }
   std::array<double, 4> residual{};
+  for (size_t k = 0; k < 4; ++k) residual[k] = shared[k] - c;
+  // What the print's border does on every side alike. A real print's border is not exactly one
+  // of its cells thick (the printer's rounding of the bitmap, toner, a relief print's walls, the
+  // camera's resampling), but it is the same print on all four sides; a side on an occluder's
+  // outline or moved off the border deviates alone. Where at least three sides are measured
+  // and all deviate the same way, the least deviating one (at most border_max_edge_bias of a
+  // cell) is the print's and is taken off every side.
+  // The deviation is a fraction of a cell: under perspective each side's share of it, in
+  // pixels, is that fraction of the cell across the side.
+  if (s.border_shared_deviation) {
+    int measured_sides = 0, above = 0, below = 0;
+    double least = std::numeric_limits<double>::infinity();  // [cells]
+    std::array<double, 4> cell{};
+    for (size_t k = 0; k < 4; ++k) {
+      if (std::isnan(residual[k]) || cells[k].empty()) continue;
+      cell[k] = median(cells[k]);
+      ++measured_sides;
+      above += residual[k] > 0.0;
+      below += residual[k] < 0.0;
+      if (std::abs(residual[k] / cell[k]) < std::abs(least)) least = residual[k] / cell[k];
+    }
+    if (measured_sides >= 3 && (above == measured_sides || below == measured_sides)) {
+      out.shared_deviation = std::clamp(least, -s.border_max_edge_bias, s.border_max_edge_bias);
+      for (size_t k = 0; k < 4; ++k)
+        if (!std::isnan(residual[k])) residual[k] -= out.shared_deviation * cell[k];
+    }
+  }
   for (size_t k = 0; k < 4; ++k) {
-    residual[k] = shared[k] - c;
     out.expected_thickness_error[k] = out.thickness_error[k] - residual[k];
+    // A deviation is only evidence where it stands out of the side's own measurement noise.
+    if (s.border_significance > 0.0 && !std::isnan(out.thickness_se[k]))
+      out.side_limit[k] = std::max(out.side_limit[k], s.border_significance * out.thickness_se[k]);
   }
 
   // A side fails on either test; the reason names the side that fails worst (relative to its

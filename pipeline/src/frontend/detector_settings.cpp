@@ -50,6 +50,8 @@ void validate(const DetectorSettings& s) {
     bad("border_max_edge_bias must be in 0..0.5 (cells)");
   if (!(s.border_scatter_allowance >= 0.0 && s.border_scatter_allowance <= 20.0))
     bad("border_scatter_allowance must be in 0..20");
+  if (!(s.border_significance >= 0.0 && s.border_significance <= 20.0))
+    bad("border_significance must be in 0..20");
 }
 
 }  // namespace netvmo::frontend

@@ -65,6 +65,15 @@ struct BorderCheck {
   /// thickness_error that 2 b (1 - 1/n) explains, b the local bias across the side at each
   /// inner-edge point; otherwise common_offset.
   std::array<double, 4> expected_thickness_error{};
+  /// Per side: the standard error of the thickness error, from the scatter of the inner-edge
+  /// offsets about the line fitted along the side, one independent measurement per data cell
+  /// (the five points of a cell share its print), at the end it is evaluated. NaN where the
+  /// thickness error is.
+  std::array<double, 4> thickness_se{};
+  /// The deviation every measured side shares, as a fraction of the cell across each side,
+  /// taken off each (that fraction of its own cell) before the limit
+  /// (DetectorSettings::border_shared_deviation) [cells]; 0 where the sides disagree in sign.
+  double shared_deviation = 0.0;
 };
 
 /// The tag's bitmap as libapriltag prints it (apriltag_to_image): total_width x total_width

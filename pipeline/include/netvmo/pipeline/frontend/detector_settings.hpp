@@ -83,6 +83,17 @@ struct DetectorSettings {
   /// edges as imaged, which its border shares (0.03 px on clean renderings, 0.04-0.3 px on real
   /// photos). 0: the fixed limit alone.
   double border_scatter_allowance = 4.0;
+  /// A real print's border is not exactly one of its cells thick, but it is the same on all four
+  /// sides: where at least three sides are measured and all deviate the same way after the
+  /// print's edge bias, the least deviating one's deviation (at most border_max_edge_bias of a
+  /// cell) is taken off every side (BorderCheck::shared_deviation). A side on an occluder's
+  /// outline deviates alone. false: off.
+  bool border_shared_deviation = true;
+  /// A side's thickness error fails only when it also exceeds this many of its own standard
+  /// errors (BorderCheck::thickness_se: the scatter of the inner-edge offsets along the side,
+  /// one independent measurement per data cell): a deviation within a noisy image's own
+  /// measurement noise is no evidence of a wrong side. 0: off.
+  double border_significance = 3.0;
 };
 
 /// Throws InputError naming the first field out of its range.
