@@ -106,16 +106,23 @@ TEST(OutputSafety, ASecondCommandOnTheSameOutputFailsPlainly) {
   const auto dir = testing::fresh_dir("lock");
   testing::write_synth_dataset(dir / "ds", testing::simple_dataset_spec(3, 20));
   const fs::path out = dir / "out";
-  // Two real runs at once: the first holds the lock while it works.
+  // Two real runs at once: the first holds the lock while it works. It is stopped (SIGSTOP)
+  // once its staging folder exists, so that it still holds the lock however fast this machine
+  // runs it, and continued after the second has tried.
   const pid_t first =
       start({kNetvmo, "run", (dir / "ds").string(), "--out", out.string()}, dir / "first.log");
-  const auto until = Clock::now() + std::chrono::seconds(20);
-  while (!fs::exists(dir / ("out.partial-" + std::to_string(first))) && Clock::now() < until)
+  const fs::path staging = dir / ("out.partial-" + std::to_string(first));
+  const auto until = Clock::now() + std::chrono::seconds(60);
+  while (!fs::exists(staging) && Clock::now() < until)
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  ASSERT_EQ(::kill(first, SIGSTOP), 0);
+  const bool holding = fs::exists(staging);
   const auto second = test::run_netvmo(
       "run " + (dir / "ds").string() + " --out " + out.string() + " --no-overlays --no-plots", dir,
       60);
+  ASSERT_EQ(::kill(first, SIGCONT), 0);
   const int status = wait_bounded(first, 60);
+  ASSERT_TRUE(holding) << "the first run ended before it could be stopped";
   ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << test::slurp(dir / "first.log");
   EXPECT_EQ(second.code, 1);
   EXPECT_EQ(count_lines(second.err), 1) << second.err;
