@@ -479,6 +479,55 @@ TEST(BorderCheck, BorderThinnerOrThickerThanACellOnEverySideKeptWrongSideRejecte
   EXPECT_GT(wrong_quads, 60);
 }
 
+// The corners of the print's cell grid: ink spread (the black grown by +-0.12 cell) and a
+// camera's tone curve on a blurred print move the black border's outer edges, so the fitted
+// quad is the cell grid's dilated by the edge bias, and PnP's distance is off by 2 b / side.
+// With the bias the check measured on the cells taken off each side (remove_edge_bias), the
+// front end's corners are the nominal square's; without it they are the inked outline's.
+TEST(BorderCheck, EdgeBiasRemovedCornersAreTheCellGrids) {
+  const auto calib = testing::test_calibration();
+  const std::vector<obs::SE3> poses = {
+      testing::facing_pose(1.6, 0.1, -0.05, {0.2, -0.1, 0.5}),
+      testing::facing_pose(1.0, 0.05, 0.0, {1.0, 0.1, 0.3}),  // 57 degrees off the normal
+      testing::facing_pose(2.0, -0.15, 0.1, {-0.2, 0.25, -1.0}),
+  };
+  struct Case {
+    double spread, sigma, gamma;
+    const char* what;
+  };
+  const Case cases[] = {{0.12, 0.6, 1.0, "ink spread +0.12 cell"},
+                        {-0.12, 0.6, 1.0, "ink spread -0.12 cell"},
+                        {0.0, 1.2, 2.2, "blur 1.2 px under the tone curve"}};
+  DetectorSettings fitted = with_check(true);
+  fitted.correct_edge_bias = false;
+  const DetectorSettings dflt = with_check(true);
+  for (const Case& c : cases) {
+    double worst_fitted = 0.0;
+    for (size_t p = 0; p < poses.size(); ++p) {
+      const std::string what = std::string(c.what) + ", pose " + std::to_string(p);
+      testing::SynthOptions opt;
+      opt.black = 12.0;
+      opt.noise_sigma = 2.0;
+      opt.seed = static_cast<unsigned>(900 + p);
+      opt.ink_spread = c.spread;
+      const cv::Mat img =
+          testing::render_camera_picture(calib, {{0, kSize, poses[p], {}}}, opt, c.sigma, c.gamma);
+      const auto nominal = testing::project_corners(calib, poses[p], kSize);
+      const auto a = TagDetector(dflt).detect(img, &calib);
+      const auto b = TagDetector(fitted).detect(img, &calib);
+      ASSERT_EQ(a.status, TargetStatus::detected) << what << ": " << a.reason;
+      ASSERT_EQ(b.status, TargetStatus::detected) << what << ": " << b.reason;
+      const double e_grid = max_corner_error(a.target()->corners, nominal);
+      const double e_fitted = max_corner_error(b.target()->corners, nominal);
+      std::printf("%s: corners from the nominal square %.2f px (fitted outline %.2f px)\n",
+                  what.c_str(), e_grid, e_fitted);
+      EXPECT_LT(e_grid, 0.3) << what;
+      worst_fitted = std::max(worst_fitted, e_fitted);
+    }
+    EXPECT_GT(worst_fitted, 0.5) << c.what << ": the outline is not off, the test shows nothing";
+  }
+}
+
 // Families without a black border ring inside a white one are not checked.
 TEST(BorderCheck, ReversedBorderFamilyNotChecked) {
   const cv::Mat pattern = tag_pattern("tagStandard41h12", 0);

@@ -500,6 +500,17 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
         r[i] -= 2.0 * (b - b_mean) * (1.0 - 1.0 / n);
       }
       shared[k] = end_offset(ts[k], r, &out.thickness_se[k]);
+      // The bias across the side itself, a quarter and three quarters along it (perspective
+      // grows an ink spread in pixels toward the near side); 0 where the axis's bias is within
+      // what the estimator itself shows on clean renderings (edge_bias_deadband).
+      // Nor in a point-sampled image, whose edges are quantised to the pixel grid (`aliased`).
+      for (size_t e = 0; e < 2; ++e)
+        out.side_edge_bias[k][e] =
+            out.aliased || std::abs(out.edge_bias[axis]) <= s.edge_bias_deadband
+                ? 0.0
+                : std::clamp(bias.at(axis, S[k] + (0.25 + 0.5 * static_cast<double>(e)) * N * D[k],
+                                     out.edge_bias[axis]),
+                             -limit, limit);
       // A print whose edges are irregular (a real printer, JPEG) scatters the border's edges
       // as much as its cells': the limit is at least border_scatter_allowance x that scatter.
       out.side_limit[k] =
@@ -611,6 +622,55 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
     out.reason = buf;
   }
   return out;
+}
+
+std::array<cv::Point2d, 4> remove_edge_bias(const std::array<cv::Point2d, 4>& corners,
+                                            const BorderCheck& check,
+                                            const io::Calibration* calib) {
+  for (const auto& side : check.side_edge_bias)
+    if (std::isnan(side[0]) || std::isnan(side[1])) return corners;
+  const io::Calibration* dist = calib && calib->has_distortion() ? calib : nullptr;
+  std::vector<cv::Point2d> ideal(corners.begin(), corners.end());
+  if (dist) {
+    ideal = io::normalize_points(ideal, *dist);
+    for (auto& p : ideal) {
+      const cv::Vec3d q = dist->K * cv::Vec3d(p.x, p.y, 1.0);
+      p = cv::Point2d(q[0] / q[2], q[1] / q[2]);
+    }
+  }
+  const cv::Point2d centre = 0.25 * (ideal[0] + ideal[1] + ideal[2] + ideal[3]);
+  // Side k moved inward by its bias: the points a quarter and three quarters along it, each
+  // moved by the bias there along the side's inward normal.
+  std::array<cv::Point2d, 4> a, d;
+  for (size_t k = 0; k < 4; ++k) {
+    const cv::Point2d p = ideal[k], q = ideal[(k + 1) % 4], u = q - p;
+    cv::Point2d normal(-u.y, u.x);
+    normal /= cv::norm(normal);
+    if ((centre - p).dot(normal) < 0.0) normal = -normal;
+    const cv::Point2d p1 = p + 0.25 * u + check.side_edge_bias[k][0] * normal;
+    const cv::Point2d p3 = p + 0.75 * u + check.side_edge_bias[k][1] * normal;
+    a[k] = p1;
+    d[k] = p3 - p1;
+  }
+  std::vector<cv::Point2d> out(4);
+  for (size_t k = 0; k < 4; ++k) {
+    // Corner k: sides k - 1 and k.
+    const size_t j = (k + 3) % 4;
+    const double det = d[j].x * (-d[k].y) - d[j].y * (-d[k].x);
+    if (!(std::abs(det) > 1e-9)) return corners;
+    const cv::Point2d r = a[k] - a[j];
+    const double t = (r.x * (-d[k].y) - r.y * (-d[k].x)) / det;
+    out[k] = a[j] + t * d[j];
+  }
+  if (dist) {
+    const cv::Matx33d Kinv = dist->K.inv();
+    for (auto& p : out) {
+      const cv::Vec3d q = Kinv * cv::Vec3d(p.x, p.y, 1.0);
+      p = cv::Point2d(q[0] / q[2], q[1] / q[2]);
+    }
+    out = io::denormalize_points(out, *dist);
+  }
+  return {out[0], out[1], out[2], out[3]};
 }
 
 }  // namespace netvmo::frontend

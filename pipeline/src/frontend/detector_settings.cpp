@@ -52,6 +52,7 @@ void validate(const DetectorSettings& s) {
     bad("border_scatter_allowance must be in 0..20");
   if (!(s.border_significance >= 0.0 && s.border_significance <= 20.0))
     bad("border_significance must be in 0..20");
+  if (!(s.edge_bias_deadband >= 0.0)) bad("edge_bias_deadband must be >= 0");
 }
 
 }  // namespace netvmo::frontend

@@ -186,6 +186,9 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
           bc.reason = buf;
         }
       }
+      // The corners of the print's cell grid, not of its inked outline (DetectorSettings::
+      // correct_edge_bias).
+      if (bc.ok && s.correct_edge_bias) corners = remove_edge_bias(corners, bc, calib);
       return CandidateCheck{bc.ok, bc.reason};
     };
   };

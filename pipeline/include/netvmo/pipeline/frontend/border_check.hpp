@@ -74,6 +74,14 @@ struct BorderCheck {
   /// taken off each (that fraction of its own cell) before the limit
   /// (DetectorSettings::border_shared_deviation) [cells]; 0 where the sides disagree in sign.
   double shared_deviation = 0.0;
+  /// Per side, a quarter and three quarters along it: the print's edge bias across the side
+  /// there (the local value of edge_bias of the axis across it, clamped as the test does)
+  /// [px]; NaN where the bias was not measured on both axes. remove_edge_bias() uses it.
+  std::array<std::array<double, 2>, 4> side_edge_bias{
+      {{std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()},
+       {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()},
+       {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()},
+       {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()}}};
 };
 
 /// The tag's bitmap as libapriltag prints it (apriltag_to_image): total_width x total_width
@@ -135,5 +143,17 @@ cv::Mat tag_pattern(const std::string& family, int id);
 BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners,
                          const cv::Mat& pattern, int border_cells, const DetectorSettings& s,
                          const io::Calibration* calib = nullptr);
+
+/// The corners of the print's cell grid from corners fitted to the outer edges of its black
+/// border: every black/white edge of a print is imaged displaced toward the white by the edge
+/// bias b (ink spread, bloom: b > 0; a camera's tone curve on a blurred print: b < 0; motion
+/// blur: along its axis), so the fitted quad is the grid's dilated by b. Each side is moved
+/// inward by the bias across it (BorderCheck::side_edge_bias, measured on the tag's own data
+/// cells, a quarter and three quarters along the side: perspective grows it toward the near
+/// side), in undistorted pixels where `calib` has distortion, and the corners are the moved
+/// sides' intersections. The corners unchanged where the bias was not measured.
+std::array<cv::Point2d, 4> remove_edge_bias(const std::array<cv::Point2d, 4>& corners,
+                                            const BorderCheck& check,
+                                            const io::Calibration* calib = nullptr);
 
 }  // namespace netvmo::frontend

@@ -94,6 +94,19 @@ struct DetectorSettings {
   /// one independent measurement per data cell): a deviation within a noisy image's own
   /// measurement noise is no evidence of a wrong side. 0: off.
   double border_significance = 3.0;
+  /// Report the corners of the print's cell grid (remove_edge_bias()): each side of the quad
+  /// fitted to the black border's outer edges moved inward by the print's edge bias the check
+  /// measured across it on the tag's own data cells (ink spread and bloom grow the black, a
+  /// camera's tone curve on a blurred print shrinks it; both would otherwise scale the tag and
+  /// move PnP's distance by 2 b / side). network.yaml's tag size is then the bitmap's n cells as
+  /// generated. Needs the border check and the print's model (border_edge_bias); where the bias
+  /// was not measured the corners stay as fitted. false: the fitted corners.
+  bool correct_edge_bias = true;
+  /// The edge bias below which an axis's corners are not corrected [px]: what the estimator
+  /// measures on clean renderings, whose prints and imaging have no bias (|b| <= 0.13 px on
+  /// paper5_render and occluder_sweep, 2026-12-02; docs/frontend.md). Correcting by that much
+  /// would move the corners by the estimator's own error.
+  double edge_bias_deadband = 0.15;
 };
 
 /// Throws InputError naming the first field out of its range.
