@@ -43,6 +43,7 @@ struct DetectOptions {
   bool no_border_check = false;
   bool no_edge_bias = false;
   bool no_shared_deviation = false;
+  bool no_edge_bias_correction = false;
   bool keep_going = false;
   bool quiet = false;
   bool photos = false;  ///< DATASET is a folder of photos (run_detect_photos)
@@ -99,6 +100,7 @@ int run_detect(DetectOptions o) {
   o.det.border_check = !o.no_border_check;
   o.det.border_edge_bias = !o.no_edge_bias;
   o.det.border_shared_deviation = !o.no_shared_deviation;
+  o.det.correct_edge_bias = !o.no_edge_bias_correction;
   io::check_output_apart(o.out, o.dataset);
   io::OutputDir out(o.out, "detect");
   Dataset ds = open_dataset(o.dataset, {}, o.keep_going);
@@ -243,6 +245,7 @@ int run_detect_photos(DetectOptions o) {
   o.det.border_check = !o.no_border_check;
   o.det.border_edge_bias = !o.no_edge_bias;
   o.det.border_shared_deviation = !o.no_shared_deviation;
+  o.det.correct_edge_bias = !o.no_edge_bias_correction;
   const fs::path root(o.dataset);
   if (!fs::is_directory(root)) throw InputError(o.dataset + ": not a folder of photos");
   std::vector<fs::path> files;
@@ -452,6 +455,10 @@ void add_detect(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-shared-deviation", o->no_shared_deviation,
                 "Border check: do not take the deviation every side shares (a print's border "
                 "thinner or thicker than its cells) off each side");
+  cmd->add_flag("--no-edge-bias-correction", o->no_edge_bias_correction,
+                "Report the corners fitted to the black border's outer edges (the inked "
+                "outline), not those of the print's cell grid (the measured edge bias taken off "
+                "each side)");
   cmd->add_option("--border-significance", o->det.border_significance,
                   "Border check: a side fails only where its thickness error also exceeds this "
                   "many of its own standard errors (0: off), 0 to 20")
