@@ -90,13 +90,7 @@ class SquareToImage {
   SquareToImage(const std::array<cv::Point2d, 4>& corners, int n, const io::Calibration* calib)
       : calib_(calib && calib->has_distortion() ? calib : nullptr) {
     std::vector<cv::Point2d> ideal(corners.begin(), corners.end());
-    if (calib_) {
-      ideal = io::normalize_points(ideal, *calib_);
-      for (auto& p : ideal) {
-        const cv::Vec3d q = calib_->K * cv::Vec3d(p.x, p.y, 1.0);
-        p = cv::Point2d(q[0] / q[2], q[1] / q[2]);
-      }
-    }
+    if (calib_) ideal = io::ideal_pixels(ideal, *calib_);
     // Corner k of the object square in cell coordinates (X right, Y down the printed tag,
     // the black square is [0, n]^2): c0 bottom-left, c1 bottom-right, c2 top-right, c3 top-left.
     const double N = n;
@@ -129,14 +123,7 @@ class SquareToImage {
       const cv::Vec3d q = H_ * cv::Vec3d(p.x, p.y, 1.0);
       out.emplace_back(q[0] / q[2], q[1] / q[2]);
     }
-    if (calib_) {
-      const cv::Matx33d Kinv = calib_->K.inv();
-      for (auto& p : out) {
-        const cv::Vec3d q = Kinv * cv::Vec3d(p.x, p.y, 1.0);
-        p = cv::Point2d(q[0] / q[2], q[1] / q[2]);
-      }
-      out = io::denormalize_points(out, *calib_);
-    }
+    if (calib_) out = io::distorted_pixels(out, *calib_);
     return out;
   }
 
@@ -631,13 +618,7 @@ std::array<cv::Point2d, 4> remove_edge_bias(const std::array<cv::Point2d, 4>& co
     if (std::isnan(side[0]) || std::isnan(side[1])) return corners;
   const io::Calibration* dist = calib && calib->has_distortion() ? calib : nullptr;
   std::vector<cv::Point2d> ideal(corners.begin(), corners.end());
-  if (dist) {
-    ideal = io::normalize_points(ideal, *dist);
-    for (auto& p : ideal) {
-      const cv::Vec3d q = dist->K * cv::Vec3d(p.x, p.y, 1.0);
-      p = cv::Point2d(q[0] / q[2], q[1] / q[2]);
-    }
-  }
+  if (dist) ideal = io::ideal_pixels(ideal, *dist);
   const cv::Point2d centre = 0.25 * (ideal[0] + ideal[1] + ideal[2] + ideal[3]);
   // Side k moved inward by its bias: the points a quarter and three quarters along it, each
   // moved by the bias there along the side's inward normal.
@@ -662,14 +643,7 @@ std::array<cv::Point2d, 4> remove_edge_bias(const std::array<cv::Point2d, 4>& co
     const double t = (r.x * (-d[k].y) - r.y * (-d[k].x)) / det;
     out[k] = a[j] + t * d[j];
   }
-  if (dist) {
-    const cv::Matx33d Kinv = dist->K.inv();
-    for (auto& p : out) {
-      const cv::Vec3d q = Kinv * cv::Vec3d(p.x, p.y, 1.0);
-      p = cv::Point2d(q[0] / q[2], q[1] / q[2]);
-    }
-    out = io::denormalize_points(out, *dist);
-  }
+  if (dist) out = io::distorted_pixels(out, *dist);
   return {out[0], out[1], out[2], out[3]};
 }
 

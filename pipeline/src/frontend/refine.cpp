@@ -35,13 +35,7 @@ bool refine_edge_lines(const cv::Mat& g, std::array<cv::Point2d, 4>& c, int bord
       if (edge_offset(g, p, n, w, s)) pts.push_back(p + s * n);
     }
     if (pts.size() < 4) return false;
-    if (undistort) {  // ideal pixels: K times the undistorted normalized point
-      pts = io::normalize_points(pts, *calib);
-      for (auto& p : pts) {
-        const cv::Vec3d q = calib->K * cv::Vec3d(p.x, p.y, 1.0);
-        p = cv::Point2d(q[0] / q[2], q[1] / q[2]);
-      }
-    }
+    if (undistort) pts = io::ideal_pixels(pts, *calib);
     // Total least squares line through the points.
     cv::Point2d mean(0, 0);
     for (const auto& p : pts) mean += p;
@@ -68,13 +62,7 @@ bool refine_edge_lines(const cv::Mat& g, std::array<cv::Point2d, 4>& c, int bord
     out[static_cast<size_t>(k)] = cv::Point2d(l1[2] + t1 * l1[0], l1[3] + t1 * l1[1]);
   }
   if (undistort) {
-    std::vector<cv::Point2d> ideal(out.begin(), out.end()), xy;
-    const cv::Matx33d Kinv = calib->K.inv();
-    for (auto& p : ideal) {
-      const cv::Vec3d q = Kinv * cv::Vec3d(p.x, p.y, 1.0);
-      xy.emplace_back(q[0] / q[2], q[1] / q[2]);
-    }
-    const auto px = io::denormalize_points(xy, *calib);
+    const auto px = io::distorted_pixels({out.begin(), out.end()}, *calib);
     std::copy(px.begin(), px.end(), out.begin());
   }
   const double max_move = std::max(1.5, 0.5 * cell);

@@ -549,4 +549,26 @@ std::vector<cv::Point2d> denormalize_points(const std::vector<cv::Point2d>& xy,
   return out;
 }
 
+std::vector<cv::Point2d> ideal_pixels(const std::vector<cv::Point2d>& px,
+                                      const Calibration& calib) {
+  std::vector<cv::Point2d> out = normalize_points(px, calib);
+  for (auto& p : out) {
+    const cv::Vec3d q = calib.K * cv::Vec3d(p.x, p.y, 1.0);
+    p = cv::Point2d(q[0] / q[2], q[1] / q[2]);
+  }
+  return out;
+}
+
+std::vector<cv::Point2d> distorted_pixels(const std::vector<cv::Point2d>& ideal,
+                                          const Calibration& calib) {
+  std::vector<cv::Point2d> xy;
+  xy.reserve(ideal.size());
+  const cv::Matx33d Kinv = calib.K.inv();
+  for (const auto& p : ideal) {
+    const cv::Vec3d q = Kinv * cv::Vec3d(p.x, p.y, 1.0);
+    xy.emplace_back(q[0] / q[2], q[1] / q[2]);
+  }
+  return denormalize_points(xy, calib);
+}
+
 }  // namespace netvmo::io

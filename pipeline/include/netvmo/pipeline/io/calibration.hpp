@@ -96,5 +96,11 @@ std::vector<cv::Point2d> normalize_points(const std::vector<cv::Point2d>& px,
 /// cv::fisheye::distortPoints for a fisheye calibration).
 std::vector<cv::Point2d> denormalize_points(const std::vector<cv::Point2d>& xy,
                                             const Calibration& calib);
+/// Pixel points to ideal (undistorted) pixels: K times their normalize_points() coordinates,
+/// where straight lines of the scene are straight.
+std::vector<cv::Point2d> ideal_pixels(const std::vector<cv::Point2d>& px, const Calibration& calib);
+/// Inverse of ideal_pixels(): ideal pixels to distorted pixels (K^-1, then denormalize_points()).
+std::vector<cv::Point2d> distorted_pixels(const std::vector<cv::Point2d>& ideal,
+                                          const Calibration& calib);
 
 }  // namespace netvmo::io
