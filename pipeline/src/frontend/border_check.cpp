@@ -46,6 +46,7 @@ double end_offset(const std::vector<double>& t, const std::vector<double>& r,
     if (standard_error) {
       double ss = 0.0;
       for (double x : r) ss += (x - m) * (x - m);
+      // The median's standard error: sqrt(pi / 2) = 1.2533 times the mean's.
       *standard_error = std::sqrt(ss / static_cast<double>(k - 1)) *
                         std::sqrt(per_cell / static_cast<double>(k)) * 1.2533;
     }
@@ -69,7 +70,8 @@ double end_offset(const std::vector<double>& t, const std::vector<double>& r,
       res[i] = std::abs(r[i] - a - b * t[i]);
       if (use[i]) ss += res[i] * res[i];
     }
-    {
+    {  // The line's standard error at the end further from the points' centre, the larger of
+       // the two ends'.
       const double sigma = std::sqrt(ss / std::max(1.0, s0 - 2.0));
       const double tbar = st / s0, sxx = stt - s0 * tbar * tbar;
       const double tend = std::abs(*tmin - tbar) > std::abs(*tmax - tbar) ? *tmin : *tmax;

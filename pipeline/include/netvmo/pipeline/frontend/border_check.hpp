@@ -67,8 +67,8 @@ struct BorderCheck {
   std::array<double, 4> expected_thickness_error{};
   /// Per side: the standard error of the thickness error, from the scatter of the inner-edge
   /// offsets about the line fitted along the side, one independent measurement per data cell
-  /// (the five points of a cell share its print), at the end it is evaluated. NaN where the
-  /// thickness error is.
+  /// (the five points of a cell share its print), at the end of the measured stretch further
+  /// from the points' centre (the larger of the two ends'). NaN where the thickness error is.
   std::array<double, 4> thickness_se{};
   /// The deviation every measured side shares, as a fraction of the cell across each side,
   /// taken off each (that fraction of its own cell) before the limit
