@@ -95,12 +95,17 @@ struct TruthTally {
   }
 };
 
-int run_detect(DetectOptions o) {
+/// The detector settings the command line's flags and names stand for.
+void apply_detector_flags(DetectOptions& o) {
   o.det.refinement = parse_refinement(o.refinement);
   o.det.border_check = !o.no_border_check;
   o.det.border_edge_bias = !o.no_edge_bias;
   o.det.border_shared_deviation = !o.no_shared_deviation;
   o.det.correct_edge_bias = !o.no_edge_bias_correction;
+}
+
+int run_detect(DetectOptions o) {
+  apply_detector_flags(o);
   io::check_output_apart(o.out, o.dataset);
   io::OutputDir out(o.out, "detect");
   Dataset ds = open_dataset(o.dataset, {}, o.keep_going);
@@ -241,11 +246,7 @@ int run_detect(DetectOptions o) {
 /// calibration, is its photos' camera) against libapriltag's own detections (photo_recall.hpp):
 /// OUT/photos.csv, a line per folder and the totals with every loss by reason.
 int run_detect_photos(DetectOptions o) {
-  o.det.refinement = parse_refinement(o.refinement);
-  o.det.border_check = !o.no_border_check;
-  o.det.border_edge_bias = !o.no_edge_bias;
-  o.det.border_shared_deviation = !o.no_shared_deviation;
-  o.det.correct_edge_bias = !o.no_edge_bias_correction;
+  apply_detector_flags(o);
   const fs::path root(o.dataset);
   if (!fs::is_directory(root)) throw InputError(o.dataset + ": not a folder of photos");
   std::vector<fs::path> files;

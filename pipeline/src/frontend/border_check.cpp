@@ -19,8 +19,12 @@ namespace {
 using detail::edge_offset;
 using detail::edge_spread;
 using detail::inside;
+using detail::intersect_lines;
 using detail::median;
 using detail::sample_bilinear;
+
+/// Where the inner edge is located along a white data cell next to the border [cells].
+constexpr double kThicknessT[] = {0.2, 0.35, 0.5, 0.65, 0.8};
 
 /// Pairs of adjacent runs needed on each axis to believe its measured edge bias.
 constexpr int kMinEdgeBiasPairs = 4;
@@ -40,7 +44,7 @@ double end_offset(const std::vector<double>& t, const std::vector<double>& r,
   if (k < 4) return std::numeric_limits<double>::quiet_NaN();
   const auto [tmin, tmax] = std::minmax_element(t.begin(), t.end());
   // The points of one data cell share that cell's print: one independent measurement a cell.
-  const double per_cell = 5.0;
+  const double per_cell = static_cast<double>(std::size(kThicknessT));
   if (*tmax - *tmin < 2.0) {
     const double m = median(r);
     if (standard_error) {
@@ -284,7 +288,6 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
   const cv::Point2d O[4] = {{0, 1}, {1, 0}, {0, -1}, {-1, 0}};
   constexpr int kPerCell = 4;  // contrast samples per cell along a side
   const int m = kPerCell * n;  // contrast samples per side
-  constexpr double kThicknessT[] = {0.2, 0.35, 0.5, 0.65, 0.8};  // along a white data cell
 
   // Every object point, mapped in one batch: white data cell centres, then per side its
   // contrast pairs (quiet zone, border) and its inner-edge triples (edge, outer, inner).
@@ -639,11 +642,9 @@ std::array<cv::Point2d, 4> remove_edge_bias(const std::array<cv::Point2d, 4>& co
   for (size_t k = 0; k < 4; ++k) {
     // Corner k: sides k - 1 and k.
     const size_t j = (k + 3) % 4;
-    const double det = d[j].x * (-d[k].y) - d[j].y * (-d[k].x);
-    if (!(std::abs(det) > 1e-9)) return corners;
-    const cv::Point2d r = a[k] - a[j];
-    const double t = (r.x * (-d[k].y) - r.y * (-d[k].x)) / det;
-    out[k] = a[j] + t * d[j];
+    const auto corner = intersect_lines(a[j], d[j], a[k], d[k]);
+    if (!corner) return corners;
+    out[k] = *corner;
   }
   if (dist) out = io::distorted_pixels(out, *dist);
   return {out[0], out[1], out[2], out[3]};

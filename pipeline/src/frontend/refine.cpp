@@ -55,11 +55,10 @@ bool refine_edge_lines(const cv::Mat& g, std::array<cv::Point2d, 4>& c, int bord
     // corner k = intersection of edge k-1 (c[k-1] -> c[k]) and edge k (c[k] -> c[k+1])
     const cv::Vec4d& l1 = lines[static_cast<size_t>((k + 3) % 4)];
     const cv::Vec4d& l2 = lines[static_cast<size_t>(k)];
-    const double det = l1[0] * (-l2[1]) - l1[1] * (-l2[0]);
-    if (std::abs(det) < 1e-6) return false;
-    const double rx = l2[2] - l1[2], ry = l2[3] - l1[3];
-    const double t1 = (rx * (-l2[1]) - ry * (-l2[0])) / det;
-    out[static_cast<size_t>(k)] = cv::Point2d(l1[2] + t1 * l1[0], l1[3] + t1 * l1[1]);
+    const auto corner =
+        detail::intersect_lines({l1[2], l1[3]}, {l1[0], l1[1]}, {l2[2], l2[3]}, {l2[0], l2[1]});
+    if (!corner) return false;
+    out[static_cast<size_t>(k)] = *corner;
   }
   if (undistort) {
     const auto px = io::distorted_pixels({out.begin(), out.end()}, *calib);

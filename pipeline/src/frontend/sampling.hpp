@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <vector>
 
 namespace netvmo::frontend::detail {
@@ -76,6 +77,17 @@ inline double edge_spread(const cv::Mat& g, cv::Point2d p, cv::Point2d n, double
   if (!(sum_g > 0.0)) return std::numeric_limits<double>::quiet_NaN();
   const double c = sum_sg / sum_g;
   return std::sqrt(std::max(0.0, sum_ssg / sum_g - c * c));
+}
+
+/// The intersection of the lines a1 + t d1 and a2 + s d2; nullopt where they are parallel to
+/// 1e-6 (|d1 x d2| below 1e-6 |d1| |d2|).
+inline std::optional<cv::Point2d> intersect_lines(cv::Point2d a1, cv::Point2d d1, cv::Point2d a2,
+                                                  cv::Point2d d2) {
+  const double det = d1.x * (-d2.y) - d1.y * (-d2.x);
+  if (std::abs(det) < 1e-6 * cv::norm(d1) * cv::norm(d2)) return std::nullopt;
+  const double rx = a2.x - a1.x, ry = a2.y - a1.y;
+  const double t = (rx * (-d2.y) - ry * (-d2.x)) / det;
+  return cv::Point2d(a1.x + t * d1.x, a1.y + t * d1.y);
 }
 
 inline double median(std::vector<double> v) {
