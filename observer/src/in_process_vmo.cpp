@@ -123,7 +123,9 @@ int InProcessVmo::run(std::vector<CameraObserver>& cams, const std::vector<Measu
   model_ = &cams.front().error_model();
   std::atomic<bool> refused{false};
   for_each(pool, [&](int i) {
-    if (!gather(cams[static_cast<size_t>(i)], i)) refused.store(true, std::memory_order_relaxed);
+    auto& c = cams[static_cast<size_t>(i)];
+    c.set_measurement(z[static_cast<size_t>(i)]);
+    if (!gather(c, i)) refused.store(true, std::memory_order_relaxed);
   });
   if (check_stored)  // CameraObserver::receive's out-of-order test on the first round's messages
     for_each(pool, [&](int i) {
@@ -142,26 +144,36 @@ int InProcessVmo::run(std::vector<CameraObserver>& cams, const std::vector<Measu
   if (std::any_of(moving_.begin(), moving_.end(), [](unsigned char m) { return m != 0; })) return 0;
 
   int done = 0, cur = 0;
+  if (rounds <= 0) {
+    for_each(pool, [&](int i) { write_back(cams, i, done, cur); });
+    return 0;
+  }
   try {
-    while (done < rounds) {
-      const bool publish = done + 1 < rounds;
+    while (done + 1 < rounds) {
       for_each(pool, [&](int i) {
-        if (!step(i, cur, z[static_cast<size_t>(i)], h, publish))
+        if (!step(i, cur, z[static_cast<size_t>(i)], h, true))
           refused.store(true, std::memory_order_relaxed);
       });
       ++done;
-      if (refused) break;  // the next round runs the per-camera way
-      if (publish) cur = 1 - cur;
+      if (refused) {  // the next round runs the per-camera way
+        for_each(pool, [&](int i) { write_back(cams, i, done, cur); });
+        return done;
+      }
+      cur = 1 - cur;
     }
+    // The last round publishes nothing, so the neighbours' messages it reads (buffer cur) stay
+    // as they are while it runs: each camera writes its state back right after its step.
+    for_each(pool, [&](int i) {
+      step(i, cur, z[static_cast<size_t>(i)], h, false);
+      write_back(cams, i, done + 1, cur);
+    });
+    return ++done;
   } catch (...) {
     const auto error = std::current_exception();
     ++done;
     for_each(pool, [&](int i) { write_back(cams, i, done, cur); });
     std::rethrow_exception(error);
   }
-  // The messages of the last round done are in buffer `cur` (a refused round did not swap).
-  for_each(pool, [&](int i) { write_back(cams, i, done, cur); });
-  return done;
 }
 
 }  // namespace netvmo::obs

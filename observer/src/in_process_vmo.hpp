@@ -37,8 +37,10 @@ class InProcessVmo {
   /// Whether the fast path can run the estimator these cameras use (vmo).
   static bool supports(const CameraObserver& camera);
 
-  /// Runs up to `rounds` exchange rounds of length h on the cameras (their measurements already
-  /// set), on the pool's threads when there is one, and writes the state back. Returns the rounds
+  /// Sets each camera's measurement z[i] (CameraObserver::set_measurement) and runs up to
+  /// `rounds` exchange rounds of length h on the cameras, on the pool's threads when there is
+  /// one, and writes the state back (the last round's state right after each camera's step: that
+  /// round publishes nothing). Returns the rounds
   /// done: fewer when a camera published a pose that its neighbours refuse, or when a stored
   /// message would make one out of order (`check_stored`: look; otherwise known not to), and none
   /// when a camera moves (V_wi != 0: its believed pose moves over the sub-steps); the

@@ -101,12 +101,14 @@ int NetworkedObserver::substeps(double dt) const {
 
 void NetworkedObserver::step(double dt, const std::vector<Measurement>& z) {
   check_count(z.size(), "step: measurements");
-  for_each_camera(
-      [&](int i) { cameras_[static_cast<size_t>(i)].set_measurement(z[static_cast<size_t>(i)]); });
   const int N = substeps(dt);
   const double h = dt / N;
   int k = 0;
-  if (!transport_ && fast_) {
+  if (transport_ || !fast_)
+    for_each_camera([&](int i) {
+      cameras_[static_cast<size_t>(i)].set_measurement(z[static_cast<size_t>(i)]);
+    });
+  else {  // (the fast path sets the measurements in its first pass)
     // The same rounds on compact arrays; it hands over to the loop below when a message would be
     // refused (then the rest of the frame is exchanged camera by camera).
     const bool known = stored_known_;

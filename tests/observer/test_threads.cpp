@@ -4,8 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include <thread>
 #include <utility>
 
 #include "netvmo/observer/networked_observer.hpp"
@@ -213,4 +215,22 @@ TEST(WorkerPool, EveryIndexOnceAndTheSmallestIndexExceptionWins) {
   std::atomic<int> sum{0};
   pool.for_each(10, 2, [&](int i) { sum += i; });
   EXPECT_EQ(sum.load(), 45);
+}
+
+// A waiting thread polls for the pool's spin and then sleeps on a condition variable; both ways
+// must hand over every job. With no spin every wait sleeps; with a long one every wait polls; with
+// a short one and pauses between jobs longer than it, the workers are asleep when the next job
+// comes.
+TEST(WorkerPool, JobsReachPollingAndSleepingWorkers) {
+  using std::chrono::microseconds;
+  for (const auto spin : {microseconds(0), microseconds(100000), microseconds(50)}) {
+    WorkerPool pool(2, spin);
+    std::vector<int> count(64, 0);
+    for (int job = 0; job < 200; ++job) {
+      pool.for_each(64, 2, [&](int i) { ++count[static_cast<size_t>(i)]; });
+      if (spin == microseconds(50) && job % 20 == 0)
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    for (int c : count) ASSERT_EQ(c, 200) << "spin " << spin.count() << " us";
+  }
 }

@@ -6,8 +6,17 @@
 // depend on count and size() only, and every call is a barrier. A job whose iterations touch
 // disjoint state (camera i writes only camera i's state) therefore gives bit-identical results
 // for any pool size.
+//
+// Waiting: a frame of the observer is ~15 jobs of well under a millisecond each, so the time a
+// sleeping thread takes to wake (a futex wake-up is tens of microseconds on a virtual machine)
+// would eat the second core's gain. A waiting thread (a worker between jobs, the caller for the
+// workers' chunks) therefore first polls for up to `spin` (the constructor's), then blocks on
+// a condition variable. The spin is bounded in time, so a loaded machine loses at most that much
+// CPU per job and never waits on a spinning thread for longer.
 #pragma once
 
+#include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <exception>
@@ -20,8 +29,11 @@ namespace netvmo::obs {
 
 class WorkerPool {
  public:
+  /// How long a waiting thread polls before it blocks (see above).
+  static constexpr std::chrono::microseconds kDefaultSpin{200};
+
   /// size - 1 worker threads (size >= 1; 0 means std::thread::hardware_concurrency()).
-  explicit WorkerPool(int size);
+  explicit WorkerPool(int size, std::chrono::microseconds spin = kDefaultSpin);
   ~WorkerPool();
   WorkerPool(const WorkerPool&) = delete;
   WorkerPool& operator=(const WorkerPool&) = delete;
@@ -37,13 +49,17 @@ class WorkerPool {
  private:
   void work(int t);
   void run_chunk(int t);
+  /// Polls `ready` for up to spin_, then blocks on `cv` under mu_ until it holds.
+  template <class Ready>
+  void wait_for(std::condition_variable& cv, Ready ready);
 
+  const std::chrono::microseconds spin_;
   std::mutex mu_;
   std::condition_variable start_, done_;
-  std::uint64_t generation_ = 0;  ///< counts jobs; a worker runs each generation once
-  int pending_ = 0;               ///< workers still running the current job
-  bool stop_ = false;
-  // The current job.
+  std::atomic<std::uint64_t> generation_{0};  ///< counts jobs; a worker runs each generation once
+  std::atomic<int> pending_{0};               ///< workers still running the current job
+  std::atomic<bool> stop_{false};
+  // The current job (written before generation_ is advanced, read after it is seen).
   const std::function<void(int)>* job_ = nullptr;
   int count_ = 0, parts_ = 1;
   std::vector<std::exception_ptr> errors_;  ///< per chunk: its first exception
