@@ -4,10 +4,10 @@
 //   dds_peer ros   DOMAIN CAMERA COUNT SECONDS OUT             reads a camera's PoseStamped topic
 //     until COUNT samples or SECONDS; OUT: "sec nanosec frame_id px py pz qw qx qy qz" per sample
 // A peer runs its CameraObserver (pnp error model, a fixed measurement, k_s = 50) for ROUNDS
-// lock-step rounds over DdsTransport after WRITERS writers match (and 0.3 s more for their
-// history to arrive), and writes to OUT: one line
-// per accepted message "sender round px py pz r00 .. r22", then "final px py pz r00 .. r22",
-// then "refused n0 n1 n2 n3 n4" and "stats sent received late foreign".
+// lock-step rounds over DdsTransport after WRITERS writers of other participants match (and 0.3 s
+// more for their history to arrive), and writes to OUT: one line per accepted message "sender round
+// px py pz r00 .. r22", then "final px py pz r00 .. r22", then "refused n0 n1 n2 n3 n4" and "stats
+// sent received late foreign".
 #include <unistd.h>
 
 #include <chrono>

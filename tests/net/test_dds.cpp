@@ -120,7 +120,7 @@ TEST(DdsTransport, TwoProcessesExchangeInLockStep) {
   const auto dir = test::scratch_dir("dds_two");
   const int domain = net_test::loopback_domain(dir);
   const auto res = net_test::run_all(
-      {peer_cmd(domain, 0, 2, dir / "p0.txt"), peer_cmd(domain, 1, 2, dir / "p1.txt")}, dir, 30.0);
+      {peer_cmd(domain, 0, 1, dir / "p0.txt"), peer_cmd(domain, 1, 1, dir / "p1.txt")}, dir, 30.0);
   for (size_t k = 0; k < res.size(); ++k)
     ASSERT_TRUE(res[k].finished && res[k].exit_code == 0)
         << "peer " << k << ": " << net::describe(res[k]) << "\n"
@@ -147,7 +147,7 @@ TEST(DdsTransport, RogueParticipantChangesNothingAndIsCounted) {
       net::spawn({NETVMO_DDS_PEER, "rogue", std::to_string(domain), std::to_string(kRounds), "20"},
                  dir / "rogue.log");
   const auto res = net_test::run_all(
-      {peer_cmd(domain, 0, 3, dir / "p0.txt"), peer_cmd(domain, 1, 3, dir / "p1.txt")}, dir, 30.0);
+      {peer_cmd(domain, 0, 2, dir / "p0.txt"), peer_cmd(domain, 1, 2, dir / "p1.txt")}, dir, 30.0);
   ::kill(rogue, SIGKILL);
   ::waitpid(rogue, nullptr, 0);
   for (size_t k = 0; k < res.size(); ++k)

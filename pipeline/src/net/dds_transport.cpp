@@ -2,6 +2,7 @@
 
 #include <dds/dds.h>
 
+#include <sched.h>
 #include <unistd.h>
 #include <algorithm>
 #include <chrono>
@@ -71,6 +72,9 @@ dds_qos_t* estimate_qos(Mode mode, bool writer) {
     dds_qset_durability(q, DDS_DURABILITY_VOLATILE);
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 256);
   }
+  // A camera's reader does not match its own participant's writer: its own estimates would
+  // otherwise be delivered back to it every round (copied, waking the waitset, then discarded).
+  if (!writer) dds_qset_ignorelocal(q, DDS_IGNORELOCAL_PARTICIPANT);
   return q;
 }
 
@@ -168,7 +172,6 @@ DdsTransport::DdsTransport(int self, std::vector<int> neighbours, std::vector<in
     writer_ = dds_create_writer(participant_, topic_, wq, nullptr);
     dds_delete_qos(wq);
     check(writer_, "create writer");
-    check(dds_get_instance_handle(writer_, &own_writer_handle_), "writer handle");
     dds_qos_t* rq = estimate_qos(settings_.mode, false);
     reader_ = dds_create_reader(participant_, topic_, rq, nullptr);
     dds_delete_qos(rq);
@@ -204,10 +207,9 @@ void DdsTransport::take_all() {
     const dds_return_t n = dds_take(reader_, samples, infos, kMaxTake, kMaxTake);
     check(n, "take estimates");
     for (dds_return_t k = 0; k < n; ++k) {
+      // (Our own writer's samples never arrive: the reader ignores its own participant.
+      // Anything else claiming our index goes to the observer, which refuses it.)
       if (!infos[k].valid_data) continue;
-      // Our own writer's samples come back (same topic): not counted. Anything else claiming
-      // our index goes to the observer, which refuses it.
-      if (infos[k].publication_handle == own_writer_handle_) continue;
       const auto& s = *static_cast<const netvmo_msg_Estimate*>(samples[k]);
       ++stats_.received;
       try {
@@ -219,6 +221,19 @@ void DdsTransport::take_all() {
     }
     if (n > 0) dds_return_loan(reader_, samples, n);
     if (n < kMaxTake) return;
+  }
+}
+
+bool DdsTransport::poll(double us) const {
+  if (us <= 0.0) return false;
+  const auto until =
+      std::chrono::steady_clock::now() + std::chrono::duration<double, std::micro>(us);
+  for (;;) {
+    if (dds_triggered(readcond_) > 0) return true;
+    if (std::chrono::steady_clock::now() >= until) return false;
+    // Gives the core to a runnable thread, above all this machine's DDS receive threads, which
+    // deliver what this one waits for.
+    sched_yield();
   }
 }
 
@@ -272,6 +287,10 @@ void DdsTransport::receive(int receiver, std::vector<obs::EstimateMessage>& out)
                        std::to_string(round_) + " from neighbour camera " + label(labels_, j) +
                        " within " + b + " s (is its node running, on DDS domain " +
                        std::to_string(settings_.domain) + "?)");
+    }
+    if (poll(settings_.poll_us)) {
+      take_all();
+      continue;
     }
     const double left = std::min(0.5, settings_.timeout_s - waited);
     const dds_return_t rc =

@@ -221,7 +221,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   DdsSettings dds = o.dds;
   dds.graph_digest = graph_digest(labels, netcfg.edges);
   DdsTransport transport(self, graph.neighbors(self), labels, dds);
-  transport.wait_for_writers(1 + static_cast<int>(graph.neighbors(self).size()), o.dds.timeout_s);
+  transport.wait_for_writers(static_cast<int>(graph.neighbors(self).size()), o.dds.timeout_s);
 
   io::ensure_directory(out_dir);
   const NodeFiles files = node_files(out_dir, o.camera_id);

@@ -35,6 +35,11 @@ struct DdsSettings {
   int domain = 0;  ///< DDS domain id (the Cyclone configuration comes from CYCLONEDDS_URI)
   Mode mode = Mode::lockstep;
   double timeout_s = 20.0;  ///< lock-step: longest wait for a neighbour's message of a round
+  /// Lock-step: how long receive() first polls for a neighbour's message (yielding the core
+  /// between polls) before it sleeps on a waitset [us]. A message that arrives within it is
+  /// taken without the thread wake-up a waitset costs (tens of us on a virtual machine, as much
+  /// as the message's trip itself; docs/benchmarks.md). 0: sleep at once.
+  double poll_us = 50.0;
   std::string topic = "netvmo_estimates";
   /// This camera's graph_digest() of network.yaml, sent with every estimate; a received estimate
   /// carrying another non-zero digest throws GraphMismatch. 0: none sent, nothing checked.
@@ -66,7 +71,7 @@ struct DdsTimeout : std::runtime_error {
 /// What crossed this camera's side of the transport.
 struct MessageStats {
   std::uint64_t sent = 0;      ///< estimates published
-  std::uint64_t received = 0;  ///< samples taken from the topic (own ones excluded)
+  std::uint64_t received = 0;  ///< samples taken from the topic (never this camera's own)
   std::uint64_t dropped = 0;   ///< discarded on purpose before the observer (fault injection)
   std::uint64_t late = 0;      ///< a neighbour's message of an earlier round than expected
   std::uint64_t foreign = 0;   ///< from a sender that is not a neighbour
@@ -93,21 +98,23 @@ class DdsTransport final : public obs::Transport {
   /// Waits until every reliable reader has acknowledged what this camera sent (before exit).
   void flush(double timeout_s);
 
-  /// Waits until at least `count` writers (this camera's own included) match the estimates
-  /// reader, or `timeout_s` passes; returns whether they did.
+  /// Waits until at least `count` writers of other participants (this camera's own writer never
+  /// matches: its reader ignores its own participant) match the estimates reader, or
+  /// `timeout_s` passes; returns whether they did.
   bool wait_for_writers(int count, double timeout_s);
 
   const MessageStats& stats() const { return stats_; }
 
  private:
   void take_all();
+  /// Polls the read condition for up to `us` microseconds; whether it triggered.
+  bool poll(double us) const;
 
   int self_;
   std::vector<int> neighbours_, labels_;
   DdsSettings settings_;
   std::int32_t participant_ = 0, topic_ = 0, writer_ = 0, reader_ = 0;
   std::int32_t pose_topic_ = 0, pose_writer_ = 0, waitset_ = 0, readcond_ = 0;
-  std::uint64_t own_writer_handle_ = 0;
   std::uint64_t round_ = 0;  ///< the round of this camera's last send()
   std::deque<obs::EstimateMessage> pending_;
   MessageStats stats_;
