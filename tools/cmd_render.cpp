@@ -19,6 +19,7 @@ void add_render(CLI::App& app, int& exit_code) {
     int frames = 0;
     int spp = 0;
     long long seed = -1;
+    std::string resolution;
     bool quiet = false;
   };
   auto o = std::make_shared<Options>();
@@ -45,6 +46,10 @@ void add_render(CLI::App& app, int& exit_code) {
   cmd->add_option("--seed", o->seed, "noise seed (-1 = the scenario's imaging.seed)")
       ->capture_default_str()
       ->check(CLI::Range(-1LL, 9000000000000000LL));
+  cmd->add_option("--resolution", o->resolution,
+                  "WxH: every camera at this resolution instead of its own, the same aspect ratio "
+                  "(the same camera with a finer or coarser sensor; render::CameraSpec::"
+                  "set_resolution)");
   cmd->add_flag("--quiet", o->quiet, "no progress bar");
   cmd->callback([o, &exit_code]() {
     exit_code = guarded("render", [&]() {
@@ -52,6 +57,18 @@ void add_render(CLI::App& app, int& exit_code) {
       if (o->spp > 0) scene.imaging.spp = o->spp;
       if (o->seed >= 0) scene.imaging.seed = static_cast<std::uint64_t>(o->seed);
       if (o->frames > 0) scene.frames = o->frames;
+      if (!o->resolution.empty()) {
+        int w = 0, h = 0;
+        char tail = 0;
+        if (std::sscanf(o->resolution.c_str(), "%dx%d%c", &w, &h, &tail) != 2)
+          throw InputError("--resolution " + o->resolution +
+                           ": expected WIDTHxHEIGHT, e.g. 1280x720");
+        for (auto& c : scene.cameras) try {
+            c.set_resolution(w, h);
+          } catch (const std::invalid_argument& e) {
+            throw InputError("--resolution: " + std::string(e.what()));
+          }
+      }
       if (scene.frames > io::kMaxDatasetFrames)
         throw InputError(o->scenario + ": frames: " + std::to_string(scene.frames) +
                          " is more than " + std::to_string(io::kMaxDatasetFrames) +

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace netvmo::render {
 
@@ -146,6 +147,27 @@ Pose CameraSpec::believed_pose(double t) const {
 
 bool CameraSpec::moving() const {
   return (motion && motion->kind != Trajectory::Kind::Static) || !believed_drift.isZero(0.0);
+}
+
+void CameraSpec::set_resolution(int width, int height) {
+  Intrinsics& k = intrinsics;
+  // width / k.width == height / k.height, in integers.
+  if (width <= 0 || height <= 0 ||
+      static_cast<long long>(width) * k.height != static_cast<long long>(height) * k.width)
+    throw std::invalid_argument("resolution " + std::to_string(width) + "x" +
+                                std::to_string(height) + " for camera " + std::to_string(id) +
+                                " of " + std::to_string(k.width) + "x" + std::to_string(k.height) +
+                                ": needs the same aspect ratio");
+  const double s = static_cast<double>(width) / k.width;
+  k.width = width;
+  k.height = height;
+  k.fx *= s;
+  k.fy *= s;
+  k.cx = (k.cx + 0.5) * s - 0.5;
+  k.cy = (k.cy + 0.5) * s - 0.5;
+  sensor.psf_sigma *= s;
+  sensor.pixel_pitch_um /= s;
+  sensor.line_delay /= s;
 }
 
 }  // namespace netvmo::render

@@ -100,5 +100,32 @@ TEST(Geometry, RenderedBorderCornersMatchProjectionSecondPose) {
   check_pose(testing::facing_pose(Vec3(-0.12, 0.08, 0.8), Vec3(-0.2, 0.45, -1.1)));
 }
 
+// The same camera at twice and at three quarters of its resolution (CameraSpec::set_resolution):
+// every projected point moves to (u + 1/2) s - 1/2, distortion included, and the image keeps its
+// aspect.
+TEST(Geometry, AnotherResolutionIsTheSameCameraScaled) {
+  SceneDescription scene = testing::single_tag_scene(
+      testing::facing_pose(Vec3(0.07, -0.05, 1.0), Vec3(0.35, -0.3, 0.4)));
+  scene.cameras[0].intrinsics.dist = {-0.08, 0.02, 0.001, -0.001, 0.0, 0.0, 0.0, 0.0};
+  scene.cameras[0].sensor.line_delay = 2e-5;
+  const Intrinsics k = scene.cameras[0].intrinsics;
+  for (const auto& [w, h] : {std::pair{1280, 960}, std::pair{k.width * 3 / 4, k.height * 3 / 4}}) {
+    SCOPED_TRACE(std::to_string(w) + "x" + std::to_string(h));
+    CameraSpec c = scene.cameras[0];
+    c.set_resolution(w, h);
+    const double s = static_cast<double>(w) / k.width;
+    EXPECT_EQ(c.intrinsics.height, h);
+    EXPECT_DOUBLE_EQ(c.sensor.line_delay * h, 2e-5 * k.height);  // the same readout time
+    for (const Vec3& p : {Vec3(0.1, -0.05, 1.0), Vec3(-0.3, 0.2, 0.9), Vec3(0.2, 0.25, 1.4)}) {
+      const auto a = k.project(p), b = c.intrinsics.project(p);
+      ASSERT_TRUE(a && b);
+      EXPECT_NEAR(b->x(), (a->x() + 0.5) * s - 0.5, 1e-9);
+      EXPECT_NEAR(b->y(), (a->y() + 0.5) * s - 0.5, 1e-9);
+    }
+  }
+  CameraSpec c = scene.cameras[0];
+  EXPECT_THROW(c.set_resolution(1280, 720), std::invalid_argument);  // 4:3 -> 16:9
+}
+
 }  // namespace
 }  // namespace netvmo::render

@@ -130,6 +130,13 @@ struct CameraSpec {
   Pose believed_pose(double t) const;
   /// Whether the true or the believed pose changes over time.
   bool moving() const;
+  /// The same camera with a sensor of width x height pixels over the same area: the image is
+  /// scaled by s = width / intrinsics.width, which must equal height / intrinsics.height (same
+  /// aspect ratio; throws std::invalid_argument otherwise). Pixel quantities scale with it:
+  /// fx, fy and (cx + 1/2), (cy + 1/2) by s (pixel centres at integers), psf_sigma by s,
+  /// pixel_pitch_um by 1 / s; the rolling shutter's line_delay by 1 / s (the same readout time
+  /// per frame). Distortion (on normalized coordinates), poses and the lens stay.
+  void set_resolution(int width, int height);
 };
 
 }  // namespace netvmo::render
