@@ -62,6 +62,13 @@ void add_search_options(CLI::App& cmd, frontend::TrackingSettings& t) {
                  "side is below this [px] (0: never)")
       ->check(CLI::Range(0.0, 1e6))
       ->capture_default_str();
+  cmd.add_option("--change-pixels", t.change_pixels,
+                 "A camera that does not see the target skips the whole-image search while fewer "
+                 "than this many pixels changed by more than 24 gray levels (beyond a 1-pixel "
+                 "shake) since its last such search; still searched every 30 frames (0: always "
+                 "search)")
+      ->check(CLI::Range(0, 100000000))
+      ->capture_default_str();
   cmd.add_flag_callback(
       "--no-shadow-retry", [&t] { t.shadow_retry = false; },
       "No second search of the tracking window on a locally normalised copy (for tags "
@@ -71,8 +78,9 @@ void add_search_options(CLI::App& cmd, frontend::TrackingSettings& t) {
 std::vector<std::string> search_arguments(const frontend::TrackingSettings& t) {
   char b[40];
   std::snprintf(b, sizeof b, "%.17g", t.full_res_below_px);
-  std::vector<std::string> a = {"--acquire-every", std::to_string(t.acquire_every),
-                                "--full-res-below", b};
+  std::vector<std::string> a = {"--acquire-every",  std::to_string(t.acquire_every),
+                                "--full-res-below", b,
+                                "--change-pixels",  std::to_string(t.change_pixels)};
   if (!t.enabled) a.push_back("--no-track");
   if (!t.shadow_retry) a.push_back("--no-shadow-retry");
   return a;

@@ -227,6 +227,35 @@ TEST_F(SmallDataset, RecordedFoldersAndVideoGiveTheSameEstimates) {
   EXPECT_EQ(detections, 36);
 }
 
+// The front end's threads (it runs ahead of the observer, each free thread taking the next
+// camera's frame) and the skipped searches of cameras that see nothing in a static scene
+// (TrackingSettings::change_pixels) change no detection and no estimate, to the last bit.
+TEST_F(SmallDataset, FrontEndThreadsAndSkippedSearchesChangeNothing) {
+  auto source = sources::open_dataset_source(*dir_ / "rendered");
+  const auto run_with = [&](int workers, int change_pixels) {
+    auto o = quiet_options();
+    o.workers = workers;
+    o.tracking.change_pixels = change_pixels;
+    return run::run_images(*source, o);
+  };
+  const int skipping = frontend::TrackingSettings{}.change_pixels;
+  const auto ref = run_with(1, 0);
+  for (const auto& [workers, change_pixels] :
+       {std::pair{1, skipping}, std::pair{2, skipping}, std::pair{3, 0}}) {
+    SCOPED_TRACE(std::to_string(workers) + " workers, change_pixels " +
+                 std::to_string(change_pixels));
+    const auto r = run_with(workers, change_pixels);
+    ASSERT_EQ(r.history.size(), ref.history.size());
+    for (size_t k = 0; k < r.history.size(); ++k)
+      for (size_t i = 0; i < 5; ++i) {
+        const auto &a = r.history[k].cameras[i], &b = ref.history[k].cameras[i];
+        EXPECT_EQ(a.delta, b.delta) << "frame " << k << " camera " << i;
+        EXPECT_TRUE(a.est_w.matrix() == b.est_w.matrix()) << "frame " << k << " camera " << i;
+        EXPECT_EQ(r.frames[k][i].obs.status, ref.frames[k][i].obs.status);
+      }
+  }
+}
+
 // The same dataset with every calibration as a ROS camera_info file (detected by its content):
 // `netvmo run` gives the same summary.json, timing and the dataset's name aside.
 TEST_F(SmallDataset, RosCalibrationFilesGiveTheSameSummary) {

@@ -450,5 +450,51 @@ TEST(FrontEnd, SmallTagFoundWithinTheAcquisitionPeriod) {
   EXPECT_GE(tested, 2);  // measured: 3 of the 6 poses are missed at decimate 2
 }
 
+// A camera without its target skips the whole-image search while its image stays the same scene
+// (TrackingSettings::change_pixels): here two other tags, shaken by up to 0.6 px from frame to
+// frame (a camera's vibration) under fresh noise. It still searches every full_frame_every
+// frames, and the frame on which the target comes into view is searched and the target found,
+// exactly as without skipping.
+TEST(FrontEnd, UnchangedSceneSkipsTheSearchATagComingIntoViewDoesNot) {
+  const auto calib = testing::test_calibration();
+  const TrackingSettings defaults;
+  ASSERT_GT(defaults.change_pixels, 0);
+  const int every = defaults.full_frame_every, appears = every + 10, frames = appears + 5;
+  const auto frame = [&](int k) {
+    // 0.6 px at 1.5 m and fx 610: 1.5 mm.
+    const double jx = 1.5e-3 * std::sin(1.3 * k), jy = 1.5e-3 * std::cos(0.7 * k);
+    std::vector<testing::SynthTag> tags = {
+        {3, 0.15, facing_pose(1.5, -0.35 + jx, 0.1 + jy, {0.2, 0.3, 0.4}), {}},
+        {5, 0.12, facing_pose(1.6, 0.3 + jx, -0.15 + jy, {-0.3, 0.1, 1.0}), {}}};
+    if (k >= appears) tags.push_back({0, kSize, facing_pose(1.8, 0.05, 0.1, {0.2, -0.3, 0.5}), {}});
+    SynthOptions o;
+    o.noise_sigma = 2.0;
+    o.seed = static_cast<std::uint64_t>(100 + k);
+    return testing::render_tags(calib, tags, o);
+  };
+  FrontEnd skipping;
+  TrackingSettings always_settings;
+  always_settings.change_pixels = 0;
+  FrontEnd always(DetectorSettings{}, always_settings);
+  TrackState a, b;
+  for (int k = 0; k < frames; ++k) {
+    const cv::Mat img = frame(k);
+    const auto o = skipping.observe(img, calib, nullptr, &a);
+    const auto ref = always.observe(img, calib, nullptr, &b);
+    EXPECT_EQ(o.delta, ref.delta) << "frame " << k;
+    EXPECT_EQ(o.status, ref.status) << "frame " << k;
+    EXPECT_EQ((b.searches & kSkippedFullFrame), 0u) << "frame " << k;
+    if (k == appears) {
+      EXPECT_TRUE(o.delta) << "the target in view";
+      EXPECT_TRUE(a.searches & kSearchFullFrame);
+    }
+    if (k >= appears) continue;
+    EXPECT_FALSE(o.delta) << "frame " << k;
+    const bool due = k % every == 0;  // the first frame and the periodic search
+    EXPECT_EQ((a.searches & kSearchFullFrame) != 0, due) << "frame " << k;
+    EXPECT_EQ((a.searches & kSkippedFullFrame) != 0, !due) << "frame " << k;
+  }
+}
+
 }  // namespace
 }  // namespace netvmo

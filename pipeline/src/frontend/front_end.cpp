@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <opencv2/imgproc.hpp>
 
 #include "netvmo/pipeline/error.hpp"
 
@@ -132,11 +133,41 @@ void validate(const TrackingSettings& t) {
   if (t.full_frame_every < 1) bad("full_frame_every must be >= 1");
   if (!(t.full_res_below_px >= 0.0)) bad("full_res_below_px must be >= 0");
   if (t.acquire_every < 0) bad("acquire_every must be >= 0 (0: no acquisition pass)");
+  if (t.change_dn < 0 || t.change_dn > 255) bad("change_dn must be 0..255");
+  if (t.change_pixels < 0) bad("change_pixels must be >= 0 (0: always search)");
 }
 
 FrontEnd::FrontEnd(DetectorSettings settings, TrackingSettings tracking)
     : detector_(std::move(settings)), tracking_(tracking) {
   validate(tracking_);
+}
+
+namespace {
+ChangeReference change_reference(const cv::Mat& gray) {
+  ChangeReference r;
+  const cv::Mat k = cv::getStructuringElement(cv::MORPH_RECT, {3, 3});
+  cv::erode(gray, r.low, k);
+  cv::dilate(gray, r.high, k);
+  return r;
+}
+}  // namespace
+
+bool FrontEnd::unchanged(const cv::Mat& gray, const ChangeReference& reference) {
+  if (tracking_.change_pixels <= 0 || reference.empty() || gray.size() != reference.low.size() ||
+      gray.type() != reference.low.type())
+    return false;
+  // Saturating differences: how far each pixel lies above the range, then below it.
+  int changed = 0;
+  for (int side = 0; side < 2; ++side) {
+    if (side == 0)
+      cv::subtract(gray, reference.high, difference_);
+    else
+      cv::subtract(reference.low, gray, difference_);
+    cv::threshold(difference_, difference_, tracking_.change_dn, 255, cv::THRESH_BINARY);
+    changed += cv::countNonZero(difference_.reshape(1));
+    if (changed >= tracking_.change_pixels) return false;
+  }
+  return true;
 }
 
 TagObservation FrontEnd::observe(const cv::Mat& gray, const io::Calibration& calib,
@@ -156,16 +187,20 @@ std::vector<TagObservation> FrontEnd::observe_targets(const cv::Mat& gray,
       dets.targets.push_back({TargetStatus::no_image, dets.reason, 0, 0});
   } else {
     const bool tracked = track && tracking_.enabled && !track->last_all.empty();
-    auto search = [&](unsigned what, const cv::Rect& region, const SearchOptions& opt) {
-      if (settled(dets)) return;
-      const bool first = searches == 0;
-      searches |= what;
-      FrameDetections d = detector_.detect(gray, region, &calib, opt);
+    bool merged = false;
+    // A search's result joins the frame's (the first one is the frame's).
+    auto merge = [&](unsigned what, FrameDetections&& d) {
       if (all_found(d)) found_by = what;
-      if (first)
+      if (!merged)
         dets = std::move(d);
       else
         keep_best(dets, std::move(d));
+      merged = true;
+    };
+    auto search = [&](unsigned what, const cv::Rect& region, const SearchOptions& opt) {
+      if (settled(dets)) return;
+      searches |= what;
+      merge(what, detector_.detect(gray, region, &calib, opt));
     };
     auto window = [&] {
       const auto& last = track->last_all;
@@ -188,20 +223,42 @@ std::vector<TagObservation> FrontEnd::observe_targets(const cv::Mat& gray,
     const bool periodic_full =
         tracked && track->frames_since_full + 1 >= tracking_.full_frame_every;
     if (tracked && !periodic_full) window();
-    if (!all_found(dets)) {
+    // A camera without its target whose image is still that of its last whole-image search
+    // takes that search's result (TrackingSettings::change_pixels), up to the periodic search.
+    const bool skip_whole = track && tracking_.enabled && !tracked &&
+                            track->frames_since_full + 1 < tracking_.full_frame_every &&
+                            unchanged(gray, track->whole_image);
+    if (skip_whole) {
+      searches |= kSkippedFullFrame;
+      merge(kSkippedFullFrame, FrameDetections(track->whole_result));
+      ++track->frames_since_full;
+    } else if (!all_found(dets)) {
       search(kSearchFullFrame, whole, {});
-      if (track) track->frames_since_full = 0;
+      if (track) {
+        track->frames_since_full = 0;
+        const bool keep =
+            !tracked && tracking_.enabled && tracking_.change_pixels > 0 && !all_found(dets);
+        track->whole_image = keep ? change_reference(gray) : ChangeReference{};
+        track->whole_result = keep ? dets : FrameDetections{};
+      }
     } else {
       ++track->frames_since_full;
     }
     if (tracked && periodic_full) window();
-    // Acquisition: a blind camera's every acquire_every-th frame at full resolution.
+    // Acquisition: a blind camera's every acquire_every-th frame at full resolution (unless its
+    // image is that of the last acquisition pass, which found nothing).
     if (track && tracking_.enabled && !tracked && tracking_.acquire_every > 0 &&
         track->blind_frames % tracking_.acquire_every == 0 &&
-        detector_.settings().quad_decimate > 1.0) {
-      SearchOptions opt;
-      opt.decimate = 1.0;
-      search(kSearchAcquisition, whole, opt);
+        detector_.settings().quad_decimate > 1.0 && !settled(dets)) {
+      if (unchanged(gray, track->acquisition_image)) {
+        searches |= kSkippedAcquisition;
+      } else {
+        SearchOptions opt;
+        opt.decimate = 1.0;
+        search(kSearchAcquisition, whole, opt);
+        const bool keep = tracking_.change_pixels > 0 && !all_found(dets);
+        track->acquisition_image = keep ? change_reference(gray) : ChangeReference{};
+      }
     }
   }
   if (track) {
@@ -210,10 +267,14 @@ std::vector<TagObservation> FrontEnd::observe_targets(const cv::Mat& gray,
     track->last_all.clear();
     for (const auto& t : dets.tags)
       if (t.index >= 0) track->last_all.push_back(dets.all[static_cast<size_t>(t.index)].corners);
-    if (!track->last_all.empty())
+    if (!track->last_all.empty()) {
       track->blind_frames = 0;
-    else
+      track->whole_image = {};  // tracking: the next whole-image search is a new one
+      track->whole_result = FrameDetections{};
+      track->acquisition_image = {};
+    } else {
       ++track->blind_frames;
+    }
   }
   std::vector<TagObservation> out(target_count());
   for (size_t j = 0; j < out.size(); ++j) {

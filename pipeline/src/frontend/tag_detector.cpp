@@ -3,6 +3,7 @@
 #include <apriltag/apriltag.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <opencv2/imgproc.hpp>
@@ -14,6 +15,10 @@
 namespace netvmo::frontend {
 
 namespace {
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0, Clock::time_point t1 = Clock::now()) {
+  return std::chrono::duration<double>(t1 - t0).count();
+}
 
 /// libapriltag reports pixel centres at +0.5 (measured, see tests/pipeline/test_detector.cpp).
 constexpr double kApriltagPixelOffset = 0.5;
@@ -60,6 +65,7 @@ struct TagDetector::Impl {
   cv::Mat gray;                   // conversion buffer for non-gray input
   cv::Mat normalized;             // the image with the searched region normalised (SearchOptions)
   std::vector<cv::Mat> patterns;  // bitmap of each tag of the body, for the border check
+  StageSeconds seconds;           // time spent, by stage
 
   explicit Impl(DetectorSettings settings) : s(std::move(settings)) {
     validate(s);
@@ -82,6 +88,10 @@ TagDetector& TagDetector::operator=(TagDetector&&) noexcept = default;
 const DetectorSettings& TagDetector::settings() const {
   return impl_->s;
 }
+const StageSeconds& TagDetector::seconds() const {
+  return impl_->seconds;
+}
+
 int TagDetector::border_cells() const {
   return impl_->family->width_at_border;
 }
@@ -153,7 +163,9 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
   image_u8_t im{sub.cols, sub.rows, static_cast<int32_t>(sub.step[0]),
                 const_cast<uint8_t*>(sub.ptr<uint8_t>())};
   impl_->td->quad_decimate = static_cast<float>(decimate);
+  const auto t_search = Clock::now();
   zarray_t* dets = apriltag_detector_detect(impl_->td, &im);
+  impl_->seconds.search += seconds_since(t_search);
   impl_->td->quad_decimate = static_cast<float>(s.quad_decimate);
   if (!dets) throw std::runtime_error("libapriltag: detection failed");
   for (int i = 0; i < zarray_size(dets); ++i) {
@@ -167,7 +179,10 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
   const auto check_on = [&](const cv::Mat& pattern) -> CandidateChecker {
     return [&, pattern](std::array<cv::Point2d, 4>& corners) {
       const std::array<cv::Point2d, 4> found = corners;
+      const auto t_refine = Clock::now();
       refine_corners(*g, corners, s.refinement, border_cells(), calib);
+      const auto t_check = Clock::now();
+      impl_->seconds.refinement += seconds_since(t_refine, t_check);
       BorderCheck bc = s.border_check ? check_border(*g, corners, pattern, border_cells(), s, calib)
                                       : BorderCheck{};
       if (bc.ok && opt.normalized) {
@@ -189,6 +204,7 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
       // The corners of the print's cell grid, not of its inked outline (DetectorSettings::
       // correct_edge_bias).
       if (bc.ok && s.correct_edge_bias) corners = remove_edge_bias(corners, bc, calib);
+      impl_->seconds.check += seconds_since(t_check);
       return CandidateCheck{bc.ok, bc.reason};
     };
   };

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <exception>
 #include <limits>
+#include <mutex>
 #include <thread>
 
 #include "netvmo/pipeline/error.hpp"
@@ -163,8 +165,10 @@ struct Pipeline {
   std::exception_ptr observe(int w, size_t i, int frame, cv::Mat& image,
                              std::vector<std::vector<CameraFrame>>& cams, size_t slot) {
     for (auto& c : cams) c[slot] = CameraFrame{};
+    const auto t_read = Clock::now();
     try {
       image = provider.read(i, frame);
+      seconds_reading[static_cast<size_t>(w)] += seconds_since(t_read);
     } catch (const InputError&) {
       image.release();
       for (auto& c : cams) c[slot].read_failed = options.keep_going;
@@ -206,6 +210,13 @@ struct Pipeline {
       for (size_t j = 0; j < targets.size(); ++j) result.target(j).frames.push_back(cams[j]);
     progress.update(k + 1);
   }
+  // The front end's time by stage, summed over the workers, into the result.
+  void add_stage_seconds(ImageRunResult& result) const {
+    for (int w = 0; w < workers; ++w) {
+      result.seconds_reading += seconds_reading[static_cast<size_t>(w)];
+      result.seconds_stages += front_ends[static_cast<size_t>(w)].detector().seconds();
+    }
+  }
   // Runs f(w) for every worker w, worker 0 on the calling thread.
   template <class F>
   void in_parallel(F&& f) const {
@@ -223,6 +234,124 @@ struct Pipeline {
   int workers;
   std::vector<frontend::FrontEnd> front_ends;
   std::vector<frontend::TrackState> tracks;  // camera i is always handled by worker i % workers
+  std::vector<double> seconds_reading = std::vector<double>(static_cast<size_t>(workers), 0.0);
+};
+
+// The front end of a synchronised run, running ahead of the observer on its own threads (one
+// per Pipeline worker, each with its own detector). Camera i's frame k is detected once its frame
+// k - 1 is (its tracking state) and while k < the observer's frame + kLookAhead; a free worker
+// takes the earliest such frame, among equals the camera that took longest the last time (so the
+// slow cameras, typically the blind ones searching whole images, start first). A slow camera's
+// frame thus no longer idles the other workers: they move on to the next frames of the others.
+// Results are those of detecting each camera's frames in order, whichever worker does it.
+class FrontEndAhead {
+ public:
+  static constexpr int kLookAhead = 3;  ///< frames in flight (images and results held)
+
+  FrontEndAhead(Pipeline& p, int frames)
+      : p_(p),
+        frames_(frames),
+        next_(p.n, 0),
+        busy_(p.n, false),
+        cost_(p.n, 0.0),
+        done_(kLookAhead, 0) {
+    for (int s = 0; s < kLookAhead; ++s) {
+      images_.emplace_back(p.n);
+      cams_.push_back(p.frames_for(p.n));
+      errors_.emplace_back(p.n);
+    }
+    for (int w = 0; w < p.workers; ++w) threads_.emplace_back([this, w] { work(w); });
+  }
+  ~FrontEndAhead() {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      stop_ = true;
+    }
+    changed_.notify_all();
+    for (auto& t : threads_) t.join();
+  }
+  FrontEndAhead(const FrontEndAhead&) = delete;
+  FrontEndAhead& operator=(const FrontEndAhead&) = delete;
+
+  /// Waits until every camera's frame k is detected; its results stay until release(k).
+  void wait(int k) {
+    std::unique_lock<std::mutex> lock(mu_);
+    changed_.wait(lock, [&] { return failure_ || done_[slot(k)] == p_.n; });
+    if (failure_) std::rethrow_exception(failure_);
+  }
+  std::vector<cv::Mat>& images(int k) { return images_[slot(k)]; }
+  std::vector<std::vector<CameraFrame>>& cams(int k) { return cams_[slot(k)]; }
+  std::vector<std::exception_ptr>& errors(int k) { return errors_[slot(k)]; }
+  /// Frame k is used: its slot takes frame k + kLookAhead.
+  void release(int k) {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      done_[slot(k)] = 0;
+      consumed_ = k + 1;
+    }
+    changed_.notify_all();
+  }
+
+ private:
+  static size_t slot(int k) { return static_cast<size_t>(k % kLookAhead); }
+  // The camera whose next frame comes first, or n when none may start now.
+  size_t pick() const {
+    size_t best = p_.n;
+    for (size_t i = 0; i < p_.n; ++i) {
+      if (busy_[i] || next_[i] >= frames_ || next_[i] >= consumed_ + kLookAhead) continue;
+      if (best == p_.n || next_[i] < next_[best] ||
+          (next_[i] == next_[best] && cost_[i] > cost_[best]))
+        best = i;
+    }
+    return best;
+  }
+  void work(int w) {
+    std::unique_lock<std::mutex> lock(mu_);
+    for (;;) {
+      size_t i = p_.n;
+      changed_.wait(lock, [&] {
+        if (stop_ || failure_) return true;
+        i = pick();
+        return i < p_.n ||
+               std::all_of(next_.begin(), next_.end(), [&](int f) { return f >= frames_; });
+      });
+      if (stop_ || failure_ || i == p_.n) return;
+      const int k = next_[i];
+      busy_[i] = true;
+      lock.unlock();
+      const auto t0 = Clock::now();
+      std::exception_ptr failure;
+      try {
+        errors_[slot(k)][i] = p_.observe(w, i, k, images_[slot(k)][i], cams_[slot(k)], i);
+      } catch (...) {
+        failure = std::current_exception();
+      }
+      const double cost = seconds_since(t0);
+      lock.lock();
+      busy_[i] = false;
+      if (failure && !failure_) failure_ = failure;
+      next_[i] = k + 1;
+      cost_[i] = cost;
+      ++done_[slot(k)];
+      changed_.notify_all();
+    }
+  }
+
+  Pipeline& p_;
+  const int frames_;
+  std::mutex mu_;
+  std::condition_variable changed_;
+  std::vector<int> next_;     ///< per camera: its next frame to detect
+  std::vector<bool> busy_;    ///< per camera: a worker is detecting its frame
+  std::vector<double> cost_;  ///< per camera: seconds its last frame took
+  std::vector<size_t> done_;  ///< per slot: cameras done with its frame
+  int consumed_ = 0;          ///< frames the observer is done with
+  bool stop_ = false;
+  std::exception_ptr failure_;  ///< a front end's unexpected error: the run stops
+  std::vector<std::vector<cv::Mat>> images_;
+  std::vector<std::vector<std::vector<CameraFrame>>> cams_;
+  std::vector<std::vector<std::exception_ptr>> errors_;
+  std::vector<std::thread> threads_;
 };
 
 // One camera image of a run on the union of timestamps.
@@ -357,6 +486,7 @@ void run_union(Pipeline& p, const FrameHook& hook, ImageRunResult& result) {
   }
   progress.finish();
   result.seconds = seconds_since(t_start);
+  p.add_stage_seconds(result);
 }
 
 }  // namespace
@@ -401,39 +531,40 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
 
   Progress progress("run", frames, options.progress);
   const auto t_start = Clock::now();
-  std::vector<cv::Mat> images(n);
-  auto cams = p.frames_for(n);
-  std::vector<std::exception_ptr> errors(n);
   std::vector<const FrameRecord*> records(T);
-  for (int k = 0; k < frames; ++k) {
-    const auto t_fe = Clock::now();
-    p.in_parallel([&](int w) {
-      for (size_t i = static_cast<size_t>(w); i < n; i += static_cast<size_t>(p.workers))
-        errors[i] = p.observe(w, i, k, images[i], cams, i);
-    });
-    for (size_t i = 0; i < n; ++i) p.report(errors[i], i, k, result);
-    result.seconds_front_end += seconds_since(t_fe);
+  {
+    FrontEndAhead ahead(p, frames);
+    for (int k = 0; k < frames; ++k) {
+      const auto t_fe = Clock::now();
+      ahead.wait(k);
+      const auto& images = ahead.images(k);
+      const auto& cams = ahead.cams(k);
+      for (size_t i = 0; i < n; ++i) p.report(ahead.errors(k)[i], i, k, result);
+      result.seconds_front_end += seconds_since(t_fe);
 
-    const auto t_obs = Clock::now();
-    for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth(i, k);
-    if (moving) {
-      for (size_t i = 0; i < n; ++i) {
-        g_wi[i] = provider.camera_believed(i, k);
-        if (!options.ignore_camera_velocity)
-          V_wi[i] = camera_velocity(g_wi[i], provider.camera_believed(i, k + 1), dt);
+      const auto t_obs = Clock::now();
+      for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth(i, k);
+      if (moving) {
+        for (size_t i = 0; i < n; ++i) {
+          g_wi[i] = provider.camera_believed(i, k);
+          if (!options.ignore_camera_velocity)
+            V_wi[i] = camera_velocity(g_wi[i], provider.camera_believed(i, k + 1), dt);
+        }
+        for (auto& r : p.runners) r->set_camera_motion(g_wi, V_wi);
       }
-      for (auto& r : p.runners) r->set_camera_motion(g_wi, V_wi);
+      for (size_t j = 0; j < T; ++j) {
+        const auto target = provider.target_truth(k, j);
+        records[j] =
+            &p.runners[j]->process(k, k * dt, dt, camera_inputs(cams[j], target, true_wi), target);
+      }
+      result.seconds_observer += seconds_since(t_obs);
+      p.frame_done(k, images, cams, records, hook, result, progress);
+      ahead.release(k);
     }
-    for (size_t j = 0; j < T; ++j) {
-      const auto target = provider.target_truth(k, j);
-      records[j] =
-          &p.runners[j]->process(k, k * dt, dt, camera_inputs(cams[j], target, true_wi), target);
-    }
-    result.seconds_observer += seconds_since(t_obs);
-    p.frame_done(k, images, cams, records, hook, result, progress);
-  }
+  }  // the front end's threads end here
   progress.finish();
   result.seconds = seconds_since(t_start);
+  p.add_stage_seconds(result);
   histories();
   return result;
 }

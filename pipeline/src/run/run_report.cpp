@@ -190,6 +190,11 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
       {"seconds", result.seconds},
       {"front_end_seconds", result.seconds_front_end},
       {"observer_seconds", result.seconds_observer},
+      // Summed over the front end's worker threads.
+      {"reading_seconds", result.seconds_reading},
+      {"search_seconds", result.seconds_stages.search},
+      {"refinement_seconds", result.seconds_stages.refinement},
+      {"check_seconds", result.seconds_stages.check},
       {"network_frames_per_second", result.seconds > 0 ? h.size() / result.seconds : 0.0}};
   s["warnings"] = result.warnings;
   s["target"] = net.targets.at(target).id;

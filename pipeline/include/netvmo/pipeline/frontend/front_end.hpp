@@ -92,9 +92,28 @@ struct TrackingSettings {
   int acquire_every = 10;
   /// A second window search on a locally normalised copy when the window search fails.
   bool shadow_retry = true;
+  /// A camera without its target skips the whole-image search while its image is still the one
+  /// of its last whole-image search (which found no target): fewer than change_pixels pixels
+  /// lie more than change_dn gray levels outside the range of that image's 3x3 neighbourhood
+  /// around them (ChangeReference). That search's result stands for the
+  /// frame. It searches anyway at least every full_frame_every frames; the acquisition pass is
+  /// skipped alike while the image is the one of the last acquisition pass. A tag that comes
+  /// into view changes far more pixels than that (its black border against anything lighter),
+  /// while sensor and JPEG noise stay far below 24 levels (docs/frontend.md, "Cameras that see
+  /// nothing"). change_pixels = 0: never skip.
+  int change_dn = 24;
+  int change_pixels = 16;
 };
 /// Checks a TrackingSettings; throws InputError naming the field.
 void validate(const TrackingSettings& t);
+
+/// An image kept to tell whether a later one is still the same scene: each pixel's 3x3
+/// neighbourhood's least and greatest value, so that a shift of the image by up to a pixel (a
+/// camera's vibration, the renderer's sample positions) is no change (FrontEnd::unchanged).
+struct ChangeReference {
+  cv::Mat low, high;
+  bool empty() const { return low.empty(); }
+};
 
 /// One camera's tracking state (keep one per camera, pass it on every frame).
 struct TrackState {
@@ -103,14 +122,21 @@ struct TrackState {
   std::vector<std::array<cv::Point2d, 4>> last_all;
   int frames_since_full = 0;
   int blind_frames = 0;  ///< consecutive frames without the target (acquisition period)
+  /// The image of the last whole-image search that found no target, and that search's result
+  /// (TrackingSettings::change_pixels); empty once the target is found.
+  ChangeReference whole_image;
+  FrameDetections whole_result;
+  /// The image of the last acquisition pass that found no target (empty: none since).
+  ChangeReference acquisition_image;
   /// How the last frame was searched, for tests and benchmarks: bit 0 window, bit 1 normalised
-  /// window, bit 2 full frame, bit 3 full-resolution acquisition.
+  /// window, bit 2 full frame, bit 3 full-resolution acquisition; bit 4: the full frame's search
+  /// was skipped (its image unchanged), bit 5: the acquisition pass was.
   unsigned searches = 0;
   /// The search that found the target in the last frame (one bit as above), 0 when none.
   unsigned found_by = 0;
 };
 inline constexpr unsigned kSearchWindow = 1, kSearchNormalizedWindow = 2, kSearchFullFrame = 4,
-                          kSearchAcquisition = 8;
+                          kSearchAcquisition = 8, kSkippedFullFrame = 16, kSkippedAcquisition = 32;
 
 /// Detector (reused across frames and cameras) + refinement + cv::undistortPoints.
 class FrontEnd {
@@ -133,11 +159,16 @@ class FrontEnd {
   const TrackingSettings& tracking() const { return tracking_; }
 
   TagDetector& detector() { return detector_; }
+  const TagDetector& detector() const { return detector_; }
   const DetectorSettings& settings() const { return detector_.settings(); }
 
  private:
+  /// Whether `gray` is still `reference`'s image (TrackingSettings::change_dn, change_pixels).
+  bool unchanged(const cv::Mat& gray, const ChangeReference& reference);
+
   TagDetector detector_;
   TrackingSettings tracking_;
+  cv::Mat difference_;  ///< scratch of unchanged()
 };
 
 }  // namespace netvmo::frontend

@@ -59,6 +59,19 @@ struct SearchOptions {
 /// (5 bit cells is used). 8-bit in, 8-bit out (white ~ 240).
 cv::Mat normalize_illumination(const cv::Mat& gray, int window);
 
+/// Where a TagDetector's time went, summed over its detect() calls [s, wall time of the calling
+/// thread]: libapriltag's search (quads and decoding, its own threads included), the corner
+/// refinement and the border check (with the edge-bias correction).
+struct StageSeconds {
+  double search = 0.0, refinement = 0.0, check = 0.0;
+  StageSeconds& operator+=(const StageSeconds& o) {
+    search += o.search;
+    refinement += o.refinement;
+    check += o.check;
+    return *this;
+  }
+};
+
 /// libapriltag detector, created once and reused across frames (not thread-safe: one
 /// detect() at a time; it uses `nthreads` workers internally).
 class TagDetector {
@@ -82,6 +95,8 @@ class TagDetector {
   const DetectorSettings& settings() const;
   /// Cells across the black border square (8 for tag36h11): corners are at this square.
   int border_cells() const;
+  /// Time spent so far, by stage.
+  const StageSeconds& seconds() const;
 
  private:
   struct Impl;

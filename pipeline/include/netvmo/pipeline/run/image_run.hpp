@@ -74,6 +74,11 @@ struct ImageRunResult {
   double seconds = 0.0;            ///< wall time of the loop
   double seconds_front_end = 0.0;  ///< of which reading + detection + PnP
   double seconds_observer = 0.0;   ///< of which the observer and baselines
+  /// The front end's time by stage, summed over its worker threads (so up to `workers` times
+  /// seconds_front_end): reading the images (file and decoding; rendering for a live source)
+  /// and the detector's stages (frontend::StageSeconds).
+  double seconds_reading = 0.0;
+  frontend::StageSeconds seconds_stages;
   /// Cameras on their own clocks (async processes at different rates): estimates.csv holds
   /// these rows (each camera's own images and times, by t, then camera), while history and
   /// frames are a regular grid at the dataset's fps holding each camera's latest estimate at or
