@@ -50,8 +50,10 @@ std::vector<std::string> forwarded(const RunCliOptions& o) {
 json merge_and_report(sources::NetworkSource& provider, const run::ImageRunOptions& options,
                       const RunCliOptions& cli, const fs::path& nodes, const fs::path& dir,
                       int frames, bool allow_gaps) {
-  const auto merged =
-      net::merge_run_outputs(provider, options, nodes, dir, frames, allow_gaps, !cli.no_overlays);
+  run::OverlaySettings overlays;
+  overlays.camera_videos = cli.camera_videos;
+  const auto merged = net::merge_run_outputs(provider, options, nodes, dir, frames, allow_gaps,
+                                             cli.no_overlays ? nullptr : &overlays);
   if (!cli.no_plots) {
     plot_run(dir, provider.network());
   }

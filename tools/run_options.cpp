@@ -51,6 +51,9 @@ void add_run_options(CLI::App& cmd, RunCliOptions& o, bool in_process_transport)
                "warning, instead of stopping (bad dataset files, e.g. timestamps.csv going "
                "backwards or repeating, still stop: no fallback guesses a clock)");
   cmd.add_flag("--no-overlays", o.no_overlays, "Do not write overlays/");
+  cmd.add_flag("--camera-videos", o.camera_videos,
+               "Also write overlays/cam_<id>.mp4, each camera's overlay at full resolution "
+               "(default: the mosaic only)");
   cmd.add_flag("--no-plots", o.no_plots, "Do not draw energies.png and errors.png");
   cmd.add_option("--max-frames", o.max_frames, "Stop after this many frames (0 = all)")
       ->capture_default_str()
@@ -82,6 +85,7 @@ run::ImageRunOptions to_image_run_options(const RunCliOptions& o) {
   r.runner.init = run::parse_init_mode(o.init);
   r.runner.rounds = o.rounds;
   r.keep_going = o.keep_going;
+  r.progress = o.progress;
   r.ignore_camera_velocity = o.ignore_camera_velocity;
   if (o.max_frames > 0) r.max_frames = o.max_frames;
   r.detector.quad_decimate = o.decimate;
@@ -108,13 +112,14 @@ json run_and_report_in(sources::NetworkSource& provider, const RunCliOptions& o,
   std::unique_ptr<run::OverlayWriter> overlays;
   run::FrameHook hook;
   if (!o.no_overlays) {
-    overlays = std::make_unique<run::OverlayWriter>(dir, provider);
+    run::OverlaySettings os;
+    os.camera_videos = o.camera_videos;
+    overlays = std::make_unique<run::OverlayWriter>(dir, provider, os);
     hook = [&](int k, const std::vector<cv::Mat>& images,
                const std::vector<std::vector<run::CameraFrame>>& cams,
                const std::vector<const run::FrameRecord*>& r) { (*overlays)(k, images, cams, r); };
   }
   const auto result = run::run_images(provider, options, hook);
-  if (overlays) overlays->finish();
   for (size_t k = provider.warnings().size(); k < result.warnings.size(); ++k)
     std::fprintf(stderr, "warning: %s\n", result.warnings[k].c_str());
   // Where the image times came from (a camera without timestamps.csv rows or video timestamps:
@@ -125,6 +130,8 @@ json run_and_report_in(sources::NetworkSource& provider, const RunCliOptions& o,
     localisation = calib::g_star_localisation_summary(provider, result, covariances, o.calibration);
   json s = run::write_run_outputs(dir, provider, options, result, localisation);
   if (!o.no_plots) plot_run(dir, provider.network());
+  // The overlays' writer thread has drawn on meanwhile.
+  if (overlays) overlays->finish();
   return s;
 }
 }  // namespace

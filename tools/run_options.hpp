@@ -24,6 +24,8 @@ struct RunCliOptions {
   bool ignore_camera_velocity = run::ImageRunOptions{}.ignore_camera_velocity;
   bool no_overlays = false;
   bool no_plots = false;
+  bool camera_videos = false;  ///< --camera-videos (run::OverlaySettings::camera_videos)
+  bool progress = true;        ///< the progress bar on stderr
   int max_frames = 0;
   double decimate = frontend::DetectorSettings{}.quad_decimate;
   std::string refine = frontend::to_string(frontend::DetectorSettings{}.refinement);

@@ -1,6 +1,8 @@
 #include "run_plots.hpp"
 
+#include <exception>
 #include <fstream>
+#include <future>
 #include <string>
 
 #include "plot.hpp"
@@ -31,6 +33,8 @@ void plot_run(const fs::path& dir, const io::NetworkConfig& net) {
     return several ? ", target " + std::to_string(net.targets[j].id) : std::string();
   };
   static const char* const kColors[] = {"#d62728", "#1f77b4", "#2ca02c", "#ff7f0e"};
+  // The two figures are drawn by two gnuplot processes at once; an error of the first wins.
+  std::future<void> first;
   if (has_rows(energies)) {
     plot::Panel up{"position error energy U_p", "U_p [m^2]", true, {}, {}};
     plot::Panel ur{"orientation error energy U_R", "U_R", true, {}, {}};
@@ -39,7 +43,10 @@ void plot_run(const fs::path& dir, const io::NetworkConfig& net) {
       up.series.push_back(series(energies, "networked observer" + suffix(j), 3, j, style));
       ur.series.push_back(series(energies, "networked observer" + suffix(j), 4, j, style));
     }
-    plot::panels_figure({up, ur}, dir / "energies.png", "Estimation error energies against g*(t)");
+    first = std::async(std::launch::async, [=] {
+      plot::panels_figure({up, ur}, dir / "energies.png",
+                          "Estimation error energies against g*(t)");
+    });
   }
   if (has_rows(errors)) {
     plot::Panel pos{"position error to g*", "[mm]", true, {}, {}};
@@ -51,8 +58,16 @@ void plot_run(const fs::path& dir, const io::NetworkConfig& net) {
         pos.series.push_back(series(errors, t, 3 + 2 * static_cast<int>(i), j, style));
         rot.series.push_back(series(errors, t, 4 + 2 * static_cast<int>(i), j, style));
       }
-    plot::panels_figure({pos, rot}, dir / "errors.png", "Networked observer: error per camera");
+    std::exception_ptr second;
+    try {
+      plot::panels_figure({pos, rot}, dir / "errors.png", "Networked observer: error per camera");
+    } catch (...) {
+      second = std::current_exception();
+    }
+    if (first.valid()) first.get();
+    if (second) std::rethrow_exception(second);
   }
+  if (first.valid()) first.get();
 }
 
 }  // namespace netvmo::tools

@@ -122,7 +122,7 @@ TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
   const double ds_json = json_difference(s_run, s_launch);
   std::printf("summary.json: largest difference %.3g\n", ds_json);
   EXPECT_LE(ds_json, 1e-9);
-  for (const char* f : {"energies.png", "errors.png", "overlays/mosaic.png", "overlays/cam_1.mp4",
+  for (const char* f : {"energies.png", "errors.png", "overlays/mosaic.png", "overlays/mosaic.mp4",
                         "messages.json", "cyclonedds.xml", "nodes/node_3.log"})
     EXPECT_TRUE(fs::exists(launch / f)) << f;
 

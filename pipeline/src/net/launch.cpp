@@ -193,7 +193,7 @@ json read_node_json(const fs::path& f) {
 
 MergedRun merge_run_outputs(sources::NetworkSource& provider, const run::ImageRunOptions& options,
                             const fs::path& nodes_dir, const fs::path& dir, int frames,
-                            bool allow_gaps, bool overlays) {
+                            bool allow_gaps, const run::OverlaySettings* overlays) {
   const auto& netcfg = provider.network();
   auto result = merge_nodes(provider, options, nodes_dir, frames, allow_gaps);
   MergedRun merged;
@@ -212,7 +212,7 @@ MergedRun merge_run_outputs(sources::NetworkSource& provider, const run::ImageRu
   io::ensure_directory(dir);
   io::write_file_atomic(dir / "messages.json", merged.messages.dump(2) + "\n");
   if (overlays) {
-    run::OverlayWriter writer(dir, provider);
+    run::OverlayWriter writer(dir, provider, *overlays);
     const size_t n = netcfg.cameras.size();
     for (int k = 0; k < frames; ++k) {
       std::vector<cv::Mat> images(n);

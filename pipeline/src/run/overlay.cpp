@@ -1,5 +1,6 @@
 #include "netvmo/pipeline/run/overlay.hpp"
 
+#include <algorithm>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -13,13 +14,15 @@ namespace fs = std::filesystem;
 namespace {
 const cv::Scalar kText(255, 255, 255);
 
-void polygon(cv::Mat& img, const std::vector<cv::Point2d>& pts, const cv::Scalar& color) {
+// A closed polygon with corner 0 circled, anti-aliased, at sub-pixel positions.
+void polygon(cv::Mat& img, const std::vector<cv::Point2d>& pts, const cv::Scalar& color,
+             int thickness, int radius) {
   constexpr int kShift = 4;  // sub-pixel drawing
   std::vector<cv::Point> p;
   for (const auto& q : pts)
     p.emplace_back(cvRound(q.x * (1 << kShift)), cvRound(q.y * (1 << kShift)));
-  cv::polylines(img, p, true, color, 2, cv::LINE_AA, kShift);
-  cv::circle(img, p[0], 5 << kShift, color, 2, cv::LINE_AA, kShift);  // corner 0
+  cv::polylines(img, p, true, color, thickness, cv::LINE_AA, kShift);
+  cv::circle(img, p[0], radius << kShift, color, thickness, cv::LINE_AA, kShift);  // corner 0
 }
 }  // namespace
 
@@ -34,24 +37,43 @@ std::pair<cv::Scalar, cv::Scalar> target_colors(size_t j) {
 }
 
 cv::Mat draw_overlay(const cv::Mat& gray, int camera_id, const io::Calibration& calib,
-                     const obs::SE3& g_wi, const std::vector<OverlayLayer>& layers) {
+                     const obs::SE3& g_wi, const std::vector<OverlayLayer>& layers, double scale) {
+  const int width = gray.empty() ? calib.width : gray.cols;
+  const int height = gray.empty() ? calib.height : gray.rows;
+  const cv::Size size(std::max(1, cvRound(width * scale)), std::max(1, cvRound(height * scale)));
   cv::Mat img;
-  if (gray.empty())
-    img = cv::Mat(calib.height, calib.width, CV_8UC3, cv::Scalar(40, 40, 40));
-  else
+  if (gray.empty()) {
+    img = cv::Mat(size, CV_8UC3, cv::Scalar(40, 40, 40));
+  } else if (size == gray.size()) {
     cv::cvtColor(gray, img, cv::COLOR_GRAY2BGR);
+  } else {
+    cv::Mat small;
+    cv::resize(gray, small, size, 0, 0, cv::INTER_AREA);
+    cv::cvtColor(small, img, cv::COLOR_GRAY2BGR);
+  }
+  // Pixel centres are at integers at either size.
+  const double sx = static_cast<double>(size.width) / width,
+               sy = static_cast<double>(size.height) / height;
+  const auto scaled = [&](const std::vector<cv::Point2d>& pts) {
+    std::vector<cv::Point2d> out;
+    for (const auto& p : pts) out.emplace_back((p.x + 0.5) * sx - 0.5, (p.y + 0.5) * sy - 0.5);
+    return out;
+  };
+  // Lines and text sized for the drawn image (as at 640 pixels across, never below legible).
+  const double em = size.width / 640.0;
+  const int thickness = em >= 0.75 ? 2 : 1;
+  const int radius = std::max(2, cvRound(5 * em));
   const bool several = layers.size() > 1;
   std::string label = "cam " + std::to_string(camera_id);
   for (size_t j = 0; j < layers.size(); ++j) {
-    const CameraFrame& cam = *layers[j].cam;
-    const run::CameraRecord& rec = *layers[j].rec;
+    const OverlayLayer& layer = layers[j];
     const auto [detected, estimate] = target_colors(j);
-    if (cam.obs.delta)
-      polygon(img, std::vector<cv::Point2d>(cam.obs.corners_px.begin(), cam.obs.corners_px.end()),
-              detected);
-    if (rec.initialized) {
-      const obs::SE3 g_bar = g_wi.inverse() * rec.est_w;  // the camera's own estimate g_bar_i
-      const auto model = obs::FeatureModel::square(layers[j].target->size);
+    if (layer.detected)
+      polygon(img, scaled(std::vector<cv::Point2d>(layer.corners.begin(), layer.corners.end())),
+              detected, thickness, radius);
+    if (layer.estimate_w) {
+      const obs::SE3 g_bar = g_wi.inverse() * *layer.estimate_w;  // the camera's own g_bar_i
+      const auto model = obs::FeatureModel::square(layer.target->size);
       bool in_front = true;
       std::vector<cv::Point2d> xy;
       for (const auto& p : model.points_o) {
@@ -59,31 +81,101 @@ cv::Mat draw_overlay(const cv::Mat& gray, int camera_id, const io::Calibration& 
         in_front = in_front && q.z() > 1e-3;
         xy.emplace_back(q.x() / q.z(), q.y() / q.z());
       }
-      if (in_front) polygon(img, io::denormalize_points(xy, calib), estimate);
+      if (in_front)
+        polygon(img, scaled(io::denormalize_points(xy, calib)), estimate, thickness, radius);
     }
-    if (j == 0 && cam.read_failed) label += "  unreadable";
-    if (cam.read_failed) continue;
-    if (several) label += "  " + std::to_string(layers[j].target->id) + ":";
-    label += cam.obs.delta ? (several ? " seen" : "  detected") : (several ? " -" : "  no target");
+    if (j == 0 && layer.read_failed) label += "  unreadable";
+    if (layer.read_failed) continue;
+    if (several) label += "  " + std::to_string(layer.target->id) + ":";
+    label += layer.detected ? (several ? " seen" : "  detected") : (several ? " -" : "  no target");
   }
-  cv::putText(img, label, {10, 24}, cv::FONT_HERSHEY_SIMPLEX, 0.7, kText, 2, cv::LINE_AA);
+  cv::putText(img, label, {cvRound(10 * em), cvRound(24 * em)}, cv::FONT_HERSHEY_SIMPLEX,
+              std::max(0.35, 0.7 * em), kText, thickness, cv::LINE_AA);
   const std::string legend =
       several ? "light: detection  dark: networked estimate  (one colour pair per target)"
               : "green: detection  magenta: networked estimate";
-  cv::putText(img, legend, {10, img.rows - 12}, cv::FONT_HERSHEY_SIMPLEX, 0.45, kText, 1,
-              cv::LINE_AA);
+  cv::putText(img, legend, {cvRound(10 * em), img.rows - cvRound(12 * em)},
+              cv::FONT_HERSHEY_SIMPLEX, std::max(0.3, 0.45 * em), kText, 1, cv::LINE_AA);
   return img;
 }
 
 OverlayWriter::OverlayWriter(const fs::path& dir, const sources::NetworkSource& provider,
                              OverlaySettings settings)
     : dir_(dir / "overlays"), provider_(provider), settings_(settings) {
+  if (settings_.tile_width < 16 || settings_.mosaic_columns < 1 || settings_.queue_frames < 1)
+    throw std::invalid_argument(
+        "OverlaySettings: tile_width >= 16, mosaic_columns >= 1 and "
+        "queue_frames >= 1");
   io::ensure_directory(dir_);
+  thread_ = std::thread([this] { work(); });
+}
+
+OverlayWriter::~OverlayWriter() {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    closing_ = true;
+  }
+  changed_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+void OverlayWriter::rethrow_error() {
+  std::lock_guard<std::mutex> lock(mu_);
+  if (error_) std::rethrow_exception(error_);
 }
 
 void OverlayWriter::operator()(int /*frame*/, const std::vector<cv::Mat>& images,
                                const std::vector<std::vector<CameraFrame>>& cams,
                                const std::vector<const run::FrameRecord*>& records) {
+  const auto& net = provider_.network();
+  Job job;
+  job.images = images;  // shared pixels: the run reads each frame into a new image
+  job.layers.resize(net.cameras.size());
+  for (size_t i = 0; i < net.cameras.size(); ++i) {
+    for (size_t j = 0; j < records.size(); ++j) {
+      const CameraFrame& cam = cams[j][i];
+      const CameraRecord& rec = records[j]->cameras[i];
+      OverlayLayer layer;
+      layer.detected = cam.obs.delta;
+      layer.corners = cam.obs.corners_px;
+      layer.read_failed = cam.read_failed;
+      if (rec.initialized) layer.estimate_w = rec.est_w;
+      layer.target = &net.targets[j];
+      job.layers[i].push_back(layer);
+    }
+    job.g_wi.push_back(provider_.camera_believed(i, records[0]->frame));
+  }
+  std::unique_lock<std::mutex> lock(mu_);
+  changed_.wait(
+      lock, [&] { return error_ || queue_.size() < static_cast<size_t>(settings_.queue_frames); });
+  if (error_) std::rethrow_exception(error_);
+  queue_.push_back(std::move(job));
+  changed_.notify_all();
+}
+
+void OverlayWriter::work() {
+  for (;;) {
+    Job job;
+    {
+      std::unique_lock<std::mutex> lock(mu_);
+      changed_.wait(lock, [&] { return closing_ || !queue_.empty(); });
+      if (queue_.empty()) return;  // closing, all done
+      job = std::move(queue_.front());
+      queue_.pop_front();
+      changed_.notify_all();
+      if (error_) continue;  // the first error stands; the rest is not drawn
+    }
+    try {
+      draw(job);
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(mu_);
+      error_ = std::current_exception();
+      changed_.notify_all();
+    }
+  }
+}
+
+void OverlayWriter::draw(const Job& job) {
   const auto& net = provider_.network();
   const size_t n = net.cameras.size();
   const int cols = std::max(1, std::min<int>(settings_.mosaic_columns, static_cast<int>(n)));
@@ -92,15 +184,13 @@ void OverlayWriter::operator()(int /*frame*/, const std::vector<cv::Mat>& images
   cv::Size tile;
   for (size_t i = 0; i < n; ++i) {
     const auto& calib = provider_.calibration(i);
-    std::vector<OverlayLayer> layers;
-    for (size_t j = 0; j < records.size(); ++j)
-      layers.push_back({&cams[j][i], &records[j]->cameras[i], &net.targets[j]});
-    const cv::Mat img = draw_overlay(images[i], net.cameras[i].id, calib,
-                                     provider_.camera_believed(i, records[0]->frame), layers);
-    if (settings_.video) {
+    const auto& layers = job.layers[i];
+    const int id = net.cameras[i].id;
+    if (settings_.video && settings_.camera_videos) {
+      const cv::Mat img = draw_overlay(job.images[i], id, calib, job.g_wi[i], layers);
       if (videos_.size() <= i) videos_.resize(n);
       if (!videos_[i].isOpened()) {
-        const fs::path file = dir_ / ("cam_" + std::to_string(net.cameras[i].id) + ".mp4");
+        const fs::path file = dir_ / ("cam_" + std::to_string(id) + ".mp4");
         videos_[i].open(file.string(), cv::VideoWriter::fourcc('m', 'p', '4', 'v'), net.fps,
                         img.size());
         if (!videos_[i].isOpened())
@@ -108,14 +198,14 @@ void OverlayWriter::operator()(int /*frame*/, const std::vector<cv::Mat>& images
       }
       videos_[i].write(img);
     }
-    cv::Mat small;
-    cv::resize(img, small, cv::Size(), settings_.mosaic_scale, settings_.mosaic_scale,
-               cv::INTER_AREA);
+    const int width = job.images[i].empty() ? calib.width : job.images[i].cols;
+    cv::Mat small = draw_overlay(job.images[i], id, calib, job.g_wi[i], layers,
+                                 static_cast<double>(settings_.tile_width) / width);
     if (i == 0) {
       tile = small.size();
       last_mosaic_ = cv::Mat(tile.height * rows, tile.width * cols, CV_8UC3, cv::Scalar(0, 0, 0));
     }
-    if (small.size() != tile) cv::resize(small, small, tile);
+    if (small.size() != tile) cv::resize(small, small, tile, 0, 0, cv::INTER_AREA);
     small.copyTo(last_mosaic_(cv::Rect(
         static_cast<int>(i % static_cast<size_t>(cols)) * tile.width,
         static_cast<int>(i / static_cast<size_t>(cols)) * tile.height, tile.width, tile.height)));
@@ -133,6 +223,13 @@ void OverlayWriter::operator()(int /*frame*/, const std::vector<cv::Mat>& images
 }
 
 void OverlayWriter::finish() {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    closing_ = true;
+  }
+  changed_.notify_all();
+  if (thread_.joinable()) thread_.join();
+  rethrow_error();
   for (auto& v : videos_) v.release();
   mosaic_video_.release();
   if (!last_mosaic_.empty()) {

@@ -16,6 +16,7 @@
 #include "netvmo/pipeline/net/node.hpp"
 #include "netvmo/pipeline/net/process.hpp"
 #include "netvmo/pipeline/run/image_run.hpp"
+#include "netvmo/pipeline/run/overlay.hpp"
 #include "netvmo/pipeline/sources/network_source.hpp"
 
 namespace netvmo::net {
@@ -82,9 +83,9 @@ nlohmann::json read_node_json(const std::filesystem::path& file);
 
 /// The merge of `launch` and `merge`: every node's node_<id>.csv in `nodes_dir` into the outputs
 /// of `netvmo run` in `dir` (the same result structure as run_images, the same writers; overlays
-/// unless `overlays` is false), plus messages.json from the nodes' statistics (a node without
-/// them, killed for good in an async run, is null there). Returns the run's summary and the
-/// messages.
+/// with `overlays`' settings unless it is null), plus messages.json from the nodes' statistics (a
+/// node without them, killed for good in an async run, is null there). Returns the run's summary
+/// and the messages.
 struct MergedRun {
   nlohmann::json summary;
   nlohmann::json messages;
@@ -92,7 +93,7 @@ struct MergedRun {
 MergedRun merge_run_outputs(sources::NetworkSource& provider, const run::ImageRunOptions& options,
                             const std::filesystem::path& nodes_dir,
                             const std::filesystem::path& dir, int frames, bool allow_gaps,
-                            bool overlays);
+                            const run::OverlaySettings* overlays);
 
 /// The per-camera message table of a merged run (sent, received, dropped, late, non-neighbour,
 /// rejected), as printed by launch and merge.
