@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <thread>
+#include <vector>
 
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
@@ -16,6 +18,7 @@
 #include "netvmo/pipeline/run/image_run.hpp"
 #include "netvmo/pipeline/sources/render_source.hpp"
 #include "netvmo/render/renderer.hpp"
+#include "run_options.hpp"
 #include "scenario_path.hpp"
 
 namespace netvmo::tools {
@@ -97,6 +100,86 @@ void soak(sources::NetworkSource& source, const std::string& what, int every, co
   };
   run::run_images(source, run, hook);
 }
+// A recording played through the whole `netvmo run` pipeline, looped to `frames` network
+// frames, `repeat` times each way, alternately: bare (--no-overlays --no-plots: the CSVs and
+// summary only) and with the default outputs (overlays, plots). Each figure is wall time from
+// the first image read to the last output written; the split comes from the run's own timers.
+// The anchor, measured in the same run: reading (decoding) the same images alone on as many
+// threads as the run's front end, the most any pipeline could do with this decoder here.
+void recording(const fs::path& dir, int frames, int repeat) {
+  auto inner = sources::open_dataset_source(dir);
+  const size_t n = inner->network().cameras.size();
+  LoopSource looped(std::move(inner), frames);
+  int width = 0, height = 0;
+  for (size_t i = 0; i < n; ++i) {
+    width = std::max(width, looped.calibration(i).width);
+    height = std::max(height, looped.calibration(i).height);
+  }
+  std::printf(
+      "recording %s: %zu cameras, up to %dx%d, looped to %d network frames, %d times each "
+      "way\n",
+      dir.string().c_str(), n, width, height, frames, repeat);
+  const fs::path out =
+      fs::temp_directory_path() / ("netvmo_bench_out_" + std::to_string(::getpid()));
+  const auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
+  const int workers = run::ImageRunOptions{}.workers;
+  std::vector<double> reading_only, wall[2];
+  std::vector<nlohmann::json> timing[2];
+  for (int r = 0; r < repeat; ++r) {
+    {  // the anchor
+      const auto t0 = std::chrono::steady_clock::now();
+      std::vector<std::thread> threads;
+      for (int w = 0; w < workers; ++w)
+        threads.emplace_back([&, w] {
+          for (int k = 0; k < frames; ++k)
+            for (size_t i = static_cast<size_t>(w); i < n; i += static_cast<size_t>(workers))
+              looped.read(i, k);
+        });
+      for (auto& t : threads) t.join();
+      reading_only.push_back(
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    }
+    for (const int outputs : {0, 1}) {
+      RunCliOptions o;
+      o.no_overlays = o.no_plots = !outputs;
+      o.progress = false;
+      fs::remove_all(out);
+      fs::create_directories(out);
+      const auto t0 = std::chrono::steady_clock::now();
+      const auto summary = run_and_report(looped, o, out, {});
+      wall[outputs].push_back(
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      timing[outputs].push_back(summary["timing"]);
+    }
+  }
+  fs::remove_all(out);
+  std::printf("%-16s %6.1f network frames/s  (the anchor: reading alone, %d threads)\n",
+              "reading only", frames / median(reading_only), workers);
+  for (const int outputs : {0, 1}) {
+    const auto ms = [&](const char* key) {
+      std::vector<double> v;
+      for (const auto& t : timing[outputs]) v.push_back(t[key].get<double>());
+      return 1000.0 * median(v) / frames;
+    };
+    const double s = median(wall[outputs]);
+    std::printf(
+        "%-16s %6.1f network frames/s  (median of %d; per network frame: %.2f ms waiting for the "
+        "front end, %.2f ms observer, %.2f ms the rest: outputs)\n",
+        outputs ? "default outputs" : "bare", frames / s, repeat, ms("front_end_seconds"),
+        ms("observer_seconds"),
+        1000.0 * s / frames - ms("front_end_seconds") - ms("observer_seconds"));
+    std::printf(
+        "%-16s front end, summed over its threads, per network frame: reading (decoding) %.2f "
+        "ms, search (libapriltag) %.2f ms, refinement %.2f ms, check %.2f ms\n",
+        "", ms("reading_seconds"), ms("search_seconds"), ms("refinement_seconds"),
+        ms("check_seconds"));
+  }
+  std::printf("the default outputs cost %.0f %% on top of bare\n",
+              100.0 * (median(wall[1]) / median(wall[0]) - 1.0));
+}
 }  // namespace
 
 void add_bench(CLI::App& app, int& exit_code) {
@@ -108,6 +191,8 @@ void add_bench(CLI::App& app, int& exit_code) {
     int live_spp = 1;
     int soak = 0, soak_every = 1000;
     std::string soak_log = "soak.dat", soak_source = "recorded";
+    std::string recording;
+    int repeat = 3;
   };
   auto o = std::make_shared<Options>();
   auto* cmd = app.add_subcommand(
@@ -145,8 +230,19 @@ void add_bench(CLI::App& app, int& exit_code) {
   cmd->add_option("--soak-log", o->soak_log,
                   "Soak: table of frames, seconds, ms per frame, VmRSS [kB]")
       ->capture_default_str();
+  cmd->add_option("--recording", o->recording,
+                  "Instead: a recorded dataset folder through `netvmo run`, looped to --frames, "
+                  "bare (--no-overlays --no-plots) and with the default outputs")
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("--repeat", o->repeat, "--recording: runs each way (the median is printed)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100));
   cmd->callback([o, &exit_code] {
     exit_code = guarded("bench", [&] {
+      if (!o->recording.empty()) {
+        recording(o->recording, o->frames, o->repeat);
+        return 0;
+      }
       const fs::path scenario = find_scenario(o->scenario);
       const auto scene = io::load_render_scenario(scenario);
       if (o->soak > 0 && o->soak_source == "live") {

@@ -4,6 +4,8 @@
 // reported complexity is fitted against n + |E|, per thread count.
 #include <benchmark/benchmark.h>
 
+#include <chrono>
+
 #include "netvmo/observer/networked_observer.hpp"
 
 using namespace netvmo::obs;
@@ -58,6 +60,59 @@ void BM_ObserverFrame(benchmark::State& state, const char* error_model) {
                                                         benchmark::Counter::kInvert);
   state.SetItemsProcessed(state.iterations() * work);
 }
+// The same network on one thread and on two, frame for frame alternately in the same
+// iterations (the anchor measured in the same run): the wall time per frame of each and the
+// speed-up (one thread's time / two threads').
+void BM_ObserverTwoThreadsSpeedup(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const Graph g = ring_with_chords(n);
+  std::vector<SE3> g_wi(static_cast<size_t>(n)), g_bar(static_cast<size_t>(n));
+  std::vector<Measurement> z(static_cast<size_t>(n));
+  ObserverSettings s;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2.0 * 3.14159265358979 * i / n;
+    g_wi[static_cast<size_t>(i)] =
+        make_pose(Vec3(3 * std::cos(a), 3 * std::sin(a), 0), Vec3(0, 0, a));
+    g_bar[static_cast<size_t>(i)] = make_pose(Vec3(0, 0, 2), Vec3(3.0, 0, 0));
+    if (i % 3 == 0) {
+      auto& zi = z[static_cast<size_t>(i)];
+      zi.delta = true;
+      zi.g_io_true = make_pose(Vec3(0.01 * (i % 7), 0.0, 2.0), Vec3(3.05, 0.02, 0.0));
+      zi.f = project(*zi.g_io_true, s.features);
+    }
+  }
+  std::vector<NetworkedObserver> obs;
+  obs.reserve(2);
+  for (int threads : {1, 2}) {
+    s.threads = threads;
+    obs.emplace_back(g, s);
+    obs.back().set_camera_poses(g_wi);
+    obs.back().reset(g_bar);
+  }
+  const double dt = 1.0 / 30.0;
+  double seconds[2] = {0.0, 0.0};
+  for (auto _ : state) {
+    for (size_t t = 0; t < 2; ++t) {
+      const auto t0 = std::chrono::steady_clock::now();
+      obs[t].step(dt, z);
+      benchmark::DoNotOptimize(obs[t].estimates().data());
+      seconds[t] += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+  }
+  const auto frames = static_cast<double>(state.iterations());
+  state.counters["cameras"] = n;
+  state.counters["threads_used"] = obs[1].threads();
+  state.counters["ms_1_thread"] = 1000.0 * seconds[0] / frames;
+  state.counters["ms_2_threads"] = 1000.0 * seconds[1] / frames;
+  state.counters["speedup"] = seconds[0] / seconds[1];  // goal (README): >= 1.8 at 10,000
+}
+BENCHMARK(BM_ObserverTwoThreadsSpeedup)
+    ->ArgName("n")
+    ->Arg(1000)
+    ->Arg(10000)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 // n = 5 ... 10,000 cameras, the complexity fitted against n + |E|.
 void sizes(benchmark::internal::Benchmark* b, int threads) {
   b->ArgNames({"n", "threads"});

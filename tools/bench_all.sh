@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# Every speed figure of the README's table (docs/benchmarks.md), each with its anchor measured in
+# the same run (not a CI test; run it on an otherwise idle machine):
+#   1. the observer on one thread and on two, frame for frame alternately (bench_observer's
+#      BM_ObserverTwoThreadsSpeedup: ms per frame of each and the speed-up), 1,000 and 10,000
+#      cameras;
+#   2. a lock-step round over Cyclone DDS against ddsperf ping/pong of the same Cyclone over the
+#      same loopback configuration (bench_dds: both, and the ratios);
+#   3. recordings at real resolution, 5 cameras of which 2 are blind, 1920x1080 and 1280x720
+#      JPEG (datasets/paper5_render_hd.yaml, rendered once into DATA): `netvmo bench --recording`,
+#      bare and with the default outputs, against reading the images alone.
+#
+#   tools/bench_all.sh [BUILD_DIR [DATA]]     (defaults: build, BUILD_DIR/bench_data)
+#
+# Builds what it runs (Release), prints the machine and the date first. Takes ~10 minutes the
+# first time (the renders), ~4 minutes after.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build=${1:-build}
+data=${2:-$build/bench_data}
+frames=${BENCH_FRAMES:-150}
+
+echo "bench_all: $(date -u '+%Y-%m-%d %H:%M UTC'); $(nproc) cores," \
+  "$(lscpu | sed -n 's/^Model name: *//p' | head -1);" \
+  "load average $(cut -d' ' -f1-3 /proc/loadavg)"
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$build" -j"$(nproc)" --target netvmo bench_observer bench_dds >/dev/null
+
+echo
+echo "== 1. observer: one thread against two (goal: >= 1.8x at 10,000 cameras, no slowdown at 1,000)"
+"$build"/bench/bench_observer --benchmark_filter='BM_ObserverTwoThreadsSpeedup' \
+  --benchmark_repetitions=5 --benchmark_report_aggregates_only=true 2>&1 | grep -E 'median|Benchmark'
+
+echo
+echo "== 2. lock-step round over DDS against ddsperf (goals: median <= 2x ddsperf's one-way median," \
+  "p99 <= 3x its p99)"
+"$build"/bench/bench_dds 2>&1 | grep -E 'BM_|Benchmark'
+
+echo
+echo "== 3. recordings at real resolution (goals: 1920x1080 >= 30, 1280x720 >= 100 network" \
+  "frames/s; default outputs <= 25 % on top)"
+mkdir -p "$data"
+for res in 1920x1080 1280x720; do
+  if [ ! -f "$data/$res/network.yaml" ]; then
+    "$build"/netvmo render datasets/paper5_render_hd.yaml --out "$data/$res" --frames 20 --spp 4 \
+      --resolution "$res" --quiet >/dev/null
+  fi
+  "$build"/netvmo bench --recording "$data/$res" --frames "$frames"
+done
