@@ -3,17 +3,16 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <deque>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <random>
 #include <sstream>
 #include <thread>
 
 #include "netvmo/observer/camera_observer.hpp"
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/frontend/pnp.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/net/faulty_transport.hpp"
+#include "netvmo/pipeline/run/camera_step.hpp"
 
 namespace netvmo::net {
 namespace fs = std::filesystem;
@@ -197,7 +196,8 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   };
 
   frontend::DetectorSettings ds = o.run.detector;
-  frontend::set_target(ds, netcfg.target());
+  const std::vector<io::TargetConfig> targets = {netcfg.target()};  // the first target only
+  frontend::set_targets(ds, targets);
   const int workers = std::max(1, std::min<int>(o.run.workers, static_cast<int>(n)));
   ds.nthreads = std::max(1, ds.nthreads / workers);
   frontend::FrontEnd front_end(ds, o.run.tracking);
@@ -252,37 +252,27 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   // it is initialised from them, or, if none has an estimate, for the staleness bound.
   bool hold_measurement = async && first > 0 && rs.init == run::InitMode::Pnp;
   const double hold_until = frame_time(first) + o.stale_s;
-  std::mt19937_64 rng(o.seed * 1000003ULL + static_cast<std::uint64_t>(o.camera_id));
-  std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  std::deque<std::pair<double, obs::EstimateMessage>> delayed;  // (due, message)
+  // Async: the faults injected on this side (--drop, --delay), between DDS and the observer.
+  FaultyTransport faulty(transport, o.drop, o.delay_ms / 1000.0,
+                         o.seed * 1000003ULL + static_cast<std::uint64_t>(o.camera_id), now_epoch);
+  obs::Transport& exchange = async ? static_cast<obs::Transport&>(faulty) : transport;
+  std::vector<run::CameraFrame> cams;
   for (int k = first; k < frames; ++k) {
-    run::CameraFrame cam;
     cv::Mat image;
-    try {
-      image = provider->read(si, k);
-    } catch (const InputError& e) {
-      if (!o.run.keep_going) throw;
-      cam.read_failed = true;
-      summary.warnings.push_back(std::string(e.what()) + " (camera " + std::to_string(o.camera_id) +
-                                 " blind at frame " + std::to_string(k) + ")");
-    }
-    if (!cam.read_failed) {
-      cam.obs = front_end.observe(image, provider->calibration(si), nullptr, &track);
-      if (cam.obs.delta) {
-        const auto model = frontend::observation_model(netcfg.target(), cam.obs);
-        const auto pose = frontend::pnp_pose(cam.obs.f_normalized, model);
-        if (pose) cam.g_io_pnp = pose->g_io;
-        if (!netcfg.target().bundle.empty()) cam.points_o = model.points_o;
+    if (const auto error = run::observe_camera(*provider, si, k, front_end, track, targets,
+                                               o.run.keep_going, image, cams)) {
+      if (!o.run.keep_going) std::rethrow_exception(error);
+      try {
+        std::rethrow_exception(error);
+      } catch (const InputError& e) {
+        summary.warnings.push_back(std::string(e.what()) + " (camera " +
+                                   std::to_string(o.camera_id) + " blind at frame " +
+                                   std::to_string(k) + ")");
       }
     }
-    obs::Measurement z;
-    z.delta = cam.obs.delta;
-    z.f = cam.obs.f_normalized;
-    z.points_o = cam.points_o;
-    z.g_io_pnp = cam.g_io_pnp;
-    const auto target = provider->target_truth(k);
-    const auto true_wi = provider->camera_truth(si, k);
-    if (target && true_wi) z.g_io_true = true_wi->inverse() * *target;
+    const run::CameraFrame& cam = cams[0];
+    const obs::Measurement z =
+        run::camera_input(cam, provider->target_truth(k), provider->camera_truth(si, k));
     if (net.error_model().input() == obs::MeasurementInput::true_pose && z.delta && !z.g_io_true)
       throw InputError("the " + std::string(net.error_model().name()) +
                        " error model needs ground truth (rendered data)");
@@ -303,23 +293,10 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
       // Lock-step neighbours wait for every round's message; an async node publishes nothing
       // while it has no estimate.
       if (!async || net.initialized()) transport.send(net.publish(tr));
-      transport.receive(self, inbox);
-      if (!async) {
-        for (const auto& m : inbox) net.receive(m);
-      } else {
-        // Faults injected on this side, then the latest value of each neighbour, forgotten
-        // once older than the staleness bound.
-        const double now = now_epoch();
-        for (const auto& m : inbox) {
-          if (o.drop > 0 && uniform(rng) < o.drop)
-            ++summary.stats.dropped;
-          else
-            delayed.emplace_back(now + o.delay_ms / 1000.0, m);
-        }
-        while (!delayed.empty() && delayed.front().first <= now) {
-          net.receive(delayed.front().second);
-          delayed.pop_front();
-        }
+      exchange.receive(self, inbox);
+      for (const auto& m : inbox) net.receive(m);
+      if (async) {
+        // The latest value of each neighbour, forgotten once older than the staleness bound.
         const auto& latest = net.latest();
         for (size_t a = 0; a < latest.size(); ++a)
           if (latest[a] && tr - latest[a]->stamp > o.stale_s) {
@@ -350,9 +327,8 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   csv.commit();
   links.commit();
   summary.frames = frames;
-  const auto dropped = summary.stats.dropped;
   summary.stats = transport.stats();
-  summary.stats.dropped = dropped;
+  summary.stats.dropped = faulty.dropped();
   summary.refused = net.refused();
   summary.seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
 

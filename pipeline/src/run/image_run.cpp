@@ -11,7 +11,6 @@
 #include <thread>
 
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/frontend/pnp.hpp"
 #include "netvmo/pipeline/progress.hpp"
 
 namespace netvmo::run {
@@ -36,25 +35,6 @@ obs::Graph network_graph(const io::NetworkConfig& net) {
                      ": add an edge joining them");
   }
   return g;
-}
-
-CameraInput camera_input(const CameraFrame& cam, const std::optional<obs::SE3>& target,
-                         const std::optional<obs::SE3>& true_wi) {
-  CameraInput in;
-  in.delta = cam.obs.delta;
-  in.f = cam.obs.f_normalized;  // (eq:visual_mea) with lambda = 1
-  in.points_o = cam.points_o;   // a bundle's seen corners (empty: the tag's square)
-  in.g_io_pnp = cam.g_io_pnp;
-  if (target && true_wi) in.g_io_true = true_wi->inverse() * *target;  // g_io = g_wi^-1 g_wo
-  return in;
-}
-
-std::vector<CameraInput> camera_inputs(const std::vector<CameraFrame>& cams,
-                                       const std::optional<obs::SE3>& target,
-                                       const std::vector<std::optional<obs::SE3>>& true_wi) {
-  std::vector<CameraInput> in(cams.size());
-  for (size_t i = 0; i < cams.size(); ++i) in[i] = camera_input(cams[i], target, true_wi[i]);
-  return in;
 }
 
 obs::Vec6 camera_velocity(const obs::SE3& g_k, const obs::SE3& g_k1, double dt) {
@@ -159,34 +139,15 @@ struct Pipeline {
   std::vector<std::vector<CameraFrame>> frames_for(size_t slots) const {
     return std::vector<std::vector<CameraFrame>>(targets.size(), std::vector<CameraFrame>(slots));
   }
-  // Camera i's image `frame` through worker w's front end (and PnP for each detected target)
-  // into cams[j][slot]. An unreadable image is returned as the error (with keep_going the camera
-  // is marked blind there).
+  // Camera i's image `frame` through worker w's front end (observe_camera) into cams[j][slot].
   std::exception_ptr observe(int w, size_t i, int frame, cv::Mat& image,
                              std::vector<std::vector<CameraFrame>>& cams, size_t slot) {
-    for (auto& c : cams) c[slot] = CameraFrame{};
-    const auto t_read = Clock::now();
-    try {
-      image = provider.read(i, frame);
-      seconds_reading[static_cast<size_t>(w)] += seconds_since(t_read);
-    } catch (const InputError&) {
-      image.release();
-      for (auto& c : cams) c[slot].read_failed = options.keep_going;
-      return std::current_exception();
-    }
-    auto observations = front_ends[static_cast<size_t>(w)].observe_targets(
-        image, provider.calibration(i), nullptr, &tracks[i]);
-    for (size_t j = 0; j < targets.size(); ++j) {
-      CameraFrame& cam = cams[j][slot];
-      cam.obs = std::move(observations[j]);
-      if (!cam.obs.delta) continue;
-      // PnP on the corners of every accepted tag (a bundle's object points).
-      const auto m = frontend::observation_model(targets[j], cam.obs);
-      const auto pose = frontend::pnp_pose(cam.obs.f_normalized, m);
-      if (pose) cam.g_io_pnp = pose->g_io;
-      if (!targets[j].bundle.empty()) cam.points_o = m.points_o;
-    }
-    return nullptr;
+    std::vector<CameraFrame> out;
+    auto error =
+        observe_camera(provider, i, frame, front_ends[static_cast<size_t>(w)], tracks[i], targets,
+                       options.keep_going, image, out, &seconds_reading[static_cast<size_t>(w)]);
+    for (size_t j = 0; j < targets.size(); ++j) cams[j][slot] = std::move(out[j]);
+    return error;
   }
   // Rethrows an unreadable image's error, or with keep_going turns it into a warning.
   void report(const std::exception_ptr& error, size_t i, int frame, ImageRunResult& result) const {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "netvmo/pipeline/frontend/front_end.hpp"
+#include "netvmo/pipeline/run/camera_step.hpp"
 #include "netvmo/pipeline/run/flips.hpp"
 #include "netvmo/pipeline/run/runner.hpp"
 #include "netvmo/pipeline/run/transports.hpp"
@@ -32,16 +33,6 @@ struct ImageRunOptions {
   /// set every V_wi to zero (a diagnostic: how much the -hat(V_wi) g_bar term of (eq:EsRRBM)
   /// matters).
   bool ignore_camera_velocity = false;
-};
-
-/// What one camera made of one frame.
-struct CameraFrame {
-  frontend::TagObservation obs;      ///< detection (delta, corners, normalized features)
-  std::optional<obs::SE3> g_io_pnp;  ///< ViSP pose when detected
-  /// The object points of obs.f_normalized when the target has a bundle (tag_points of the
-  /// accepted tags; empty for a single tag, whose points are the error model's fixed square).
-  std::vector<obs::Vec3> points_o;
-  bool read_failed = false;  ///< the image could not be read (only with keep_going)
 };
 
 /// Called after each frame with the frame's images, the front-end results [target][camera] and
@@ -117,17 +108,6 @@ int latest_at_or_before(const std::vector<double>& times, double t);
 /// The communication graph of network.yaml (camera indices in its order). Throws InputError
 /// naming network.yaml when it is disconnected (Assumption 1).
 obs::Graph network_graph(const io::NetworkConfig& net);
-
-/// One camera's observer input (camera_inputs, for one camera; true_wi: its true pose, if known).
-CameraInput camera_input(const CameraFrame& cam, const std::optional<obs::SE3>& target,
-                         const std::optional<obs::SE3>& true_wi);
-
-/// One frame's observer inputs: delta, the normalized corners and the PnP pose from the front
-/// end, and on data with truth the true relative pose g_io = g_wi^-1 g_wo (true_wi: the
-/// cameras' true poses, when known).
-std::vector<CameraInput> camera_inputs(const std::vector<CameraFrame>& cams,
-                                       const std::optional<obs::SE3>& target,
-                                       const std::vector<std::optional<obs::SE3>>& true_wi);
 
 /// The warning a run gives when h (k_e + 2 k_s d_max) = step_factor reaches 2 (the forward-Euler
 /// stability limit), or none.

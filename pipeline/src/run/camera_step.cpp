@@ -1,0 +1,60 @@
+#include "netvmo/pipeline/run/camera_step.hpp"
+
+#include <chrono>
+
+#include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/frontend/pnp.hpp"
+
+namespace netvmo::run {
+
+std::exception_ptr observe_camera(sources::NetworkSource& source, size_t i, int frame,
+                                  frontend::FrontEnd& front_end, frontend::TrackState& track,
+                                  const std::vector<io::TargetConfig>& targets, bool keep_going,
+                                  cv::Mat& image, std::vector<CameraFrame>& out,
+                                  double* seconds_reading) {
+  out.assign(targets.size(), CameraFrame{});
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    image = source.read(i, frame);
+    if (seconds_reading)
+      *seconds_reading +=
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  } catch (const InputError&) {
+    image.release();
+    for (auto& c : out) c.read_failed = keep_going;
+    return std::current_exception();
+  }
+  auto observations = front_end.observe_targets(image, source.calibration(i), nullptr, &track);
+  for (size_t j = 0; j < targets.size(); ++j) {
+    CameraFrame& cam = out[j];
+    cam.obs = std::move(observations[j]);
+    if (!cam.obs.delta) continue;
+    // PnP on the corners of every accepted tag (a bundle's object points).
+    const auto m = frontend::observation_model(targets[j], cam.obs);
+    const auto pose = frontend::pnp_pose(cam.obs.f_normalized, m);
+    if (pose) cam.g_io_pnp = pose->g_io;
+    if (!targets[j].bundle.empty()) cam.points_o = m.points_o;
+  }
+  return nullptr;
+}
+
+CameraInput camera_input(const CameraFrame& cam, const std::optional<obs::SE3>& target,
+                         const std::optional<obs::SE3>& true_wi) {
+  CameraInput in;
+  in.delta = cam.obs.delta;
+  in.f = cam.obs.f_normalized;  // (eq:visual_mea) with lambda = 1
+  in.points_o = cam.points_o;   // a bundle's seen corners (empty: the tag's square)
+  in.g_io_pnp = cam.g_io_pnp;
+  if (target && true_wi) in.g_io_true = true_wi->inverse() * *target;  // g_io = g_wi^-1 g_wo
+  return in;
+}
+
+std::vector<CameraInput> camera_inputs(const std::vector<CameraFrame>& cams,
+                                       const std::optional<obs::SE3>& target,
+                                       const std::vector<std::optional<obs::SE3>>& true_wi) {
+  std::vector<CameraInput> in(cams.size());
+  for (size_t i = 0; i < cams.size(); ++i) in[i] = camera_input(cams[i], target, true_wi[i]);
+  return in;
+}
+
+}  // namespace netvmo::run
