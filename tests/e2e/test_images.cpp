@@ -14,10 +14,12 @@
 #include <opencv2/videoio.hpp>
 #include <sstream>
 
+#include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/calibration.hpp"
 #include "netvmo/pipeline/io/dataset_writer.hpp"
 #include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/pipeline/run/image_run.hpp"
+#include "netvmo/pipeline/run/overlay.hpp"
 #include "netvmo/pipeline/run/run_report.hpp"
 #include "netvmo/pipeline/sources/render_source.hpp"
 #include "netvmo/render/renderer.hpp"
@@ -253,6 +255,52 @@ TEST_F(SmallDataset, FrontEndThreadsAndSkippedSearchesChangeNothing) {
         EXPECT_TRUE(a.est_w.matrix() == b.est_w.matrix()) << "frame " << k << " camera " << i;
         EXPECT_EQ(r.frames[k][i].obs.status, ref.frames[k][i].obs.status);
       }
+  }
+}
+
+// The overlays: by default the mosaic alone (its tiles 320 px wide), with camera_videos each
+// camera's video at its own resolution too; drawn on the writer thread, whose error (a video
+// that cannot be opened) stops the run with the file's name.
+TEST_F(SmallDataset, OverlaysWriteTheMosaicAndCameraVideosOnRequest) {
+  auto source = sources::open_dataset_source(*dir_ / "rendered");
+  const auto run_with = [&](const fs::path& out, const run::OverlaySettings& settings) {
+    run::OverlayWriter writer(out, *source, settings);
+    run::run_images(*source, quiet_options(),
+                    [&](int k, const std::vector<cv::Mat>& images,
+                        const std::vector<std::vector<run::CameraFrame>>& cams,
+                        const std::vector<const run::FrameRecord*>& records) {
+                      writer(k, images, cams, records);
+                    });
+    writer.finish();
+  };
+  const fs::path plain = *dir_ / "overlays_plain", all = *dir_ / "overlays_all";
+  run_with(plain, {});
+  const cv::Mat mosaic = cv::imread((plain / "overlays" / "mosaic.png").string());
+  EXPECT_EQ(mosaic.cols, 3 * 320);  // five 640x480 cameras, 3 per row
+  EXPECT_EQ(mosaic.rows, 2 * 240);
+  EXPECT_TRUE(fs::exists(plain / "overlays" / "mosaic.mp4"));
+  EXPECT_FALSE(fs::exists(plain / "overlays" / "cam_1.mp4"));
+
+  run::OverlaySettings videos;
+  videos.camera_videos = true;
+  run_with(all, videos);
+  for (int id = 1; id <= 5; ++id) {
+    cv::VideoCapture v((all / "overlays" / ("cam_" + std::to_string(id) + ".mp4")).string());
+    ASSERT_TRUE(v.isOpened()) << id;
+    cv::Mat f;
+    ASSERT_TRUE(v.read(f)) << id;
+    EXPECT_EQ(f.cols, 640);
+    EXPECT_EQ(f.rows, 480);
+    EXPECT_EQ(static_cast<int>(v.get(cv::CAP_PROP_FRAME_COUNT)), 12) << id;
+  }
+
+  const fs::path bad = *dir_ / "overlays_bad";
+  fs::create_directories(bad / "overlays" / "mosaic.mp4");  // a folder where the video goes
+  try {
+    run_with(bad, {});
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("mosaic.mp4"), std::string::npos) << e.what();
   }
 }
 
