@@ -27,8 +27,8 @@
 #include <vector>
 
 #include "netvmo/observer/lie.hpp"
-#include "netvmo/pipeline/frontend/detections.hpp"
 #include "netvmo/pipeline/io/network_config.hpp"
+#include "netvmo/pipeline/target_status.hpp"
 #include "netvmo/render/renderer.hpp"
 
 namespace netvmo::io {
