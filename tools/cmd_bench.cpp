@@ -51,6 +51,7 @@ class LoopSource final : public sources::NetworkSource {
   const io::NetworkConfig& network() const override { return inner_->network(); }
   const io::Calibration& calibration(size_t i) const override { return inner_->calibration(i); }
   int frame_count() const override { return frames_; }
+  bool one_frame_at_a_time() const override { return inner_->one_frame_at_a_time(); }
   cv::Mat read(size_t i, int frame) override { return inner_->read(i, frame % n_); }
   std::optional<obs::SE3> target_truth(int frame, size_t target) const override {
     return inner_->target_truth(frame % n_, target);

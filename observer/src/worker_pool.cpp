@@ -33,13 +33,14 @@ WorkerPool::~WorkerPool() {
 template <class Ready>
 void WorkerPool::wait_for(std::condition_variable& cv, Ready ready) {
   if (ready()) return;
-  const auto until = std::chrono::steady_clock::now() + spin_;
-  for (int polls = 1;; ++polls) {
-    for (int k = 0; k < 64; ++k) {
-      relax();
-      if (ready()) return;
-    }
-    if (polls % 16 == 0 && std::chrono::steady_clock::now() >= until) break;
+  if (spin_.count() > 0) {
+    const auto until = std::chrono::steady_clock::now() + spin_;
+    do {
+      for (int k = 0; k < 64; ++k) {
+        relax();
+        if (ready()) return;
+      }
+    } while (std::chrono::steady_clock::now() < until);
   }
   // The state a waiter tests changes under mu_ whenever it is to wake one (for_each advances
   // generation_ under it, the last worker to finish takes it before notifying), so a wake-up
@@ -64,14 +65,16 @@ void WorkerPool::run_chunk(int t) {
 void WorkerPool::work(int t) {
   std::uint64_t seen = 0;
   for (;;) {
+    std::uint64_t now = seen;
     wait_for(start_, [&] {
-      return stop_.load(std::memory_order_acquire) ||
-             generation_.load(std::memory_order_acquire) != seen;
+      now = generation_.load(std::memory_order_acquire);
+      return stop_.load(std::memory_order_acquire) || now != seen;
     });
     if (stop_.load(std::memory_order_acquire)) return;
-    seen = generation_.load(std::memory_order_acquire);
-    if (t >= parts_) continue;  // not needed for this job
-    run_chunk(t);
+    seen = now;
+    // Every worker counts in the job's barrier, a chunk or not, so that the caller cannot set up
+    // the next job while one still reads this one's fields.
+    if (t < parts_) run_chunk(t);
     if (pending_.fetch_sub(1, std::memory_order_acq_rel) == 1) {
       std::lock_guard<std::mutex> lock(mu_);  // see wait_for
       done_.notify_one();
@@ -89,7 +92,7 @@ void WorkerPool::for_each(int count, int parts, const std::function<void(int)>& 
   job_ = &f;
   count_ = count;
   parts_ = parts;
-  pending_.store(parts - 1, std::memory_order_relaxed);
+  pending_.store(size() - 1, std::memory_order_relaxed);
   {
     std::lock_guard<std::mutex> lock(mu_);  // see wait_for
     generation_.fetch_add(1, std::memory_order_release);

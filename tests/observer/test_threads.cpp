@@ -224,10 +224,11 @@ TEST(WorkerPool, EveryIndexOnceAndTheSmallestIndexExceptionWins) {
 TEST(WorkerPool, JobsReachPollingAndSleepingWorkers) {
   using std::chrono::microseconds;
   for (const auto spin : {microseconds(0), microseconds(100000), microseconds(50)}) {
-    WorkerPool pool(2, spin);
+    WorkerPool pool(3, spin);
     std::vector<int> count(64, 0);
     for (int job = 0; job < 200; ++job) {
-      pool.for_each(64, 2, [&](int i) { ++count[static_cast<size_t>(i)]; });
+      // 1, 2 and 3 chunks in turn: workers left out of a job still keep in step.
+      pool.for_each(64, 1 + job % 3, [&](int i) { ++count[static_cast<size_t>(i)]; });
       if (spin == microseconds(50) && job % 20 == 0)
         std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }

@@ -250,7 +250,8 @@ std::vector<TagObservation> FrontEnd::observe_targets(const cv::Mat& gray,
     if (track && tracking_.enabled && !tracked && tracking_.acquire_every > 0 &&
         track->blind_frames % tracking_.acquire_every == 0 &&
         detector_.settings().quad_decimate > 1.0 && !settled(dets)) {
-      if (unchanged(gray, track->acquisition_image)) {
+      if (track->blind_frames - track->acquisition_at < tracking_.full_frame_every &&
+          unchanged(gray, track->acquisition_image)) {
         searches |= kSkippedAcquisition;
       } else {
         SearchOptions opt;
@@ -258,6 +259,7 @@ std::vector<TagObservation> FrontEnd::observe_targets(const cv::Mat& gray,
         search(kSearchAcquisition, whole, opt);
         const bool keep = tracking_.change_pixels > 0 && !all_found(dets);
         track->acquisition_image = keep ? change_reference(gray) : ChangeReference{};
+        track->acquisition_at = track->blind_frames;
       }
     }
   }

@@ -194,7 +194,7 @@ struct Pipeline {
   std::vector<std::unique_ptr<NetworkRunner>> runners;  // one per target
   int workers;
   std::vector<frontend::FrontEnd> front_ends;
-  std::vector<frontend::TrackState> tracks;  // camera i is always handled by worker i % workers
+  std::vector<frontend::TrackState> tracks;  // one worker at a time per camera
   std::vector<double> seconds_reading = std::vector<double>(static_cast<size_t>(workers), 0.0);
 };
 
@@ -212,38 +212,38 @@ class FrontEndAhead {
   FrontEndAhead(Pipeline& p, int frames)
       : p_(p),
         frames_(frames),
+        ahead_(p.provider.one_frame_at_a_time() ? 1 : kLookAhead),
         next_(p.n, 0),
         busy_(p.n, false),
         cost_(p.n, 0.0),
-        done_(kLookAhead, 0) {
-    for (int s = 0; s < kLookAhead; ++s) {
+        done_(static_cast<size_t>(ahead_), 0) {
+    for (int s = 0; s < ahead_; ++s) {
       images_.emplace_back(p.n);
       cams_.push_back(p.frames_for(p.n));
       errors_.emplace_back(p.n);
     }
-    for (int w = 0; w < p.workers; ++w) threads_.emplace_back([this, w] { work(w); });
-  }
-  ~FrontEndAhead() {
-    {
-      std::lock_guard<std::mutex> lock(mu_);
-      stop_ = true;
+    try {
+      for (int w = 0; w < p.workers; ++w) threads_.emplace_back([this, w] { work(w); });
+    } catch (...) {  // a thread that cannot start: stop the others before unwinding
+      stop();
+      throw;
     }
-    changed_.notify_all();
-    for (auto& t : threads_) t.join();
   }
+  ~FrontEndAhead() { stop(); }
   FrontEndAhead(const FrontEndAhead&) = delete;
   FrontEndAhead& operator=(const FrontEndAhead&) = delete;
 
-  /// Waits until every camera's frame k is detected; its results stay until release(k).
+  /// Waits until every camera's frame k is detected; its results stay until release(k). A
+  /// front end's unexpected error is rethrown by the first wait for a frame it left unfinished.
   void wait(int k) {
     std::unique_lock<std::mutex> lock(mu_);
     changed_.wait(lock, [&] { return failure_ || done_[slot(k)] == p_.n; });
-    if (failure_) std::rethrow_exception(failure_);
+    if (done_[slot(k)] != p_.n) std::rethrow_exception(failure_);
   }
   std::vector<cv::Mat>& images(int k) { return images_[slot(k)]; }
   std::vector<std::vector<CameraFrame>>& cams(int k) { return cams_[slot(k)]; }
   std::vector<std::exception_ptr>& errors(int k) { return errors_[slot(k)]; }
-  /// Frame k is used: its slot takes frame k + kLookAhead.
+  /// Frame k is used: its slot takes frame k + ahead_.
   void release(int k) {
     {
       std::lock_guard<std::mutex> lock(mu_);
@@ -254,12 +254,21 @@ class FrontEndAhead {
   }
 
  private:
-  static size_t slot(int k) { return static_cast<size_t>(k % kLookAhead); }
+  size_t slot(int k) const { return static_cast<size_t>(k % ahead_); }
+  void stop() {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      stop_ = true;
+    }
+    changed_.notify_all();
+    for (auto& t : threads_) t.join();
+    threads_.clear();
+  }
   // The camera whose next frame comes first, or n when none may start now.
   size_t pick() const {
     size_t best = p_.n;
     for (size_t i = 0; i < p_.n; ++i) {
-      if (busy_[i] || next_[i] >= frames_ || next_[i] >= consumed_ + kLookAhead) continue;
+      if (busy_[i] || next_[i] >= frames_ || next_[i] >= consumed_ + ahead_) continue;
       if (best == p_.n || next_[i] < next_[best] ||
           (next_[i] == next_[best] && cost_[i] > cost_[best]))
         best = i;
@@ -300,6 +309,7 @@ class FrontEndAhead {
 
   Pipeline& p_;
   const int frames_;
+  const int ahead_;  ///< frames in flight: kLookAhead, or 1 (NetworkSource::one_frame_at_a_time)
   std::mutex mu_;
   std::condition_variable changed_;
   std::vector<int> next_;     ///< per camera: its next frame to detect

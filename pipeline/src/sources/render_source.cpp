@@ -23,6 +23,7 @@ class RenderProvider final : public NetworkSource {
   const io::NetworkConfig& network() const override { return net_; }
   const io::Calibration& calibration(size_t i) const override { return calib_.at(i); }
   int frame_count() const override { return frames_; }
+  bool one_frame_at_a_time() const override { return true; }  // Renderer::set_frame
   cv::Mat read(size_t i, int frame) override {
     cv::Mat img = renderer_.render(static_cast<int>(i), frame);
     // sensor.jpeg_quality: the image a recorded dataset would hold (io::write_dataset's JPEG).

@@ -57,7 +57,7 @@ class WorkerPool {
   std::mutex mu_;
   std::condition_variable start_, done_;
   std::atomic<std::uint64_t> generation_{0};  ///< counts jobs; a worker runs each generation once
-  std::atomic<int> pending_{0};               ///< workers still running the current job
+  std::atomic<int> pending_{0};  ///< workers not yet done with the current job (all count)
   std::atomic<bool> stop_{false};
   // The current job (written before generation_ is advanced, read after it is seen).
   const std::function<void(int)>* job_ = nullptr;

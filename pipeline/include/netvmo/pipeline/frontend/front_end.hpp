@@ -62,7 +62,8 @@ double narrowest_side(const std::array<cv::Point2d, 4>& corners);
 /// With several targets "the target" below is every target: the window covers every tag
 /// accepted in the last frame, and the whole image is searched whenever the window misses any
 /// target (so a target out of a camera's view costs that camera a full-frame search per frame,
-/// as a blind camera pays); the acquisition pass runs only while no target is seen.
+/// which a camera that sees no target at all skips while its image is unchanged, see
+/// change_pixels); the acquisition pass runs only while no target is seen.
 ///  - While a camera keeps detecting the target, the next frame is searched first in a window
 ///    around the last corners, at full resolution (decimate 1) when the last tag's narrowest
 ///    side was below `full_res_below_px`; if that fails and `shadow_retry`, the window again on
@@ -96,8 +97,9 @@ struct TrackingSettings {
   /// of its last whole-image search (which found no target): fewer than change_pixels pixels
   /// lie more than change_dn gray levels outside the range of that image's 3x3 neighbourhood
   /// around them (ChangeReference). That search's result stands for the
-  /// frame. It searches anyway at least every full_frame_every frames; the acquisition pass is
-  /// skipped alike while the image is the one of the last acquisition pass. A tag that comes
+  /// frame. It searches anyway at least every full_frame_every frames; the acquisition pass,
+  /// when due, is skipped alike while the image is the one of the last acquisition pass, for
+  /// at most full_frame_every blind frames after that pass. A tag that comes
   /// into view changes far more pixels than that (its black border against anything lighter),
   /// while sensor and JPEG noise stay far below 24 levels (docs/frontend.md, "Cameras that see
   /// nothing"). change_pixels = 0: never skip.
@@ -126,8 +128,10 @@ struct TrackState {
   /// (TrackingSettings::change_pixels); empty once the target is found.
   ChangeReference whole_image;
   FrameDetections whole_result;
-  /// The image of the last acquisition pass that found no target (empty: none since).
+  /// The image of the last acquisition pass that found no target (empty: none since), and
+  /// blind_frames at that pass.
   ChangeReference acquisition_image;
+  int acquisition_at = 0;
   /// How the last frame was searched, for tests and benchmarks: bit 0 window, bit 1 normalised
   /// window, bit 2 full frame, bit 3 full-resolution acquisition; bit 4: the full frame's search
   /// was skipped (its image unchanged), bit 5: the acquisition pass was.

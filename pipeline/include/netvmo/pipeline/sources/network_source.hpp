@@ -24,8 +24,11 @@ class NetworkSource {
   virtual int frame_count() const = 0;
   /// 8-bit gray image of a camera at a frame; empty when the camera has none there. Throws
   /// InputError naming the file when an image exists but cannot be read. Thread-safe for
-  /// different cameras of the same frame.
+  /// different cameras, at any frames (one_frame_at_a_time: of the same frame).
   virtual cv::Mat read(size_t camera_index, int frame) = 0;
+  /// Whether reads of different frames at once would only queue (a renderer that holds one
+  /// frame's scene at a time): the front end then reads one frame at a time.
+  virtual bool one_frame_at_a_time() const { return false; }
   /// True pose in the world of target `target` (index in network().targets) at a frame, when
   /// known.
   virtual std::optional<obs::SE3> target_truth(int frame, size_t target = 0) const = 0;
