@@ -21,6 +21,30 @@ Graph ring_with_chords(int n) {
   return Graph(n, e);
 }
 
+// Cameras on a circle looking at the origin region, every third one seeing the target: believed
+// poses, initial estimates and measurements of n cameras.
+struct Cameras {
+  std::vector<SE3> g_wi, g_bar;
+  std::vector<Measurement> z;
+};
+Cameras cameras_on_a_circle(int n, const ObserverSettings& s) {
+  Cameras c{std::vector<SE3>(static_cast<size_t>(n)), std::vector<SE3>(static_cast<size_t>(n)),
+            std::vector<Measurement>(static_cast<size_t>(n))};
+  for (int i = 0; i < n; ++i) {
+    const auto k = static_cast<size_t>(i);
+    const double a = 2.0 * 3.14159265358979 * i / n;
+    c.g_wi[k] = make_pose(Vec3(3 * std::cos(a), 3 * std::sin(a), 0), Vec3(0, 0, a));
+    c.g_bar[k] = make_pose(Vec3(0, 0, 2), Vec3(3.0, 0, 0));
+    if (i % 3 == 0) {
+      auto& zi = c.z[k];
+      zi.delta = true;
+      zi.g_io_true = make_pose(Vec3(0.01 * (i % 7), 0.0, 2.0), Vec3(3.05, 0.02, 0.0));
+      zi.f = project(*zi.g_io_true, s.features);
+    }
+  }
+  return c;
+}
+
 void BM_ObserverFrame(benchmark::State& state, const char* error_model) {
   const int n = static_cast<int>(state.range(0));
   const Graph g = ring_with_chords(n);
@@ -28,23 +52,10 @@ void BM_ObserverFrame(benchmark::State& state, const char* error_model) {
   s.error_model = error_model;
   s.threads = static_cast<int>(state.range(1));
   NetworkedObserver obs(g, s);
-  std::vector<SE3> g_wi(static_cast<size_t>(n)), g_bar(static_cast<size_t>(n));
-  std::vector<Measurement> z(static_cast<size_t>(n));
-  for (int i = 0; i < n; ++i) {
-    const double a = 2.0 * 3.14159265358979 * i / n;
-    // Cameras on a circle looking at the origin region, every third one seeing the target.
-    g_wi[static_cast<size_t>(i)] =
-        make_pose(Vec3(3 * std::cos(a), 3 * std::sin(a), 0), Vec3(0, 0, a));
-    g_bar[static_cast<size_t>(i)] = make_pose(Vec3(0, 0, 2), Vec3(3.0, 0, 0));
-    if (i % 3 == 0) {
-      auto& zi = z[static_cast<size_t>(i)];
-      zi.delta = true;
-      zi.g_io_true = make_pose(Vec3(0.01 * (i % 7), 0.0, 2.0), Vec3(3.05, 0.02, 0.0));
-      zi.f = project(*zi.g_io_true, s.features);
-    }
-  }
-  obs.set_camera_poses(g_wi);
-  obs.reset(g_bar);
+  const Cameras c = cameras_on_a_circle(n, s);
+  const auto& z = c.z;
+  obs.set_camera_poses(c.g_wi);
+  obs.reset(c.g_bar);
   const double dt = 1.0 / 30.0;
   for (auto _ : state) {
     obs.step(dt, z);
@@ -66,28 +77,16 @@ void BM_ObserverFrame(benchmark::State& state, const char* error_model) {
 void BM_ObserverTwoThreadsSpeedup(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   const Graph g = ring_with_chords(n);
-  std::vector<SE3> g_wi(static_cast<size_t>(n)), g_bar(static_cast<size_t>(n));
-  std::vector<Measurement> z(static_cast<size_t>(n));
   ObserverSettings s;
-  for (int i = 0; i < n; ++i) {
-    const double a = 2.0 * 3.14159265358979 * i / n;
-    g_wi[static_cast<size_t>(i)] =
-        make_pose(Vec3(3 * std::cos(a), 3 * std::sin(a), 0), Vec3(0, 0, a));
-    g_bar[static_cast<size_t>(i)] = make_pose(Vec3(0, 0, 2), Vec3(3.0, 0, 0));
-    if (i % 3 == 0) {
-      auto& zi = z[static_cast<size_t>(i)];
-      zi.delta = true;
-      zi.g_io_true = make_pose(Vec3(0.01 * (i % 7), 0.0, 2.0), Vec3(3.05, 0.02, 0.0));
-      zi.f = project(*zi.g_io_true, s.features);
-    }
-  }
+  const Cameras c = cameras_on_a_circle(n, s);
+  const auto& z = c.z;
   std::vector<NetworkedObserver> obs;
   obs.reserve(2);
   for (int threads : {1, 2}) {
     s.threads = threads;
     obs.emplace_back(g, s);
-    obs.back().set_camera_poses(g_wi);
-    obs.back().reset(g_bar);
+    obs.back().set_camera_poses(c.g_wi);
+    obs.back().reset(c.g_bar);
   }
   const double dt = 1.0 / 30.0;
   double seconds[2] = {0.0, 0.0};
