@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 
 #include "netvmo/pipeline/error.hpp"
 
@@ -187,6 +188,13 @@ std::vector<TagObservation> FrontEnd::observe_targets(const cv::Mat& gray,
       dets.targets.push_back({TargetStatus::no_image, dets.reason, 0, 0});
   } else {
     const bool tracked = track && tracking_.enabled && !track->last_all.empty();
+    // This frame's ChangeReference, made once (the whole-image search and the acquisition pass
+    // may both keep it; cv::Mat shares the pixels).
+    std::optional<ChangeReference> reference;
+    const auto this_reference = [&]() -> const ChangeReference& {
+      if (!reference) reference = change_reference(gray);
+      return *reference;
+    };
     bool merged = false;
     // A search's result joins the frame's (the first one is the frame's).
     auto merge = [&](unsigned what, FrameDetections&& d) {
@@ -238,7 +246,7 @@ std::vector<TagObservation> FrontEnd::observe_targets(const cv::Mat& gray,
         track->frames_since_full = 0;
         const bool keep =
             !tracked && tracking_.enabled && tracking_.change_pixels > 0 && !all_found(dets);
-        track->whole_image = keep ? change_reference(gray) : ChangeReference{};
+        track->whole_image = keep ? this_reference() : ChangeReference{};
         track->whole_result = keep ? dets : FrameDetections{};
       }
     } else {
@@ -258,7 +266,7 @@ std::vector<TagObservation> FrontEnd::observe_targets(const cv::Mat& gray,
         opt.decimate = 1.0;
         search(kSearchAcquisition, whole, opt);
         const bool keep = tracking_.change_pixels > 0 && !all_found(dets);
-        track->acquisition_image = keep ? change_reference(gray) : ChangeReference{};
+        track->acquisition_image = keep ? this_reference() : ChangeReference{};
         track->acquisition_at = track->blind_frames;
       }
     }
@@ -271,6 +279,8 @@ std::vector<TagObservation> FrontEnd::observe_targets(const cv::Mat& gray,
       if (t.index >= 0) track->last_all.push_back(dets.all[static_cast<size_t>(t.index)].corners);
     if (!track->last_all.empty()) {
       track->blind_frames = 0;
+      // As after a whole-image search: the periodic one is full_frame_every frames away.
+      if (searches & kSkippedFullFrame) track->frames_since_full = 0;
       track->whole_image = {};  // tracking: the next whole-image search is a new one
       track->whole_result = FrameDetections{};
       track->acquisition_image = {};
