@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <map>
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/render/tag_family.hpp"
@@ -144,6 +145,9 @@ struct EdgeBias {
   struct Estimate {
     cv::Point2d at;  // object cell coordinates of the transition the two runs share
     double b;        // [px]
+    // b is linear in the offsets of the three transitions it is made of: db / d(offset).
+    std::array<int, 3> edge{};
+    std::array<double, 3> coef{};
   };
   std::array<std::vector<Estimate>, 2> estimates;
   /// The bias across `axis` at object point p: the mean of the axis's estimates weighted by a
@@ -159,6 +163,33 @@ struct EdgeBias {
       swb += w * e.b;
     }
     return sw >= std::exp(-4.0 / (2.0 * 1.5 * 1.5)) ? swb / sw : fallback;
+  }
+  /// The derivative of at(axis, p) with respect to the transitions' offsets, as (transition,
+  /// coefficient) pairs (a transition in several estimates appears once per estimate).
+  std::vector<std::pair<int, double>> sensitivity(size_t axis, cv::Point2d p) const {
+    const std::vector<double> w = weights(axis, p);
+    std::vector<std::pair<int, double>> out;
+    for (size_t i = 0; i < w.size(); ++i)
+      for (size_t t = 0; t < 3; ++t)
+        out.emplace_back(estimates[axis][i].edge[t], w[i] * estimates[axis][i].coef[t]);
+    return out;
+  }
+  /// The weights of the axis's estimates in at(axis, p) (summing to 1), uniform where at() falls
+  /// back (the median, taken as the mean: its standard error is 1.25x smaller than the median's).
+  std::vector<double> weights(size_t axis, cv::Point2d p) const {
+    std::vector<double> w;
+    double sw = 0.0;
+    for (const auto& e : estimates[axis]) {
+      const cv::Point2d d = e.at - p;
+      w.push_back(std::exp(-d.dot(d) / (2.0 * 1.5 * 1.5)));
+      sw += w.back();
+    }
+    if (!(sw >= std::exp(-4.0 / (2.0 * 1.5 * 1.5)))) {
+      w.assign(w.size(), 1.0);
+      sw = static_cast<double>(w.size());
+    }
+    for (auto& x : w) x /= sw;
+    return w;
   }
 };
 
@@ -184,7 +215,8 @@ void measure_edge_bias(const cv::Mat& gray, int n, White white, const SquareToIm
   };
   std::vector<Edge> edges;
   std::vector<cv::Point2d> obj;
-  for (int axis = 0; axis < 2; ++axis)
+  for (int axis = 0; axis < 2; ++axis) {
+    if (axis == 1) out.first_y_transition = static_cast<int>(edges.size());
     for (int j = 1; j < n - 1; ++j)  // lines 0 and n - 1 are all border
       for (int i = 1; i < n; ++i) {
         if (colour(axis, i - 1, j) == colour(axis, i, j)) continue;
@@ -193,6 +225,7 @@ void measure_edge_bias(const cv::Mat& gray, int n, White white, const SquareToIm
         obj.push_back(object(axis, i - 0.5, j));
         obj.push_back(object(axis, i + 0.5, j));
       }
+  }
   const std::vector<cv::Point2d> img = map.map(obj);
   for (size_t q = 0; q < edges.size(); ++q) {
     Edge& edge = edges[q];
@@ -217,8 +250,13 @@ void measure_edge_bias(const cv::Mat& gray, int n, White white, const SquareToIm
     const double k1 = e1.u - e0.u, k2 = e2.u - e1.u;
     const double d1 = e1.off - e0.off, d2 = e2.off - e1.off;
     const double p1 = colour(e0.axis, e0.u, e0.j) ? -1.0 : 1.0;  // the first run's colour
+    const double D = 2.0 * p1 * (1.0 / k1 + 1.0 / k2);
+    const int i0 = static_cast<int>(q);
     bias.estimates[static_cast<size_t>(e0.axis)].push_back(
-        {object(e0.axis, e1.u, e1.j), (d1 / k1 - d2 / k2) / (2.0 * p1 * (1.0 / k1 + 1.0 / k2))});
+        {object(e0.axis, e1.u, e1.j),
+         (d1 / k1 - d2 / k2) / D,
+         {i0, i0 + 1, i0 + 2},
+         {-1.0 / (k1 * D), (1.0 / k1 + 1.0 / k2) / D, -1.0 / (k2 * D)}});
   }
   // Per axis: the median, and the estimates further than 3 robust sigmas (at least 0.15 px)
   // from it left out of the local values.
@@ -236,6 +274,26 @@ void measure_edge_bias(const cv::Mat& gray, int n, White white, const SquareToIm
                            [&](const EdgeBias::Estimate& x) { return std::abs(x.b - m) > cut; }),
             e.end());
     out.edge_bias[axis] = m;
+    // The transitions' offset noise sigma: with b = C o (C: estimates x transitions, o
+    // independent of variance sigma^2), E[sum_i (b_i - mean b)^2] = sigma^2 (tr(C C^T) -
+    // |C^T 1|^2 / N), neighbouring estimates sharing transitions.
+    if (e.size() >= 2) {
+      const auto N = static_cast<double>(e.size());
+      double mean = 0.0, ss = 0.0, trace = 0.0;
+      std::map<int, double> column;
+      for (const auto& x : e) mean += x.b / N;
+      for (const auto& x : e) {
+        ss += (x.b - mean) * (x.b - mean);
+        for (size_t t = 0; t < 3; ++t) {
+          trace += x.coef[t] * x.coef[t];
+          column[x.edge[t]] += x.coef[t];
+        }
+      }
+      double ones = 0.0;
+      for (const auto& [t, c] : column) ones += c * c;
+      const double dof = trace - ones / N;
+      if (dof > 0.0) out.edge_offset_sd[axis] = std::sqrt(ss / dof);
+    }
   }
 }
 
@@ -496,13 +554,14 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
       // grows an ink spread in pixels toward the near side); 0 where the axis's bias is within
       // what the estimator itself shows on clean renderings (edge_bias_deadband).
       // Nor in a point-sampled image, whose edges are quantised to the pixel grid (`aliased`).
-      for (size_t e = 0; e < 2; ++e)
-        out.side_edge_bias[k][e] =
-            out.aliased || std::abs(out.edge_bias[axis]) <= s.edge_bias_deadband
-                ? 0.0
-                : std::clamp(bias.at(axis, S[k] + (0.25 + 0.5 * static_cast<double>(e)) * N * D[k],
-                                     out.edge_bias[axis]),
-                             -limit, limit);
+      for (size_t e = 0; e < 2; ++e) {
+        const bool off = out.aliased || std::abs(out.edge_bias[axis]) <= s.edge_bias_deadband;
+        const cv::Point2d at = S[k] + (0.25 + 0.5 * static_cast<double>(e)) * N * D[k];
+        const double b = bias.at(axis, at, out.edge_bias[axis]);
+        out.side_edge_bias[k][e] = off ? 0.0 : std::clamp(b, -limit, limit);
+        if (!off && std::abs(b) < limit)
+          out.side_edge_bias_sensitivity[k][e] = bias.sensitivity(axis, at);
+      }
       // A print whose edges are irregular (a real printer, JPEG) scatters the border's edges
       // as much as its cells': the limit is at least border_scatter_allowance x that scatter.
       out.side_limit[k] =
@@ -648,6 +707,44 @@ std::array<cv::Point2d, 4> remove_edge_bias(const std::array<cv::Point2d, 4>& co
   }
   if (dist) out = io::distorted_pixels(out, *dist);
   return {out[0], out[1], out[2], out[3]};
+}
+
+CornerCovariance edge_bias_covariance(const std::array<cv::Point2d, 4>& corners,
+                                      const BorderCheck& check, const io::Calibration* calib) {
+  CornerCovariance cov = CornerCovariance::Zero();
+  const io::Calibration* dist = calib && calib->has_distortion() ? calib : nullptr;
+  const auto ideal = [&](const std::array<cv::Point2d, 4>& c) {
+    std::vector<cv::Point2d> v(c.begin(), c.end());
+    return dist ? io::ideal_pixels(v, *dist) : v;
+  };
+  const auto base = ideal(remove_edge_bias(corners, check, calib));
+  constexpr double h = 1e-3;  // px
+  // The corners' derivative with respect to each side end's value.
+  std::array<std::array<Eigen::Matrix<double, 8, 1>, 2>, 4> J;
+  for (size_t k = 0; k < 4; ++k)
+    for (size_t e = 0; e < 2; ++e) {
+      BorderCheck moved = check;
+      moved.side_edge_bias[k][e] += h;
+      const auto shifted = ideal(remove_edge_bias(corners, moved, calib));
+      for (size_t c = 0; c < 4; ++c) {
+        J[k][e](static_cast<Eigen::Index>(2 * c)) = (shifted[c].x - base[c].x) / h;
+        J[k][e](static_cast<Eigen::Index>(2 * c + 1)) = (shifted[c].y - base[c].y) / h;
+      }
+    }
+  // Each transition's offset moves every side end that depends on it (its sensitivity there).
+  std::map<int, Eigen::Matrix<double, 8, 1>> g;
+  for (size_t k = 0; k < 4; ++k)
+    for (size_t e = 0; e < 2; ++e)
+      for (const auto& [t, c] : check.side_edge_bias_sensitivity[k][e]) {
+        auto it = g.try_emplace(t, Eigen::Matrix<double, 8, 1>::Zero()).first;
+        it->second += c * J[k][e];
+      }
+  for (const auto& [t, gt] : g) {
+    // Transitions are numbered over both axes; a transition's axis is that of its side ends.
+    const double sd = check.edge_offset_sd[t < check.first_y_transition ? 0 : 1];
+    cov += sd * sd * gt * gt.transpose();
+  }
+  return cov;
 }
 
 }  // namespace netvmo::frontend

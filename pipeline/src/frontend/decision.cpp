@@ -33,6 +33,7 @@ TagDecision decide_tag(int tag_id, std::vector<TagDetection>& all, const Detecto
       continue;
     }
     d.corners = corners;  // only a passing candidate's corners are replaced by refined ones
+    d.corner_covariance = bc.corner_covariance;
     ++n_passed;
     passed = static_cast<int>(i);
   }

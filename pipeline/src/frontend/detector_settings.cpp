@@ -1,6 +1,7 @@
 #include "netvmo/pipeline/frontend/detector_settings.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/render/tag_family.hpp"
@@ -53,6 +54,8 @@ void validate(const DetectorSettings& s) {
   if (!(s.border_significance >= 0.0 && s.border_significance <= 20.0))
     bad("border_significance must be in 0..20");
   if (!(s.edge_bias_deadband >= 0.0)) bad("edge_bias_deadband must be >= 0");
+  if (!(s.corner_sigma_px > 0.0 && std::isfinite(s.corner_sigma_px)))
+    bad("corner_sigma_px must be > 0 and finite");
 }
 
 }  // namespace netvmo::frontend

@@ -1,5 +1,6 @@
 #include "netvmo/pipeline/frontend/front_end.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -20,6 +21,30 @@ Eigen::Matrix<double, 8, 1> normalized_features(const std::array<cv::Point2d, 4>
     f[2 * k + 1] = xy[static_cast<size_t>(k)].y;
   }
   return f;
+}
+
+CornerCovariance normalized_covariance(const TagDetection& t, const io::Calibration& calib,
+                                       const DetectorSettings& s) {
+  const CornerCovariance px = t.corner_covariance
+                                  ? *t.corner_covariance
+                                  : CornerCovariance(CornerCovariance::Identity() *
+                                                     (s.corner_sigma_px * s.corner_sigma_px));
+  Eigen::Matrix2d K;
+  K << calib.K(0, 0), calib.K(0, 1), 0.0, calib.K(1, 1);
+  const Eigen::Matrix2d A = K.inverse();
+  CornerCovariance T = CornerCovariance::Zero();
+  for (int k = 0; k < 4; ++k) T.block<2, 2>(2 * k, 2 * k) = A;
+  return T * px * T.transpose();
+}
+
+std::optional<Eigen::MatrixXd> f_covariance_matrix(const TagObservation& obs) {
+  const Eigen::Index n = obs.f_normalized.size();
+  if (n != 8 * static_cast<Eigen::Index>(obs.f_covariance.size())) return std::nullopt;
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(n, n);
+  for (size_t q = 0; q < obs.f_covariance.size(); ++q)
+    C.block<8, 8>(8 * static_cast<Eigen::Index>(q), 8 * static_cast<Eigen::Index>(q)) =
+        obs.f_covariance[q];
+  return C;
 }
 
 void set_target(DetectorSettings& s, const io::TargetConfig& target) {
@@ -307,6 +332,7 @@ std::vector<TagObservation> FrontEnd::observe_targets(const cv::Mat& gray,
       }
       obs.slots.push_back(static_cast<int>(k));
       obs.tag_corners_px.push_back(t.corners);
+      obs.f_covariance.push_back(normalized_covariance(t, calib, detector_.settings()));
     }
     if (obs.delta) {
       obs.f_normalized.resize(static_cast<Eigen::Index>(8 * obs.slots.size()));

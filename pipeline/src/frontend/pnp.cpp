@@ -4,6 +4,7 @@
 #include <visp3/core/vpHomogeneousMatrix.h>
 #include <visp3/core/vpPoint.h>
 #include <visp3/vision/vpPose.h>
+#include <Eigen/Dense>
 #include <cmath>
 #include <opencv2/calib3d.hpp>
 #include <stdexcept>
@@ -88,6 +89,33 @@ std::optional<PnpResult> pnp_pose(const Eigen::VectorXd& f, const obs::FeatureMo
     }
   }
   return best;
+}
+
+Eigen::MatrixXd pnp_jacobian(const obs::SE3& g_io, const std::vector<obs::Vec3>& points_o) {
+  const auto m = static_cast<Eigen::Index>(points_o.size());
+  Eigen::MatrixXd A(2 * m, 6);
+  for (Eigen::Index l = 0; l < m; ++l) {
+    const obs::Vec3 Rp = g_io.linear() * points_o[static_cast<size_t>(l)];
+    const obs::Vec3 X = Rp + g_io.translation();
+    if (!(X.z() > 0.0)) throw std::domain_error("pnp_covariance: a point is not in front");
+    Eigen::Matrix<double, 2, 3> P;
+    P << 1.0 / X.z(), 0.0, -X.x() / (X.z() * X.z()), 0.0, 1.0 / X.z(), -X.y() / (X.z() * X.z());
+    A.block<2, 3>(2 * l, 0) = P;
+    A.block<2, 3>(2 * l, 3) = -P * obs::hat(Rp);
+  }
+  return A;
+}
+
+PoseCovariance pnp_covariance(const obs::SE3& g_io, const std::vector<obs::Vec3>& points_o,
+                              const Eigen::MatrixXd& f_cov) {
+  const auto n = static_cast<Eigen::Index>(2 * points_o.size());
+  if (points_o.size() < 4 || f_cov.rows() != n || f_cov.cols() != n)
+    throw std::invalid_argument("pnp_covariance: need m >= 4 points and a 2m x 2m f_cov");
+  const Eigen::MatrixXd A = pnp_jacobian(g_io, points_o);
+  const Eigen::Matrix<double, 6, 6> AtA_inv = (A.transpose() * A).inverse();
+  const Eigen::MatrixXd B = AtA_inv * A.transpose();  // A^+
+  PoseCovariance C = B * f_cov * B.transpose();
+  return 0.5 * (C + C.transpose());
 }
 
 }  // namespace netvmo::frontend

@@ -1,5 +1,6 @@
 #include "netvmo/pipeline/frontend/refine.hpp"
 
+#include <Eigen/Dense>
 #include <opencv2/imgproc.hpp>
 
 #include "netvmo/pipeline/error.hpp"
@@ -12,15 +13,49 @@ namespace {
 using detail::edge_offset;
 using detail::min_side;
 
+// One edge's total-least-squares line: through `mean` along unit `dir`, with the first-order
+// variances of its two parameters from the scatter of its samples about it (s^2 = sum r^2 /
+// (N - 2), r the samples' normal residuals): the offset along the normal at the mean, s^2 / N,
+// and the angle, s^2 / sum t^2 (t the samples' positions along the line from the mean; the two
+// are uncorrelated because sum t = 0).
+struct EdgeLine {
+  cv::Point2d mean, dir;
+  double var_offset = 0.0, var_angle = 0.0;
+};
+
+// Corner k's first-order covariance from the lines of its two edges a (before it) and b (after
+// it): the corner c satisfies n_a . (c - m_a) = 0 and n_b . (c - m_b) = 0, a line moved by
+// (de, dphi) moves its points at position t along it by de + t dphi along its normal, so
+// dc = M^-1 [de_a + t_a dphi_a; de_b + t_b dphi_b] with M = [n_a^T; n_b^T], t_x = d_x . (c - m_x).
+// Fills the corner's rows of J (8 x 8: corners x the lines' (offset, angle) pairs).
+void corner_jacobian(const std::array<EdgeLine, 4>& lines, const std::array<cv::Point2d, 4>& c,
+                     Eigen::Matrix<double, 8, 8>& J) {
+  J.setZero();
+  for (int k = 0; k < 4; ++k) {
+    const int la = (k + 3) % 4, lb = k;
+    const EdgeLine& a = lines[static_cast<size_t>(la)];
+    const EdgeLine& b = lines[static_cast<size_t>(lb)];
+    const cv::Point2d& ck = c[static_cast<size_t>(k)];
+    Eigen::Matrix2d M;
+    M << -a.dir.y, a.dir.x, -b.dir.y, b.dir.x;  // the normals (any sign: the offsets' too)
+    const Eigen::Matrix2d Mi = M.inverse();
+    const double ta = a.dir.dot(ck - a.mean), tb = b.dir.dot(ck - b.mean);
+    J.block<2, 1>(2 * k, 2 * la) = Mi.col(0);
+    J.block<2, 1>(2 * k, 2 * la + 1) = Mi.col(0) * ta;
+    J.block<2, 1>(2 * k, 2 * lb) = Mi.col(1);
+    J.block<2, 1>(2 * k, 2 * lb + 1) = Mi.col(1) * tb;
+  }
+}
+
 bool refine_edge_lines(const cv::Mat& g, std::array<cv::Point2d, 4>& c, int border_cells,
-                       const io::Calibration* calib) {
+                       const io::Calibration* calib, CornerCovariance* cov) {
   const double cell = min_side(c) / border_cells;
   if (cell < 1.5) return false;  // too small to sample the border reliably
   const double w = std::clamp(std::min(0.45 * cell, cell - 1.2), 1.0, 4.0);
   cv::Point2d centroid(0, 0);
   for (const auto& p : c) centroid += 0.25 * p;
   const bool undistort = calib && calib->has_distortion();
-  std::array<cv::Vec4d, 4> lines;  // (vx, vy, x0, y0) in ideal (undistorted) pixels if undistort
+  std::array<EdgeLine, 4> lines;  // in ideal (undistorted) pixels if undistort
   for (int k = 0; k < 4; ++k) {
     const cv::Point2d a = c[k], b = c[(k + 1) % 4];
     const double len = cv::norm(b - a);
@@ -48,17 +83,57 @@ bool refine_edge_lines(const cv::Mat& g, std::array<cv::Point2d, 4>& c, int bord
       syy += q.y * q.y;
     }
     const double theta = 0.5 * std::atan2(2 * sxy, sxx - syy);  // principal direction
-    lines[static_cast<size_t>(k)] = cv::Vec4d(std::cos(theta), std::sin(theta), mean.x, mean.y);
+    EdgeLine& line = lines[static_cast<size_t>(k)];
+    line.mean = mean;
+    line.dir = cv::Point2d(std::cos(theta), std::sin(theta));
+    const cv::Point2d normal(-line.dir.y, line.dir.x);
+    double rr = 0.0, tt = 0.0;
+    std::vector<double> r(pts.size());
+    for (size_t i = 0; i < pts.size(); ++i) {
+      r[i] = normal.dot(pts[i] - mean);
+      const double t = line.dir.dot(pts[i] - mean);
+      rr += r[i] * r[i];
+      tt += t * t;
+    }
+    const double s2 = rr / static_cast<double>(pts.size() - 2);
+    // Neighbouring samples share pixels (their windows across the edge and the bilinear
+    // interpolation overlap), so their residuals are correlated: the variances of a mean over N
+    // samples grow by tau = 1 + 2 sum_k rho_k (rho_k the residuals' autocorrelation at lag k,
+    // summed over the lags a window can reach, 2 w + 2 samples; negative sums count as 0).
+    double tau = 1.0;
+    if (rr > 0.0) {
+      const int lags = static_cast<int>(std::ceil(2.0 * w)) + 2;
+      double sum_rho = 0.0;
+      for (int k = 1; k <= lags && static_cast<size_t>(k) < r.size(); ++k) {
+        double c = 0.0;
+        for (size_t i = 0; i + static_cast<size_t>(k) < r.size(); ++i)
+          c += r[i] * r[i + static_cast<size_t>(k)];
+        sum_rho += c / rr;
+      }
+      tau = std::max(1.0, 1.0 + 2.0 * sum_rho);
+    }
+    line.var_offset = tau * s2 / static_cast<double>(pts.size());
+    line.var_angle = tt > 0.0 ? tau * s2 / tt : 0.0;
   }
   std::array<cv::Point2d, 4> out;
   for (int k = 0; k < 4; ++k) {
     // corner k = intersection of edge k-1 (c[k-1] -> c[k]) and edge k (c[k] -> c[k+1])
-    const cv::Vec4d& l1 = lines[static_cast<size_t>((k + 3) % 4)];
-    const cv::Vec4d& l2 = lines[static_cast<size_t>(k)];
-    const auto corner =
-        detail::intersect_lines({l1[2], l1[3]}, {l1[0], l1[1]}, {l2[2], l2[3]}, {l2[0], l2[1]});
+    const EdgeLine& l1 = lines[static_cast<size_t>((k + 3) % 4)];
+    const EdgeLine& l2 = lines[static_cast<size_t>(k)];
+    const auto corner = detail::intersect_lines(l1.mean, l1.dir, l2.mean, l2.dir);
     if (!corner) return false;
     out[static_cast<size_t>(k)] = *corner;
+  }
+  std::optional<CornerCovariance> fit_cov;
+  if (cov) {
+    Eigen::Matrix<double, 8, 8> J;
+    corner_jacobian(lines, out, J);
+    Eigen::Matrix<double, 8, 1> var;
+    for (int k = 0; k < 4; ++k) {
+      var(2 * k) = lines[static_cast<size_t>(k)].var_offset;
+      var(2 * k + 1) = lines[static_cast<size_t>(k)].var_angle;
+    }
+    fit_cov = J * var.asDiagonal() * J.transpose();
   }
   if (undistort) {
     const auto px = io::distorted_pixels({out.begin(), out.end()}, *calib);
@@ -69,6 +144,7 @@ bool refine_edge_lines(const cv::Mat& g, std::array<cv::Point2d, 4>& c, int bord
     if (!(cv::norm(out[static_cast<size_t>(k)] - c[static_cast<size_t>(k)]) <= max_move))
       return false;  // implausible: keep libapriltag's corners
   c = out;
+  if (cov) *cov = *fit_cov;
   return true;
 }
 
@@ -111,19 +187,23 @@ Refinement parse_refinement(const std::string& name) {
   throw InputError("unknown refinement '" + name + "' (expected none, subpix or edges)");
 }
 
-void refine_corners(const cv::Mat& gray, std::array<cv::Point2d, 4>& corners, Refinement mode,
-                    int border_cells, const io::Calibration* calib) {
+std::optional<CornerCovariance> refine_corners(const cv::Mat& gray,
+                                               std::array<cv::Point2d, 4>& corners, Refinement mode,
+                                               int border_cells, const io::Calibration* calib) {
   CV_Assert(gray.type() == CV_8UC1);
   switch (mode) {
     case Refinement::none:
-      return;
+      return std::nullopt;
     case Refinement::corner_subpix:
       refine_subpix(gray, corners, border_cells);
-      return;
-    case Refinement::edge_lines:
-      refine_edge_lines(gray, corners, border_cells, calib);
-      return;
+      return std::nullopt;
+    case Refinement::edge_lines: {
+      CornerCovariance cov;
+      if (refine_edge_lines(gray, corners, border_cells, calib, &cov)) return cov;
+      return std::nullopt;
+    }
   }
+  return std::nullopt;
 }
 
 }  // namespace netvmo::frontend

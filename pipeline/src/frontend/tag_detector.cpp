@@ -180,7 +180,7 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
     return [&, pattern](std::array<cv::Point2d, 4>& corners) {
       const std::array<cv::Point2d, 4> found = corners;
       const auto t_refine = Clock::now();
-      refine_corners(*g, corners, s.refinement, border_cells(), calib);
+      auto covariance = refine_corners(*g, corners, s.refinement, border_cells(), calib);
       const auto t_check = Clock::now();
       impl_->seconds.refinement += seconds_since(t_refine, t_check);
       BorderCheck bc = s.border_check ? check_border(*g, corners, pattern, border_cells(), s, calib)
@@ -203,9 +203,12 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
       }
       // The corners of the print's cell grid, not of its inked outline (DetectorSettings::
       // correct_edge_bias).
-      if (bc.ok && s.correct_edge_bias) corners = remove_edge_bias(corners, bc, calib);
+      if (bc.ok && s.correct_edge_bias) {
+        if (covariance) *covariance += edge_bias_covariance(corners, bc, calib);
+        corners = remove_edge_bias(corners, bc, calib);
+      }
       impl_->seconds.check += seconds_since(t_check);
-      return CandidateCheck{bc.ok, bc.reason};
+      return CandidateCheck{bc.ok, bc.reason, std::move(covariance)};
     };
   };
   out.tags.push_back(decide_tag(s.target_id, out.all, s, check_on(impl_->patterns[0])));

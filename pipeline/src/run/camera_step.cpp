@@ -32,7 +32,11 @@ std::exception_ptr observe_camera(sources::NetworkSource& source, size_t i, int 
     // PnP on the corners of every accepted tag (a bundle's object points).
     const auto m = frontend::observation_model(targets[j], cam.obs);
     const auto pose = frontend::pnp_pose(cam.obs.f_normalized, m);
-    if (pose) cam.g_io_pnp = pose->g_io;
+    if (pose) {
+      cam.g_io_pnp = pose->g_io;
+      if (const auto f_cov = frontend::f_covariance_matrix(cam.obs))
+        cam.pnp_covariance = frontend::pnp_covariance(pose->g_io, m.points_o, *f_cov);
+    }
     if (!targets[j].bundle.empty()) cam.points_o = m.points_o;
   }
   return nullptr;

@@ -60,6 +60,13 @@ struct BorderCheck {
   /// Their robust scatter [px]: 1.4826 x the median absolute deviation from edge_bias, how
   /// sharply this image shows the print's edges (0.03 px on a clean rendering).
   std::array<double, 2> edge_bias_scatter{};
+  /// The standard deviation of one transition's measured offset on each axis, from the scatter
+  /// of the axis's estimates (those within 3 robust sigmas of the median, which the local values
+  /// average), each scaled by its sensitivity to its three transitions' offsets [px]; 0 with
+  /// fewer than 2. For edge_bias_covariance().
+  std::array<double, 2> edge_offset_sd{};
+  /// Transitions of the data cells are numbered X axis first: those from this one on are Y's.
+  int first_y_transition = 0;
   /// Per side: the thickness error a correct quad has, discounted before the limit: where both
   /// axes' biases were measured (and every side the bitmap lets us measure), the part of
   /// thickness_error that 2 b (1 - 1/n) explains, b the local bias across the side at each
@@ -82,6 +89,11 @@ struct BorderCheck {
        {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()},
        {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()},
        {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()}}};
+  /// Per side end (as side_edge_bias): the derivative of its value (a weighted mean of its
+  /// axis's estimates, each linear in three transitions' offsets) with respect to those offsets,
+  /// as (transition, coefficient) pairs; empty where the corners are not moved by it (the
+  /// deadband, not measured, clamped). edge_bias_covariance() uses them.
+  std::array<std::array<std::vector<std::pair<int, double>>, 2>, 4> side_edge_bias_sensitivity;
 };
 
 /// The tag's bitmap as libapriltag prints it (apriltag_to_image): total_width x total_width
@@ -155,5 +167,15 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
 std::array<cv::Point2d, 4> remove_edge_bias(const std::array<cv::Point2d, 4>& corners,
                                             const BorderCheck& check,
                                             const io::Calibration* calib = nullptr);
+
+/// The covariance remove_edge_bias() adds to the corners [px^2, undistorted pixels where `calib`
+/// has distortion, as refine_corners()], to first order: each side end's value is linear in
+/// the measured offsets of the data cells' transitions (side_edge_bias_sensitivity), which are
+/// independent with their axis's edge_offset_sd (neighbouring estimates share transitions, so
+/// they are not independent), so transition t moves the corners by the sum over the side ends
+/// of its coefficient there times J_end, the corners' derivative with respect to that end's
+/// value (finite differences of remove_edge_bias). Zero where the correction left the corners.
+CornerCovariance edge_bias_covariance(const std::array<cv::Point2d, 4>& corners,
+                                      const BorderCheck& check, const io::Calibration* calib);
 
 }  // namespace netvmo::frontend

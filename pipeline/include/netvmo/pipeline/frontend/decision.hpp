@@ -5,6 +5,7 @@
 #include <array>
 #include <functional>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,8 @@ namespace netvmo::frontend {
 struct CandidateCheck {
   bool ok = true;
   std::string reason;
+  /// The refined corners' covariance (refine_corners), when the refinement gives one.
+  std::optional<CornerCovariance> corner_covariance;
 };
 /// Refines a candidate's corners in place and checks them.
 using CandidateChecker = std::function<CandidateCheck(std::array<cv::Point2d, 4>& corners)>;

@@ -2,14 +2,19 @@
 // Corners in OpenCV pixels, libapriltag's order (tag_detector.hpp).
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "netvmo/pipeline/target_status.hpp"
 
 namespace netvmo::frontend {
+
+/// Covariance of a quad's four corners [px^2], ordered (x0, y0, ..., x3, y3) as the corners.
+using CornerCovariance = Eigen::Matrix<double, 8, 8>;
 
 /// One decoded tag.
 struct TagDetection {
@@ -18,6 +23,9 @@ struct TagDetection {
   double margin = 0.0;                   ///< libapriltag's decision margin
   std::array<cv::Point2d, 4> corners{};  ///< OpenCV pixels, libapriltag order
   cv::Point2d center;                    ///< OpenCV pixels
+  /// The refined corners' covariance from the edge fits (refine_corners), set on an accepted
+  /// detection whose corners came from them; nullopt otherwise.
+  std::optional<CornerCovariance> corner_covariance;
 };
 
 /// The decision about one tag of the target's body (the rules of TargetStatus, per id).

@@ -45,6 +45,12 @@ struct DetectorSettings {
   int max_hamming = 1;                ///< reject target detections with more corrected bits
   // Refinement of the accepted target's corners
   Refinement refinement = Refinement::edge_lines;
+  /// The corners' standard deviation [px] where the refinement gives no covariance of its own
+  /// (none, subpix, or an edge fit refused): a stated prior for the measurement's covariance
+  /// (TagObservation::f_covariance), each coordinate independent. 0.3 px is about what
+  /// libapriltag's own edge refinement reaches on sharp, well-lit tags; the edge fits' covariance
+  /// replaces it wherever they are used (the default).
+  double corner_sigma_px = 0.3;
   // Border / quiet-zone consistency check of the accepted target's refined corners (see
   // check_border()): a quad with a side on an occluder's outline, a shadow edge or the image
   // border is rejected as TargetStatus::border_mismatch.

@@ -35,11 +35,25 @@ struct TagObservation {
   /// order (8 per tag), corner k of a tag matching tag_points()'s order. Eight zeros when not
   /// detected.
   Eigen::VectorXd f_normalized = Eigen::VectorXd::Zero(8);
+  /// The covariance of each accepted tag's 8 entries of f_normalized, in `slots` order: the edge
+  /// fits' corner covariance (TagDetection::corner_covariance) or, without one,
+  /// DetectorSettings::corner_sigma_px squared on the diagonal, taken to normalized coordinates
+  /// by the inverse of K's upper 2x2 (first order; lens distortion's own Jacobian is left out,
+  /// which at the corners of a typical lens changes it by a few per cent). Tags are independent.
+  std::vector<CornerCovariance> f_covariance;
 };
 
 /// Corners (OpenCV pixels) to the observer's feature vector f (undistorted normalized).
 Eigen::Matrix<double, 8, 1> normalized_features(const std::array<cv::Point2d, 4>& corners_px,
                                                 const io::Calibration& calib);
+
+/// A detection's corner covariance in normalized coordinates (TagObservation::f_covariance).
+CornerCovariance normalized_covariance(const TagDetection& t, const io::Calibration& calib,
+                                       const DetectorSettings& s);
+
+/// The covariance of an observation's whole f_normalized: its tags' f_covariance blocks on the
+/// diagonal; nullopt when it has not one per tag (an observation read back from a file).
+std::optional<Eigen::MatrixXd> f_covariance_matrix(const TagObservation& obs);
 
 /// The detector settings' tag ids for a target: family, primary id and bundle ids.
 void set_target(DetectorSettings& s, const io::TargetConfig& target);

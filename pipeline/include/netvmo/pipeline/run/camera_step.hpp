@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "netvmo/pipeline/frontend/front_end.hpp"
+#include "netvmo/pipeline/frontend/pnp.hpp"
 #include "netvmo/pipeline/io/network_config.hpp"
 #include "netvmo/pipeline/run/runner.hpp"
 #include "netvmo/pipeline/sources/network_source.hpp"
@@ -20,6 +21,9 @@ namespace netvmo::run {
 struct CameraFrame {
   frontend::TagObservation obs;      ///< detection (delta, corners, normalized features)
   std::optional<obs::SE3> g_io_pnp;  ///< ViSP pose when detected
+  /// g_io_pnp's first-order covariance from the corners' (frontend::pnp_covariance: the tag's
+  /// position and rotation in the camera frame, ROS's PoseWithCovariance order).
+  std::optional<frontend::PoseCovariance> pnp_covariance;
   /// The object points of obs.f_normalized when the target has a bundle (tag_points of the
   /// accepted tags; empty for a single tag, whose points are the error model's fixed square).
   std::vector<obs::Vec3> points_o;
