@@ -72,4 +72,17 @@ Theorem1Bound theorem1_bound(double k, const Spread& s, double W, int diameter, 
   return {bound(1.0), bound(1.0 - std::sqrt(2.0 * s.phi_m))};
 }
 
+std::optional<Eigen::Matrix<double, 6, 6>> neighbour_spread(const SE3& own_w,
+                                                            const std::vector<SE3>& neighbours_w) {
+  if (neighbours_w.empty()) return std::nullopt;
+  Eigen::Matrix<double, 6, 6> C = Eigen::Matrix<double, 6, 6>::Zero();
+  for (const SE3& g : neighbours_w) {
+    Vec6 d;
+    d.head<3>() = g.translation() - own_w.translation();
+    d.tail<3>() = log_so3(g.linear() * own_w.linear().transpose());
+    C += d * d.transpose();
+  }
+  return C / static_cast<double>(neighbours_w.size());
+}
+
 }  // namespace netvmo::obs

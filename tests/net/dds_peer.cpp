@@ -3,6 +3,11 @@
 //   dds_peer rogue DOMAIN ROUNDS SECONDS                       garbage on the topic
 //   dds_peer ros   DOMAIN CAMERA COUNT SECONDS OUT             reads a camera's PoseStamped topic
 //     until COUNT samples or SECONDS; OUT: "sec nanosec frame_id px py pz qw qx qy qz" per sample
+//   dds_peer tf    DOMAIN CAMERA STATIC COUNT SECONDS OUT      reads rt/tf_static, rt/tf and camera
+//     CAMERA's measurement topic until STATIC static and COUNT other transforms (or 3 s without
+//     a message after the first transform), or SECONDS; writes OUT.ready once it reads; OUT:
+//     "static|tf stamp_ns parent child px py pz qw qx qy qz" per transform and "measurement
+//     stamp_ns frame_id px py pz qw qx qy qz c00 c01 ... c55" per measurement
 // A peer runs its CameraObserver (pnp error model, a fixed measurement, k_s = 50) for ROUNDS
 // lock-step rounds over DdsTransport after WRITERS writers of other participants match (and 0.3 s
 // more for their history to arrive), and writes to OUT: one line per accepted message "sender round
@@ -18,6 +23,7 @@
 
 #include "dds_peer_setup.hpp"
 #include "netvmo/pipeline/net/dds_transport.hpp"
+#include "netvmo/pipeline/net/ros_publisher.hpp"
 
 using namespace netvmo;
 
@@ -88,7 +94,7 @@ int rogue(int domain, int rounds, double seconds) {
   ::usleep(static_cast<useconds_t>(seconds * 1e6));
   return 0;
 }
-int ros(int domain, int camera, int count, double seconds, const char* out) {
+int pose_stamped(int domain, int camera, int count, double seconds, const char* out) {
   net::PoseStampedReader reader(domain, camera);
   std::vector<net::PoseStampedSample> all;
   const auto t0 = std::chrono::steady_clock::now();
@@ -107,6 +113,64 @@ int ros(int domain, int camera, int count, double seconds, const char* out) {
   std::fclose(f);
   return 0;
 }
+void print_ros_pose(std::FILE* f, const obs::SE3& g) {
+  const Eigen::Quaterniond q(g.linear());
+  std::fprintf(f, " %.17g %.17g %.17g %.17g %.17g %.17g %.17g", g.translation().x(),
+               g.translation().y(), g.translation().z(), q.w(), q.x(), q.y(), q.z());
+}
+
+int tf(int domain, int camera, int statics, int count, double seconds, const char* out) {
+  net::RosTopicReader stat(domain, "rt/tf_static", ros::tf_message_descriptor(), true);
+  net::RosTopicReader dyn(domain, "rt/tf", ros::tf_message_descriptor());
+  net::RosTopicReader meas(domain, "rt/netvmo/camera_" + std::to_string(camera) + "/measurement",
+                           ros::pose_with_covariance_descriptor());
+  {  // ready: the test starts the cameras once its readers exist
+    std::FILE* r = std::fopen((std::string(out) + ".ready").c_str(), "w");
+    if (!r) return 3;
+    std::fclose(r);
+  }
+  std::vector<ros::StampedTransform> s_all, d_all;
+  std::vector<ros::StampedPose> m_all;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto last = t0;  // the last message's arrival
+  for (;;) {
+    const auto now = std::chrono::steady_clock::now();
+    const double left = seconds - std::chrono::duration<double>(now - t0).count();
+    const bool idle = !d_all.empty() && std::chrono::duration<double>(now - last).count() > 3.0;
+    if (left <= 0 || (static_cast<int>(s_all.size()) >= statics &&
+                      (static_cast<int>(d_all.size()) >= count || idle)))
+      break;
+    const size_t before = s_all.size() + d_all.size() + m_all.size();
+    for (const auto& b : stat.take(0.0))
+      for (const auto& t : ros::decode_tf_message(b, "rt/tf_static")) s_all.push_back(t);
+    for (const auto& b : meas.take(0.0))
+      m_all.push_back(ros::decode_pose_with_covariance(b, "measurement"));
+    for (const auto& b : dyn.take(std::min(left, 0.05)))
+      for (const auto& t : ros::decode_tf_message(b, "rt/tf")) d_all.push_back(t);
+    if (s_all.size() + d_all.size() + m_all.size() > before)
+      last = std::chrono::steady_clock::now();
+  }
+  for (const auto& b : meas.take(0.0))
+    m_all.push_back(ros::decode_pose_with_covariance(b, "measurement"));
+  std::FILE* f = std::fopen(out, "w");
+  if (!f) return 3;
+  for (const auto* list : {&s_all, &d_all})
+    for (const auto& t : *list) {
+      std::fprintf(f, "%s %lld %s %s", list == &s_all ? "static" : "tf",
+                   static_cast<long long>(t.stamp_ns), t.parent.c_str(), t.child.c_str());
+      print_ros_pose(f, t.pose);
+      std::fprintf(f, "\n");
+    }
+  for (const auto& m : m_all) {
+    std::fprintf(f, "measurement %lld %s", static_cast<long long>(m.stamp_ns), m.frame_id.c_str());
+    print_ros_pose(f, m.pose);
+    for (int k = 0; k < 36; ++k)
+      std::fprintf(f, " %.17g", m.covariance ? (*m.covariance)(k / 6, k % 6) : -1.0);
+    std::fprintf(f, "\n");
+  }
+  std::fclose(f);
+  return 0;
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -116,8 +180,11 @@ int main(int argc, char** argv) {
       return peer(std::atoi(argv[2]), std::atoi(argv[3]), std::atoi(argv[4]), std::atoi(argv[5]),
                   std::atoi(argv[6]), argv[7]);
     if (what == "ros" && argc == 7)
-      return ros(std::atoi(argv[2]), std::atoi(argv[3]), std::atoi(argv[4]), std::atof(argv[5]),
-                 argv[6]);
+      return pose_stamped(std::atoi(argv[2]), std::atoi(argv[3]), std::atoi(argv[4]),
+                          std::atof(argv[5]), argv[6]);
+    if (what == "tf" && argc == 8)
+      return tf(std::atoi(argv[2]), std::atoi(argv[3]), std::atoi(argv[4]), std::atoi(argv[5]),
+                std::atof(argv[6]), argv[7]);
     if (what == "rogue" && argc == 5)
       return rogue(std::atoi(argv[2]), std::atoi(argv[3]), std::atof(argv[4]));
   } catch (const std::exception& e) {
@@ -126,6 +193,7 @@ int main(int argc, char** argv) {
   }
   std::fprintf(stderr,
                "usage: dds_peer peer DOMAIN SELF NEIGHBOUR ROUNDS WRITERS OUT | rogue DOMAIN "
-               "ROUNDS SECONDS\n");
+               "ROUNDS SECONDS | ros DOMAIN CAMERA COUNT SECONDS OUT | tf DOMAIN CAMERA STATIC "
+               "COUNT SECONDS OUT\n");
   return 64;
 }

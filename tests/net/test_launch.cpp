@@ -1,6 +1,7 @@
 // netvmo launch (one process per camera, lock-step over Cyclone DDS) against netvmo run on a
 // dataset rendered at test time: the merged outputs must be those of the in-process run.
 #include <yaml-cpp/yaml.h>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -8,6 +9,7 @@
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -94,11 +96,23 @@ TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
   const pid_t ros = net::spawn({NETVMO_DDS_PEER, "ros", std::to_string(domain), "1",
                                 std::to_string(kFrames), "60", (*dir_ / "ros.txt").string()},
                                *dir_ / "ros.log");
+  // A subscriber of the rig's transforms and camera 1's measurements, started first too.
+  const int cameras = 5, count = 5 * kFrames;
+  const pid_t tf =
+      net::spawn({NETVMO_DDS_PEER, "tf", std::to_string(domain), "1", std::to_string(cameras),
+                  std::to_string(count), "60", (*dir_ / "tf.txt").string()},
+                 *dir_ / "tf.log");
+  for (int waited = 0; !fs::exists(*dir_ / "tf.txt.ready") && waited < 300; ++waited)
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  ASSERT_TRUE(fs::exists(*dir_ / "tf.txt.ready")) << test::slurp(*dir_ / "tf.log");
   const auto r2 =
       net_test::netvmo_bounded("launch " + ds.string() + " --out " + launch.string() +
                                    " --domain " + std::to_string(domain) + " --timeout 90",
                                *dir_, 120);
+  const auto tf_result = net::supervise({tf}, 15.0, false);
   ASSERT_EQ(r2.code, 0) << r2.out << r2.err;
+  EXPECT_TRUE(tf_result[0].finished && tf_result[0].exit_code == 0)
+      << net::describe(tf_result[0]) << test::slurp(*dir_ / "tf.log");
   EXPECT_NE(r2.out.find("DDS domain " + std::to_string(domain) + ", loopback only"),
             std::string::npos)
       << r2.out;
@@ -238,6 +252,73 @@ TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
   EXPECT_NE(missing.err.find((gathered / "node_3.csv").string() + ": not found"), std::string::npos)
       << missing.err;
   EXPECT_FALSE(fs::exists(*dir_ / "bad" / "estimates.csv"));
+
+  // The separate subscriber's rt/tf_static: world -> cam_<id>, each camera's network.yaml pose;
+  // rt/tf: world -> cam_1/average_pose, the estimate of node_1.csv at that frame; camera 1's
+  // measurements: its PnP pose in the camera frame with a covariance (symmetric, positive
+  // definite, its position sd below a centimetre at these distances).
+  {
+    std::ifstream in(*dir_ / "tf.txt");
+    const auto rows = read_csv(launch / "nodes" / "node_1.csv");
+    std::set<std::string> statics;
+    int tf1 = 0, measurements = 0;
+    std::string kind, line;
+    while (std::getline(in, line)) {
+      std::istringstream ls(line);
+      long long ns = 0;
+      ls >> kind >> ns;
+      const int k = static_cast<int>(std::llround(ns * 1e-9 * provider->network().fps));
+      std::string parent, child;
+      double p[3], q[4];
+      if (kind == "static" || kind == "tf") ls >> parent >> child;
+      if (kind == "measurement") ls >> parent;
+      ls >> p[0] >> p[1] >> p[2] >> q[0] >> q[1] >> q[2] >> q[3];
+      ASSERT_TRUE(ls) << line;
+      obs::SE3 g = obs::SE3::Identity();
+      g.linear() = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).toRotationMatrix();
+      g.translation() = obs::Vec3(p[0], p[1], p[2]);
+      if (kind == "static") {
+        EXPECT_EQ(parent, "world");
+        statics.insert(child);
+        for (const auto& c : cams) {
+          if (child == "cam_" + std::to_string(c.id)) {
+            EXPECT_LT((g.matrix() - c.g_wi.matrix()).cwiseAbs().maxCoeff(), 1e-12) << child;
+          }
+        }
+      } else if (kind == "tf" && child == "cam_1/average_pose") {
+        ++tf1;
+        ASSERT_GE(k, 0);
+        ASSERT_LT(k, kFrames);
+        const auto& row = rows[static_cast<size_t>(k + 1)];
+        EXPECT_EQ(row[37], "1");
+        EXPECT_LT((g.matrix() - pose_at(row, 38).matrix()).cwiseAbs().maxCoeff(), 1e-12);
+      } else if (kind == "measurement") {
+        ++measurements;
+        EXPECT_EQ(parent, "cam_1");
+        ASSERT_GE(k, 0);
+        ASSERT_LT(k, kFrames);
+        const auto& row = rows[static_cast<size_t>(k + 1)];
+        EXPECT_EQ(row[24], "1");
+        EXPECT_LT((g.matrix() - pose_at(row, 25).matrix()).cwiseAbs().maxCoeff(), 1e-12);
+        Eigen::Matrix<double, 6, 6> C;
+        for (int a = 0; a < 36; ++a) ls >> C(a / 6, a % 6);
+        ASSERT_TRUE(ls) << line;
+        EXPECT_LT((C - C.transpose()).cwiseAbs().maxCoeff(), 1e-15);
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(C);
+        EXPECT_GT(eig.eigenvalues()(0), 0.0);
+        EXPECT_LT(std::sqrt(C.topLeftCorner<3, 3>().trace()), 0.01);
+      }
+    }
+    EXPECT_EQ(statics.size(), cams.size());
+    std::printf(
+        "ROS 2 subscriber: %zu static transforms, %d of camera 1's estimate transforms, "
+        "%d measurements\n",
+        statics.size(), tf1, measurements);
+    // The first ones may go out before the subscriber is found (tf_static, transient-local,
+    // reaches it whenever it is).
+    EXPECT_GE(tf1, 1);
+    EXPECT_GE(measurements, 1);
+  }
 }
 
 // Cameras as processes run the paper's observer alone (the DDS Estimate type carries no

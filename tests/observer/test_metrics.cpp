@@ -76,3 +76,26 @@ TEST(Metrics, Theorem1BoundTendsToTheOffsetAndGrowsWithK) {
   EXPECT_LT(theorem1_bound(0.01, s, W, diam, 3).eps_R, theorem1_bound(0.02, s, W, diam, 3).eps_R);
   EXPECT_TRUE(std::isinf(theorem1_bound(0.8 / 3, s, W, diam, 3).eps_R));  // k W = beta
 }
+
+namespace netvmo::obs {
+namespace {
+// Two neighbours 0.1 m either side along x and one turned 0.2 rad about z: the closed form.
+TEST(NeighbourSpread, IsTheSecondMomentOfTheNeighboursAboutTheOwnEstimate) {
+  const SE3 own = make_pose(Vec3(1, 2, 3), Vec3(0.3, -0.2, 0.1));
+  EXPECT_FALSE(neighbour_spread(own, {}).has_value());
+  SE3 a = own, b = own;
+  a.translation() += Vec3(0.1, 0, 0);
+  b.translation() -= Vec3(0.1, 0, 0);
+  b.linear() = exp_so3(Vec3(0, 0, 0.2)) * own.linear();  // 0.2 rad about the world's z
+  const auto C = neighbour_spread(own, {a, b});
+  ASSERT_TRUE(C.has_value());
+  Eigen::Matrix<double, 6, 6> expected = Eigen::Matrix<double, 6, 6>::Zero();
+  expected(0, 0) = (0.01 + 0.01) / 2;
+  expected(5, 5) = 0.04 / 2;
+  expected(0, 5) = expected(5, 0) = (-0.1 * 0.2) / 2;
+  EXPECT_LT((*C - expected).norm(), 1e-12);
+  // Neighbours that agree with the camera: zero.
+  EXPECT_LT(neighbour_spread(own, {own, own})->norm(), 1e-12);
+}
+}  // namespace
+}  // namespace netvmo::obs

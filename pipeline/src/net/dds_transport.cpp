@@ -123,8 +123,8 @@ std::string label(const std::vector<int>& labels, int i) {
              : "#" + std::to_string(i);
 }
 
-// rt/netvmo/camera_<camera>/average_pose (geometry_msgs/msg/PoseStamped), for its writer
-// (DdsTransport) and its reader (PoseStampedReader).
+// rt/netvmo/camera_<camera>/average_pose (geometry_msgs/msg/PoseStamped), for its reader
+// (PoseStampedReader; the writer is RosPublisher's).
 dds_entity_t create_average_pose_topic(dds_entity_t participant, const std::string& camera) {
   const std::string name = "rt/netvmo/camera_" + camera + "/average_pose";
   const dds_entity_t topic = dds_create_topic(
@@ -177,11 +177,6 @@ DdsTransport::DdsTransport(int self, std::vector<int> neighbours, std::vector<in
     dds_delete_qos(rq);
     check(reader_, "create reader");
     make_waitset(participant_, reader_, readcond_, waitset_);
-    pose_topic_ = create_average_pose_topic(participant_, label(labels_, self_));
-    dds_qos_t* pq = average_pose_qos(DDS_HISTORY_KEEP_LAST, 10);
-    pose_writer_ = dds_create_writer(participant_, pose_topic_, pq, nullptr);
-    dds_delete_qos(pq);
-    check(pose_writer_, "create pose writer");
   } catch (...) {
     dds_delete(participant_);
     throw;
@@ -298,24 +293,6 @@ void DdsTransport::receive(int receiver, std::vector<obs::EstimateMessage>& out)
     check(rc, "wait for estimates");
     take_all();
   }
-}
-
-void DdsTransport::publish_average_pose(const obs::SE3& g_w, double t) {
-  geometry_msgs_msg_dds__PoseStamped_ s{};
-  const double sec = std::floor(t);
-  s.header.stamp.sec = static_cast<int32_t>(sec);
-  s.header.stamp.nanosec = static_cast<uint32_t>(std::lround((t - sec) * 1e9) % 1000000000L);
-  static char world[] = "world";
-  s.header.frame_id = world;
-  s.pose.position.x = g_w.translation().x();
-  s.pose.position.y = g_w.translation().y();
-  s.pose.position.z = g_w.translation().z();
-  const Eigen::Quaterniond q(g_w.linear());
-  s.pose.orientation.x = q.x();
-  s.pose.orientation.y = q.y();
-  s.pose.orientation.z = q.z();
-  s.pose.orientation.w = q.w();
-  check(dds_write(pose_writer_, &s), "write average pose");
 }
 
 void DdsTransport::flush(double timeout_s) {

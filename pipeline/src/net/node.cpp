@@ -12,7 +12,9 @@
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
 #include "netvmo/pipeline/net/faulty_transport.hpp"
+#include "netvmo/pipeline/net/ros_publisher.hpp"
 #include "netvmo/pipeline/run/camera_step.hpp"
+#include "netvmo/pipeline/run/ros_frame.hpp"
 
 namespace netvmo::net {
 namespace fs = std::filesystem;
@@ -222,6 +224,12 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   dds.graph_digest = graph_digest(labels, netcfg.edges);
   DdsTransport transport(self, graph.neighbors(self), labels, dds);
   transport.wait_for_writers(static_cast<int>(graph.neighbors(self).size()), o.dds.timeout_s);
+  // The camera's ROS 2 topics (RosPublisher): its pose in the rig once, on rt/tf_static.
+  std::optional<RosPublisher> ros;
+  if (o.publish_ros_pose) {
+    ros.emplace(transport.participant(), o.camera_id);
+    ros->tf_static({run::camera_transform(o.camera_id, frame_time(0), g_wi)});
+  }
 
   io::ensure_directory(out_dir);
   const NodeFiles files = node_files(out_dir, o.camera_id);
@@ -318,8 +326,17 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
     links.row(link + "," + in_term + "\n");
     csv.flush();
     links.flush();
-    if (o.publish_ros_pose && net.initialized())
-      transport.publish_average_pose(net.estimate_world(), t);
+    if (ros) {
+      std::vector<SE3> neighbours_w;
+      for (const auto& m : net.latest())
+        if (m && m->initialized) neighbours_w.push_back(m->g_w);
+      const std::optional<SE3> estimate =
+          net.initialized() ? std::optional<SE3>(net.estimate_world()) : std::nullopt;
+      const run::RosFrame f = run::ros_frame(o.camera_id, t, cam, estimate, neighbours_w);
+      if (f.measurement) ros->measurement(*f.measurement);
+      if (f.average_pose) ros->average_pose(*f.average_pose);
+      if (!f.tf.empty()) ros->tf(f.tf);
+    }
   }
   // Lock-step neighbours still wait for our last round; async ones take what has arrived (and a
   // killed neighbour would never acknowledge).

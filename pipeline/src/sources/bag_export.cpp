@@ -9,6 +9,7 @@
 #include "netvmo/pipeline/io/calibration.hpp"
 #include "netvmo/pipeline/io/network_config.hpp"
 #include "netvmo/pipeline/ros/image_msgs.hpp"
+#include "netvmo/pipeline/ros/pose_msgs.hpp"
 #include "netvmo/pipeline/ros/rosbag.hpp"
 
 namespace netvmo::sources {
@@ -43,7 +44,7 @@ int write_bag(Dataset& ds, const fs::path& out, const BagExportSettings& s) {
   std::vector<bool> info_written(ds.cameras.size(), false);
   for (const auto& [t, i, f] : images) {
     const std::int64_t ns = s.stamp_origin_ns + std::llround(t * 1e9);
-    const std::string frame_id = "cam_" + std::to_string(ds.cameras[i].id);
+    const std::string frame_id = ros::camera_frame(ds.cameras[i].id);
     if (s.camera_info && !info_written[i]) {
       bag.write(info_topic[i], ns, ros::encode_camera_info(ds.cameras[i].calib, ns, frame_id));
       info_written[i] = true;

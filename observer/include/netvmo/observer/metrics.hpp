@@ -7,6 +7,7 @@
 // ||p_bar_i - p*_i|| = ||p_bar_w,i - p*|| and phi(R*_i^T R_bar_i) = phi(R*^T R_bar_w,i).
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "netvmo/observer/lie.hpp"
@@ -57,5 +58,14 @@ struct Theorem1Bound {
   double eps_R = 0.0;
 };
 Theorem1Bound theorem1_bound(double k, const Spread& s, double W, int diameter, int n_visible);
+
+/// How far camera i's neighbours' estimates lie from its own, as a covariance (the one netvmo
+/// publishes with a camera's estimate, docs/ros2.md): (1/m) sum_j d_j d_j^T over the m
+/// neighbours' latest world-frame estimates g_j, d_j = [p_j - p_i; log(R_j R_i^T)] (position,
+/// then rotation about the world axes: ROS's PoseWithCovariance order in the world frame). It is
+/// the consensus disagreement that the mutual term of (eq:input_f-) drives to zero, not an
+/// accuracy against the true target pose. nullopt when there is no neighbour estimate.
+std::optional<Eigen::Matrix<double, 6, 6>> neighbour_spread(const SE3& own_w,
+                                                            const std::vector<SE3>& neighbours_w);
 
 }  // namespace netvmo::obs

@@ -91,9 +91,8 @@ class DdsTransport final : public obs::Transport {
   void send(const obs::EstimateMessage& m) override;
   void receive(int receiver, std::vector<obs::EstimateMessage>& out) override;
 
-  /// Publishes the camera's estimate of the average pose as geometry_msgs/msg/PoseStamped on
-  /// rt/netvmo/camera_<id>/average_pose (frame_id "world", stamp = t).
-  void publish_average_pose(const obs::SE3& g_w, double t);
+  /// The DDS participant (for the camera's ROS 2 topics, RosPublisher).
+  std::int32_t participant() const { return participant_; }
 
   /// Waits until every reliable reader has acknowledged what this camera sent (before exit).
   void flush(double timeout_s);
@@ -114,7 +113,7 @@ class DdsTransport final : public obs::Transport {
   std::vector<int> neighbours_, labels_;
   DdsSettings settings_;
   std::int32_t participant_ = 0, topic_ = 0, writer_ = 0, reader_ = 0;
-  std::int32_t pose_topic_ = 0, pose_writer_ = 0, waitset_ = 0, readcond_ = 0;
+  std::int32_t waitset_ = 0, readcond_ = 0;
   std::uint64_t round_ = 0;  ///< the round of this camera's last send()
   std::deque<obs::EstimateMessage> pending_;
   MessageStats stats_;

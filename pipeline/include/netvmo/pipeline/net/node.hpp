@@ -28,7 +28,9 @@ struct NodeOptions {
   /// The dataset's frame count (launch passes the whole dataset's; a node alone knows only its
   /// own camera's, or network.yaml's `frames`).
   std::optional<int> frames;
-  bool publish_ros_pose = true;  ///< also publish rt/netvmo/camera_<id>/average_pose
+  /// Also publish the camera's ROS 2 topics (RosPublisher: its estimate, measurement and
+  /// transforms).
+  bool publish_ros_pose = true;
 
   // Async mode only (dds.mode == Mode::async).
   /// Camera time runs at `speed` x wall time: frame k's round r is due at
