@@ -2,6 +2,7 @@
 // observer, with baselines, evaluation, overlays and plots.
 #include <cstdio>
 #include <memory>
+#include <optional>
 
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
@@ -16,7 +17,7 @@ namespace fs = std::filesystem;
 
 void add_run(CLI::App& app, int& exit_code) {
   struct Options {
-    std::string dataset, out = "results/run";
+    std::string dataset, out = "results/run", bag;
     RunCliOptions run;
   };
   auto o = std::make_shared<Options>();
@@ -38,14 +39,28 @@ void add_run(CLI::App& app, int& exit_code) {
                   "netvmo calibrate's calibration.json: summary.json's g_star_localisation says "
                   "what the cameras' localisation error alone contributes to the distance between "
                   "g* and the true target pose (first order), next to the measured distance");
+  cmd->add_option(
+      "--bag", o->bag,
+      "Also write the run as a ROS 2 bag (rosbag2, sqlite3) into this folder: each "
+      "camera's overlay, camera info, measurement with covariance and estimate, and "
+      "/tf, /tf_static (docs/ros2.md); built aside and put in place at the end, as OUT");
   cmd->callback([o, &exit_code] {
     exit_code = guarded("run", [&] {
       to_image_run_options(o->run);  // option ranges first
       io::check_output_apart(o->out, o->dataset);
+      std::optional<io::OutputDir> bag;
+      if (!o->bag.empty()) {
+        io::check_output_apart(o->bag, o->dataset);
+        if (fs::weakly_canonical(o->bag) == fs::weakly_canonical(o->out))
+          throw InputError("--bag " + o->bag + ": the same folder as --out");
+      }
       io::OutputDir out(o->out, "run");
+      if (!o->bag.empty()) bag.emplace(o->bag, "run --bag");
       auto provider = sources::open_dataset_source(o->dataset, {}, o->run.keep_going);
-      const auto summary = run_and_report(*provider, o->run, out.path(), o->out);
+      const auto summary =
+          run_and_report(*provider, o->run, out.path(), o->out, bag ? bag->path() : fs::path());
       out.commit();
+      if (bag) bag->commit();
       print_run_summary(summary, o->out);
       return 0;
     });

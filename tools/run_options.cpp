@@ -10,6 +10,7 @@
 #include "netvmo/observer/estimator.hpp"
 #include "netvmo/pipeline/calib/g_star_uncertainty.hpp"
 #include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/run/bag_recorder.hpp"
 #include "netvmo/pipeline/run/overlay.hpp"
 #include "netvmo/pipeline/run/run_report.hpp"
 #include "run_plots.hpp"
@@ -104,7 +105,7 @@ void require_single_estimator(const run::ImageRunOptions& o) {
 
 namespace {
 json run_and_report_in(sources::NetworkSource& provider, const RunCliOptions& o,
-                       const fs::path& dir) {
+                       const fs::path& dir, const fs::path& bag_dir) {
   const auto options = to_image_run_options(o);
   std::map<int, Eigen::Matrix<double, 6, 6>> covariances;  // before the run: fail early
   if (!o.calibration.empty()) covariances = calib::read_calibration_covariances(o.calibration);
@@ -115,11 +116,18 @@ json run_and_report_in(sources::NetworkSource& provider, const RunCliOptions& o,
     run::OverlaySettings os;
     os.camera_videos = o.camera_videos;
     overlays = std::make_unique<run::OverlayWriter>(dir, provider, os);
+  }
+  std::unique_ptr<run::BagRecorder> bag;
+  if (!bag_dir.empty()) bag = std::make_unique<run::BagRecorder>(bag_dir, provider);
+  if (overlays || bag)
     hook = [&](int k, const std::vector<cv::Mat>& images,
                const std::vector<std::vector<run::CameraFrame>>& cams,
-               const std::vector<const run::FrameRecord*>& r) { (*overlays)(k, images, cams, r); };
-  }
+               const std::vector<const run::FrameRecord*>& r) {
+      if (overlays) (*overlays)(k, images, cams, r);
+      if (bag) (*bag)(k, images, cams, r);
+    };
   const auto result = run::run_images(provider, options, hook);
+  if (bag) bag->finish();
   for (size_t k = provider.warnings().size(); k < result.warnings.size(); ++k)
     std::fprintf(stderr, "warning: %s\n", result.warnings[k].c_str());
   // Where the image times came from (a camera without timestamps.csv rows or video timestamps:
@@ -137,7 +145,7 @@ json run_and_report_in(sources::NetworkSource& provider, const RunCliOptions& o,
 }  // namespace
 
 json run_and_report(sources::NetworkSource& provider, const RunCliOptions& o, const fs::path& dir,
-                    const fs::path& shown) {
+                    const fs::path& shown, const fs::path& bag) {
   // A file of dir named in a message (a plot or an overlay that cannot be written) is named as
   // it would have been under its final folder.
   const auto renamed = [&](std::string what) {
@@ -146,7 +154,7 @@ json run_and_report(sources::NetworkSource& provider, const RunCliOptions& o, co
     return what;
   };
   try {
-    return run_and_report_in(provider, o, dir);
+    return run_and_report_in(provider, o, dir, bag);
   } catch (const InputError& e) {
     throw InputError(renamed(e.what()));
   } catch (const std::runtime_error& e) {

@@ -47,10 +47,12 @@ void require_single_estimator(const run::ImageRunOptions& o);
 
 /// Runs the provider, writes the outputs, overlays and plots into dir; returns the summary.
 /// `shown`: the name dir will have when the command ends (dir is an io::OutputDir's temporary
-/// folder), used instead of dir in the message of an error; empty: dir.
+/// folder), used instead of dir in the message of an error; empty: dir. `bag`: also write the
+/// run as a rosbag2 bag into that (empty) folder (run::BagRecorder); empty: none.
 nlohmann::json run_and_report(sources::NetworkSource& provider, const RunCliOptions& o,
                               const std::filesystem::path& dir,
-                              const std::filesystem::path& shown = {});
+                              const std::filesystem::path& shown = {},
+                              const std::filesystem::path& bag = {});
 
 /// Prints the per-camera table of the summary.
 void print_run_summary(const nlohmann::json& s, const std::filesystem::path& dir);

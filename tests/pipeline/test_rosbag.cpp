@@ -4,15 +4,20 @@
 // byte, and a bad bag is one line naming the file and what is wrong.
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 #include "SensorMsgs.h"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/ros/cdr.hpp"
 #include "netvmo/pipeline/ros/image_msgs.hpp"
+#include "netvmo/pipeline/ros/pose_msgs.hpp"
 #include "netvmo/pipeline/ros/rosbag.hpp"
 #include "netvmo/pipeline/sources/bag_export.hpp"
 #include "synth.hpp"
@@ -112,6 +117,108 @@ TEST(RosBag, RunOnTheBagEqualsRunOnTheFolder) {
             test::slurp(dir / "det_bag" / "detections.csv"));
   EXPECT_EQ(test::slurp(dir / "sweep_ds" / "sweep.csv"),
             test::slurp(dir / "sweep_bag" / "sweep.csv"));
+  fs::remove_all(dir);
+}
+
+// `run --bag`: the run as a bag, each camera's overlay and camera info every frame, its
+// measurement (the PnP pose with a covariance) in every frame it detects the target, its
+// estimate every frame it has one (equal to estimates.csv), the rig on /tf_static and the
+// estimates on /tf; a --bag folder that is not netvmo's is refused in one line, nothing written.
+TEST(RosBag, RunWritesTheRunAsABag) {
+  const fs::path dir = test::scratch_dir("rosbag_run_bag");
+  const int frames = 6;
+  synth_folder(dir / "ds", 3, frames);
+  const auto r =
+      test::run_netvmo("run " + (dir / "ds").string() + " --out " + (dir / "out").string() +
+                           " --bag " + (dir / "bag").string() + " --no-plots --no-overlays",
+                       dir, 300);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const sources::Dataset ds = sources::open_dataset(dir / "ds");
+  const ros::RosBag bag(dir / "bag");
+  // estimates.csv: frame,t,camera,delta,px,py,pz,rx,ry,rz
+  std::map<std::pair<int, int>, std::vector<double>> rows;  // (frame, camera id) -> row
+  {
+    std::istringstream in(test::slurp(dir / "out" / "estimates.csv"));
+    std::string line;
+    std::getline(in, line);
+    while (std::getline(in, line)) {
+      std::vector<double> v;
+      std::stringstream ls(line);
+      for (std::string c; std::getline(ls, c, ',');) v.push_back(std::stod(c));
+      ASSERT_EQ(v.size(), 10u) << line;
+      rows[{static_cast<int>(v[0]), static_cast<int>(v[2])}] = v;
+    }
+  }
+  const auto frame_of = [&](std::int64_t ns) {
+    return static_cast<int>(std::llround(ns * 1e-9 * ds.network.fps));
+  };
+  for (const auto& cam : ds.network.cameras) {
+    const std::string p = "/netvmo/camera_" + std::to_string(cam.id);
+    SCOPED_TRACE(p);
+    for (const char* t : {"/overlay/compressed", "/camera_info"}) {
+      const auto* topic = bag.find_topic(p + t);
+      ASSERT_NE(topic, nullptr) << t;
+      EXPECT_EQ(topic->message_count, static_cast<std::uint64_t>(frames)) << t;
+    }
+    const auto overlays = bag.messages(p + "/overlay/compressed");
+    const cv::Mat first = ros::decode_gray(ros::kCompressedImageType, bag.read(overlays.at(0)),
+                                           bag.where(overlays.at(0)));
+    EXPECT_EQ(first.cols, 640);  // the synthetic cameras' images, at full resolution
+    EXPECT_EQ(first.rows, 480);
+    int estimates = 0, detections = 0, measurements = 0;
+    for (const auto& m : bag.messages(p + "/average_pose_with_covariance")) {
+      const auto pose = ros::decode_pose_with_covariance(bag.read(m), bag.where(m));
+      EXPECT_EQ(pose.frame_id, "world");
+      const auto it = rows.find({frame_of(pose.stamp_ns), cam.id});
+      ASSERT_NE(it, rows.end());
+      const auto& v = it->second;
+      const obs::SE3 est = obs::make_pose(obs::Vec3(v[4], v[5], v[6]), obs::Vec3(v[7], v[8], v[9]));
+      EXPECT_LT((pose.pose.matrix() - est.matrix()).cwiseAbs().maxCoeff(), 1e-8);
+      ASSERT_TRUE(pose.covariance.has_value());  // every camera has an initialised neighbour
+      EXPECT_LT((*pose.covariance - pose.covariance->transpose()).cwiseAbs().maxCoeff(), 1e-15);
+      ++estimates;
+    }
+    EXPECT_EQ(bag.find_topic(p + "/average_pose")->message_count,
+              static_cast<std::uint64_t>(estimates));
+    for (const auto& [key, v] : rows)
+      if (key.second == cam.id) detections += v[3] == 1.0;
+    for (const auto& m : bag.messages(p + "/measurement")) {
+      const auto pose = ros::decode_pose_with_covariance(bag.read(m), bag.where(m));
+      EXPECT_EQ(pose.frame_id, "cam_" + std::to_string(cam.id));
+      EXPECT_EQ(rows.at({frame_of(pose.stamp_ns), cam.id})[3], 1.0);
+      ASSERT_TRUE(pose.covariance.has_value());
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(*pose.covariance);
+      EXPECT_GT(eig.eigenvalues()(0), 0.0);
+      // The tag 2 m in front of the camera.
+      EXPECT_NEAR(pose.pose.translation().z(), 2.0, 0.05);
+      ++measurements;
+    }
+    EXPECT_EQ(measurements, detections);
+    EXPECT_GT(estimates, 0);
+  }
+  const auto statics = bag.messages("/tf_static");
+  ASSERT_EQ(statics.size(), 1u);
+  const auto rig = ros::decode_tf_message(bag.read(statics[0]), "tf_static");
+  ASSERT_EQ(rig.size(), ds.network.cameras.size());
+  for (size_t i = 0; i < rig.size(); ++i) {
+    EXPECT_EQ(rig[i].child, "cam_" + std::to_string(ds.network.cameras[i].id));
+    EXPECT_LT((rig[i].pose.matrix() - ds.network.cameras[i].g_wi.matrix()).cwiseAbs().maxCoeff(),
+              1e-12);
+  }
+  EXPECT_EQ(bag.find_topic("/tf")->message_count, static_cast<std::uint64_t>(frames));
+
+  // A --bag folder that is not a netvmo output: one line naming it, nothing written.
+  fs::create_directories(dir / "mine");
+  test::write_text(dir / "mine" / "notes.txt", "keep me\n");
+  const auto bad =
+      test::run_netvmo("run " + (dir / "ds").string() + " --out " + (dir / "out2").string() +
+                           " --bag " + (dir / "mine").string() + " --no-plots --no-overlays",
+                       dir, 300);
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.err.find((dir / "mine").string()), std::string::npos) << bad.err;
+  EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+  EXPECT_EQ(test::slurp(dir / "mine" / "notes.txt"), "keep me\n");
+  EXPECT_FALSE(fs::exists(dir / "out2"));
   fs::remove_all(dir);
 }
 

@@ -200,12 +200,16 @@ std::vector<std::uint8_t> encode_image(const cv::Mat& gray, const std::string& e
   return encode(sensor_msgs_msg_dds__Image__desc, &m);
 }
 
-std::vector<std::uint8_t> encode_compressed_image(const cv::Mat& gray, const std::string& format,
+std::vector<std::uint8_t> encode_compressed_image(const cv::Mat& image, const std::string& format,
                                                   std::int64_t stamp_ns,
-                                                  const std::string& frame_id) {
+                                                  const std::string& frame_id, int quality) {
   std::vector<uchar> bytes;
   CV_Assert(format == "png" || format == "jpeg");
-  cv::imencode(format == "png" ? ".png" : ".jpg", gray, bytes);
+  CV_Assert(image.type() == CV_8UC1 || image.type() == CV_8UC3);
+  if (format == "png")
+    cv::imencode(".png", image, bytes);
+  else
+    cv::imencode(".jpg", image, bytes, {cv::IMWRITE_JPEG_QUALITY, quality});
   Compressed m{};
   m.header.stamp = stamp_of(stamp_ns);
   m.header.frame_id = const_cast<char*>(frame_id.c_str());

@@ -119,6 +119,24 @@ OverlayWriter::~OverlayWriter() {
   if (thread_.joinable()) thread_.join();
 }
 
+std::vector<OverlayLayer> overlay_layers(const io::NetworkConfig& net, size_t i,
+                                         const std::vector<std::vector<CameraFrame>>& cams,
+                                         const std::vector<const run::FrameRecord*>& records) {
+  std::vector<OverlayLayer> layers;
+  for (size_t j = 0; j < records.size(); ++j) {
+    const CameraFrame& cam = cams[j][i];
+    const CameraRecord& rec = records[j]->cameras[i];
+    OverlayLayer layer;
+    layer.detected = cam.obs.delta;
+    layer.corners = cam.obs.corners_px;
+    layer.read_failed = cam.read_failed;
+    if (rec.initialized) layer.estimate_w = rec.est_w;
+    layer.target = &net.targets[j];
+    layers.push_back(layer);
+  }
+  return layers;
+}
+
 void OverlayWriter::rethrow_error() {
   std::lock_guard<std::mutex> lock(mu_);
   if (error_) std::rethrow_exception(error_);
@@ -132,17 +150,7 @@ void OverlayWriter::operator()(int /*frame*/, const std::vector<cv::Mat>& images
   job.images = images;  // shared pixels: the run reads each frame into a new image
   job.layers.resize(net.cameras.size());
   for (size_t i = 0; i < net.cameras.size(); ++i) {
-    for (size_t j = 0; j < records.size(); ++j) {
-      const CameraFrame& cam = cams[j][i];
-      const CameraRecord& rec = records[j]->cameras[i];
-      OverlayLayer layer;
-      layer.detected = cam.obs.delta;
-      layer.corners = cam.obs.corners_px;
-      layer.read_failed = cam.read_failed;
-      if (rec.initialized) layer.estimate_w = rec.est_w;
-      layer.target = &net.targets[j];
-      job.layers[i].push_back(layer);
-    }
+    job.layers[i] = overlay_layers(net, i, cams, records);
     job.g_wi.push_back(provider_.camera_believed(i, records[0]->frame));
   }
   std::unique_lock<std::mutex> lock(mu_);

@@ -44,9 +44,10 @@ io::Calibration decode_camera_info(const std::vector<std::uint8_t>& msg, const s
 /// mono8 or rgb8 (the gray value in each channel); `format` "png" or "jpeg".
 std::vector<std::uint8_t> encode_image(const cv::Mat& gray, const std::string& encoding,
                                        std::int64_t stamp_ns, const std::string& frame_id);
-std::vector<std::uint8_t> encode_compressed_image(const cv::Mat& gray, const std::string& format,
+/// `image` may also be 8-bit BGR (an overlay); `quality` is JPEG's (OpenCV's default 95).
+std::vector<std::uint8_t> encode_compressed_image(const cv::Mat& image, const std::string& format,
                                                   std::int64_t stamp_ns,
-                                                  const std::string& frame_id);
+                                                  const std::string& frame_id, int quality = 95);
 std::vector<std::uint8_t> encode_camera_info(const io::Calibration& calib, std::int64_t stamp_ns,
                                              const std::string& frame_id);
 

@@ -57,6 +57,12 @@ cv::Mat draw_overlay(const cv::Mat& gray, int camera_id, const io::Calibration& 
                      const obs::SE3& g_wi, const std::vector<OverlayLayer>& layers,
                      double scale = 1.0);
 
+/// Camera i's overlay layers of a frame, one per target: its detection and estimate (cams
+/// [target][camera], one record per target).
+std::vector<OverlayLayer> overlay_layers(const io::NetworkConfig& net, size_t i,
+                                         const std::vector<std::vector<CameraFrame>>& cams,
+                                         const std::vector<const run::FrameRecord*>& records);
+
 /// A FrameHook that writes DIR/overlays/mosaic.mp4, on finish() DIR/overlays/mosaic.png of the
 /// last frame, and with camera_videos DIR/overlays/cam_<id>.mp4. The hook copies what a frame's
 /// overlay needs (the images by reference: the run reads a new image every frame) and hands it
