@@ -39,6 +39,7 @@ void add_demo(CLI::App& app, int& exit_code);
 void add_bench(CLI::App& app, int& exit_code);
 void add_node(CLI::App& app, int& exit_code);
 void add_bag(CLI::App& app, int& exit_code);
+void add_play(CLI::App& app, int& exit_code);
 void add_launch(CLI::App& app, int& exit_code);
 void add_merge(CLI::App& app, int& exit_code);  // cmd_launch.cpp
 void add_calibrate(CLI::App& app, int& exit_code);

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   netvmo::tools::add_simulate(app, exit_code);
   netvmo::tools::add_render(app, exit_code);
   netvmo::tools::add_bag(app, exit_code);
+  netvmo::tools::add_play(app, exit_code);
   netvmo::tools::add_detect(app, exit_code);
   netvmo::tools::add_calibrate(app, exit_code);
   netvmo::tools::add_run(app, exit_code);

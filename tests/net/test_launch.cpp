@@ -14,6 +14,8 @@
 #include <thread>
 
 #include "net_test_util.hpp"
+#include "netvmo/pipeline/net/ros_publisher.hpp"
+#include "netvmo/pipeline/ros/image_msgs.hpp"
 #include "netvmo/pipeline/run/image_run.hpp"
 #include "netvmo/pipeline/sources/network_source.hpp"
 #include "test_util.hpp"
@@ -85,6 +87,77 @@ class Launch : public ::testing::Test {
 fs::path* Launch::dir_ = nullptr;
 
 }  // namespace
+
+// netvmo play: every image and calibration of the dataset on the camera topics, at their
+// times, to a reliable reader (the images as they are: mono8 is lossless); best-effort writers
+// reach a best-effort reader (a ROS 2 camera driver's QoS), each image received equal to its
+// frame, and do not match a reliable one.
+TEST_F(Launch, PlayPublishesEveryImageAndCameraInfo) {
+  const fs::path ds = *dir_ / "ds";
+  const int domain = net_test::loopback_domain(*dir_);
+  auto provider = sources::open_dataset_source(ds);
+  const auto& cams = provider->network().cameras;
+  const auto readers = [&](bool reliable) {
+    std::vector<std::unique_ptr<net::RosTopicReader>> r;
+    for (const auto& c : cams) {
+      const std::string p = "rt/cam_" + std::to_string(c.id);
+      r.push_back(std::make_unique<net::RosTopicReader>(domain, p + "/image_raw",
+                                                        ros::image_descriptor(), false, reliable));
+      r.push_back(std::make_unique<net::RosTopicReader>(
+          domain, p + "/camera_info", ros::camera_info_descriptor(), false, reliable));
+    }
+    return r;
+  };
+  // Each image message: its camera's frame at that stamp, pixel for pixel. Returns the count.
+  const auto check_images = [&](net::RosTopicReader& r, size_t i) {
+    int n = 0;
+    for (const auto& m : r.take(1.0)) {
+      std::string why;
+      const auto ns = ros::header_stamp_ns(m.data(), m.size(), why);
+      EXPECT_TRUE(ns.has_value()) << why;
+      if (!ns) continue;
+      const int f = static_cast<int>(std::llround(*ns * 1e-9 * provider->network().fps));
+      EXPECT_NEAR(*ns * 1e-9, provider->frame_time(i, f), 1e-9);
+      const cv::Mat got = ros::decode_gray(ros::kImageType, m, "image");
+      EXPECT_EQ(cv::norm(got, provider->read(i, f), cv::NORM_INF), 0.0) << "frame " << f;
+      ++n;
+    }
+    return n;
+  };
+  {
+    auto r = readers(true);
+    const auto p =
+        net_test::netvmo_bounded("play " + ds.string() + " --domain " + std::to_string(domain) +
+                                     " --reliable --rate 0 --wait-readers 1 --quiet",
+                                 *dir_, 120);
+    ASSERT_EQ(p.code, 0) << p.out << p.err;
+    for (size_t i = 0; i < cams.size(); ++i) {
+      EXPECT_EQ(check_images(*r[2 * i], i), kFrames) << "camera " << cams[i].id;
+      const auto infos = r[2 * i + 1]->take(1.0);
+      EXPECT_EQ(infos.size(), static_cast<size_t>(kFrames));
+      for (const auto& m : infos) {
+        const auto calib = ros::decode_camera_info(m, "camera_info");
+        EXPECT_EQ(calib.K, provider->calibration(i).K);
+      }
+    }
+  }
+  {
+    auto best_effort = readers(false);
+    net::RosTopicReader reliable(domain, "rt/cam_1/image_raw", ros::image_descriptor());
+    const auto p =
+        net_test::netvmo_bounded("play " + ds.string() + " --domain " + std::to_string(domain) +
+                                     " --rate 0 --wait-readers 1 --quiet --no-camera-info",
+                                 *dir_, 120);
+    ASSERT_EQ(p.code, 0) << p.out << p.err;
+    int received = 0;
+    for (size_t i = 0; i < cams.size(); ++i) received += check_images(*best_effort[2 * i], i);
+    std::printf("best-effort play: %d of %d images received\n", received,
+                kFrames * static_cast<int>(cams.size()));
+    EXPECT_GE(received, 1);
+    EXPECT_EQ(reliable.matched_writers(), 0);
+    EXPECT_TRUE(reliable.take(0.2).empty());
+  }
+}
 
 TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
   const fs::path ds = *dir_ / "ds", run = *dir_ / "run", launch = *dir_ / "launch";

@@ -77,7 +77,7 @@ void RosPublisher::tf_static(const std::vector<ros::StampedTransform>& m) {
 }
 
 RosTopicReader::RosTopicReader(int domain, const std::string& dds_topic,
-                               const dds_topic_descriptor_t& type, bool tf_static)
+                               const dds_topic_descriptor_t& type, bool tf_static, bool reliable)
     : type_(type) {
   participant_ =
       checked(dds_create_participant(static_cast<dds_domainid_t>(domain), nullptr, nullptr),
@@ -89,6 +89,7 @@ RosTopicReader::RosTopicReader(int domain, const std::string& dds_topic,
     // one sample in all at depth 1).
     dds_qos_t* q = ros_topic_qos(tf_static, 0);
     dds_qset_history(q, DDS_HISTORY_KEEP_ALL, 0);
+    if (!reliable) dds_qset_reliability(q, DDS_RELIABILITY_BEST_EFFORT, 0);
     reader_ = dds_create_reader(participant_, topic_, q, nullptr);
     dds_delete_qos(q);
     checked(reader_, "create ROS reader");

@@ -11,6 +11,7 @@
 #include "SensorMsgs.h"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/ros/cdr.hpp"
+#include "ros_time.hpp"
 
 namespace netvmo::ros {
 
@@ -21,14 +22,7 @@ using Image = sensor_msgs_msg_dds__Image_;
 using Compressed = sensor_msgs_msg_dds__CompressedImage_;
 using Info = sensor_msgs_msg_dds__CameraInfo_;
 
-builtin_interfaces_msg_dds__Time_ stamp_of(std::int64_t ns) {
-  builtin_interfaces_msg_dds__Time_ s;
-  std::int64_t sec = ns / 1'000'000'000, rest = ns % 1'000'000'000;
-  if (rest < 0) rest += 1'000'000'000, sec -= 1;
-  s.sec = static_cast<int32_t>(sec);
-  s.nanosec = static_cast<uint32_t>(rest);
-  return s;
-}
+using detail::time_of;
 
 // The number of distortion coefficients of a ROS distortion model, 0 when it is not read.
 int coefficients(const std::string& model) {
@@ -180,14 +174,14 @@ io::Calibration decode_camera_info(const std::vector<std::uint8_t>& msg, const s
   return c;
 }
 
-std::vector<std::uint8_t> encode_image(const cv::Mat& gray, const std::string& encoding,
-                                       std::int64_t stamp_ns, const std::string& frame_id) {
+void with_image(const cv::Mat& gray, const std::string& encoding, std::int64_t stamp_ns,
+                const std::string& frame_id, const std::function<void(const void*)>& use) {
   CV_Assert(gray.type() == CV_8UC1 && (encoding == "mono8" || encoding == "rgb8"));
   cv::Mat pixels = gray;
   if (encoding == "rgb8") cv::cvtColor(gray, pixels, cv::COLOR_GRAY2RGB);
   pixels = pixels.isContinuous() ? pixels : pixels.clone();
   Image m{};
-  m.header.stamp = stamp_of(stamp_ns);
+  m.header.stamp = time_of(stamp_ns);
   m.header.frame_id = const_cast<char*>(frame_id.c_str());
   m.height = static_cast<uint32_t>(pixels.rows);
   m.width = static_cast<uint32_t>(pixels.cols);
@@ -197,12 +191,20 @@ std::vector<std::uint8_t> encode_image(const cv::Mat& gray, const std::string& e
   m.data._length = m.data._maximum = static_cast<uint32_t>(pixels.total() * pixels.elemSize());
   m.data._buffer = pixels.data;
   m.data._release = false;
-  return encode(sensor_msgs_msg_dds__Image__desc, &m);
+  use(&m);
 }
 
-std::vector<std::uint8_t> encode_compressed_image(const cv::Mat& image, const std::string& format,
-                                                  std::int64_t stamp_ns,
-                                                  const std::string& frame_id, int quality) {
+std::vector<std::uint8_t> encode_image(const cv::Mat& gray, const std::string& encoding,
+                                       std::int64_t stamp_ns, const std::string& frame_id) {
+  std::vector<std::uint8_t> out;
+  with_image(gray, encoding, stamp_ns, frame_id,
+             [&](const void* m) { out = encode(sensor_msgs_msg_dds__Image__desc, m); });
+  return out;
+}
+
+void with_compressed_image(const cv::Mat& image, const std::string& format, std::int64_t stamp_ns,
+                           const std::string& frame_id, int quality,
+                           const std::function<void(const void*)>& use) {
   std::vector<uchar> bytes;
   CV_Assert(format == "png" || format == "jpeg");
   CV_Assert(image.type() == CV_8UC1 || image.type() == CV_8UC3);
@@ -211,19 +213,29 @@ std::vector<std::uint8_t> encode_compressed_image(const cv::Mat& image, const st
   else
     cv::imencode(".jpg", image, bytes, {cv::IMWRITE_JPEG_QUALITY, quality});
   Compressed m{};
-  m.header.stamp = stamp_of(stamp_ns);
+  m.header.stamp = time_of(stamp_ns);
   m.header.frame_id = const_cast<char*>(frame_id.c_str());
   m.format = const_cast<char*>(format.c_str());
   m.data._length = m.data._maximum = static_cast<uint32_t>(bytes.size());
   m.data._buffer = bytes.data();
   m.data._release = false;
-  return encode(sensor_msgs_msg_dds__CompressedImage__desc, &m);
+  use(&m);
 }
 
-std::vector<std::uint8_t> encode_camera_info(const io::Calibration& c, std::int64_t stamp_ns,
-                                             const std::string& frame_id) {
+std::vector<std::uint8_t> encode_compressed_image(const cv::Mat& image, const std::string& format,
+                                                  std::int64_t stamp_ns,
+                                                  const std::string& frame_id, int quality) {
+  std::vector<std::uint8_t> out;
+  with_compressed_image(image, format, stamp_ns, frame_id, quality, [&](const void* m) {
+    out = encode(sensor_msgs_msg_dds__CompressedImage__desc, m);
+  });
+  return out;
+}
+
+void with_camera_info(const io::Calibration& c, std::int64_t stamp_ns, const std::string& frame_id,
+                      const std::function<void(const void*)>& use) {
   Info m{};
-  m.header.stamp = stamp_of(stamp_ns);
+  m.header.stamp = time_of(stamp_ns);
   m.header.frame_id = const_cast<char*>(frame_id.c_str());
   m.height = static_cast<uint32_t>(c.height);
   m.width = static_cast<uint32_t>(c.width);
@@ -249,7 +261,25 @@ std::vector<std::uint8_t> encode_camera_info(const io::Calibration& c, std::int6
   for (int r = 0; r < 3; ++r)
     for (int col = 0; col < 3; ++col) m.p[r * 4 + col] = c.K(r, col);
   m.binning_x = m.binning_y = 0;
-  return encode(sensor_msgs_msg_dds__CameraInfo__desc, &m);
+  use(&m);
+}
+
+std::vector<std::uint8_t> encode_camera_info(const io::Calibration& c, std::int64_t stamp_ns,
+                                             const std::string& frame_id) {
+  std::vector<std::uint8_t> out;
+  with_camera_info(c, stamp_ns, frame_id,
+                   [&](const void* m) { out = encode(sensor_msgs_msg_dds__CameraInfo__desc, m); });
+  return out;
+}
+
+const dds_topic_descriptor_t& image_descriptor() {
+  return sensor_msgs_msg_dds__Image__desc;
+}
+const dds_topic_descriptor_t& compressed_image_descriptor() {
+  return sensor_msgs_msg_dds__CompressedImage__desc;
+}
+const dds_topic_descriptor_t& camera_info_descriptor() {
+  return sensor_msgs_msg_dds__CameraInfo__desc;
 }
 
 }  // namespace netvmo::ros

@@ -6,33 +6,20 @@
 #include "PoseStamped.h"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/ros/cdr.hpp"
+#include "ros_time.hpp"
 
 namespace netvmo::ros {
 
 namespace {
 
-using Time = builtin_interfaces_msg_dds__Time_;
 using Pose = geometry_msgs_msg_dds__Pose_;
 using PoseStamped = geometry_msgs_msg_dds__PoseStamped_;
 using PoseWithCov = geometry_msgs_msg_dds__PoseWithCovarianceStamped_;
 using TransformStamped = geometry_msgs_msg_dds__TransformStamped_;
 using TfMessage = tf2_msgs_msg_dds__TFMessage_;
 
-Time time_of(std::int64_t ns) {
-  Time t{};
-  std::int64_t sec = ns / 1'000'000'000, rem = ns % 1'000'000'000;
-  if (rem < 0) {
-    rem += 1'000'000'000;
-    --sec;
-  }
-  t.sec = static_cast<int32_t>(sec);
-  t.nanosec = static_cast<uint32_t>(rem);
-  return t;
-}
-
-std::int64_t ns_of(const Time& t) {
-  return std::int64_t{t.sec} * 1'000'000'000 + t.nanosec;
-}
+using detail::ns_of;
+using detail::time_of;
 
 Pose pose_of(const obs::SE3& g) {
   Pose p{};

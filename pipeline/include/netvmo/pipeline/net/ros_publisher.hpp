@@ -46,11 +46,12 @@ class RosPublisher {
 dds_qos_t* ros_topic_qos(bool tf_static, std::int32_t depth);
 
 /// A subscriber of its own (tests, tools): every message on one ROS 2 topic, as CDR bytes (for
-/// ros::decode_*), from a participant of its own on `domain`.
+/// ros::decode_*), from a participant of its own on `domain`; `tf_static`: transient-local;
+/// `reliable` false: best-effort, which also matches best-effort writers (camera drivers).
 class RosTopicReader {
  public:
   RosTopicReader(int domain, const std::string& dds_topic, const dds_topic_descriptor_t& type,
-                 bool tf_static = false);
+                 bool tf_static = false, bool reliable = true);
   ~RosTopicReader();
   RosTopicReader(const RosTopicReader&) = delete;
   RosTopicReader& operator=(const RosTopicReader&) = delete;

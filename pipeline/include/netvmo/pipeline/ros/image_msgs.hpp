@@ -3,7 +3,10 @@
 // as serialized in a bag (cdr.hpp).
 #pragma once
 
+#include <dds/dds.h>
+
 #include <cstdint>
+#include <functional>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
@@ -50,5 +53,19 @@ std::vector<std::uint8_t> encode_compressed_image(const cv::Mat& image, const st
                                                   const std::string& frame_id, int quality = 95);
 std::vector<std::uint8_t> encode_camera_info(const io::Calibration& calib, std::int64_t stamp_ns,
                                              const std::string& frame_id);
+
+/// The same messages as idlc structs, valid during the call to `use` only: for dds_write
+/// (net::play).
+void with_image(const cv::Mat& gray, const std::string& encoding, std::int64_t stamp_ns,
+                const std::string& frame_id, const std::function<void(const void*)>& use);
+void with_compressed_image(const cv::Mat& image, const std::string& format, std::int64_t stamp_ns,
+                           const std::string& frame_id, int quality,
+                           const std::function<void(const void*)>& use);
+void with_camera_info(const io::Calibration& calib, std::int64_t stamp_ns,
+                      const std::string& frame_id, const std::function<void(const void*)>& use);
+/// The idlc descriptors, for topics of these types.
+const dds_topic_descriptor_t& image_descriptor();
+const dds_topic_descriptor_t& compressed_image_descriptor();
+const dds_topic_descriptor_t& camera_info_descriptor();
 
 }  // namespace netvmo::ros

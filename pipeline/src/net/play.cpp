@@ -1,0 +1,134 @@
+#include "netvmo/pipeline/net/play.hpp"
+
+#include <dds/dds.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <thread>
+#include <tuple>
+#include <vector>
+
+#include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/ros/image_msgs.hpp"
+#include "netvmo/pipeline/ros/pose_msgs.hpp"
+
+namespace netvmo::net {
+
+namespace {
+
+dds_entity_t checked(dds_entity_t e, const char* what) {
+  if (e < 0)
+    throw std::runtime_error(std::string("Cyclone DDS: ") + what + ": " + dds_strretcode(e));
+  return e;
+}
+
+// A participant that deletes itself (and every entity under it).
+struct Participant {
+  dds_entity_t id;
+  explicit Participant(int domain)
+      : id(checked(dds_create_participant(static_cast<dds_domainid_t>(domain), nullptr, nullptr),
+                   "create participant (check CYCLONEDDS_URI)")) {}
+  ~Participant() { dds_delete(id); }
+};
+
+dds_entity_t writer(dds_entity_t participant, const std::string& name,
+                    const dds_topic_descriptor_t& type, bool reliable) {
+  const dds_entity_t topic =
+      checked(dds_create_topic(participant, &type, name.c_str(), nullptr, nullptr), "topic");
+  dds_qos_t* q = dds_create_qos();
+  if (reliable)
+    dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+  else
+    dds_qset_reliability(q, DDS_RELIABILITY_BEST_EFFORT, 0);
+  dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 5);
+  const dds_entity_t w = dds_create_writer(participant, topic, q, nullptr);
+  dds_delete_qos(q);
+  return checked(w, "create writer");
+}
+
+int matched(dds_entity_t w) {
+  dds_publication_matched_status_t st;
+  checked(dds_get_publication_matched_status(w, &st), "matched status");
+  return static_cast<int>(st.current_count);
+}
+
+}  // namespace
+
+PlayStats play(sources::NetworkSource& source, const PlaySettings& s,
+               const std::function<void(int, int)>& progress) {
+  const bool raw = s.encoding == "mono8" || s.encoding == "rgb8";
+  if (!raw && s.encoding != "jpeg" && s.encoding != "png")
+    throw InputError("--encoding " + s.encoding + ": expected mono8, rgb8, jpeg or png");
+  if (!(s.rate >= 0.0)) throw InputError("--rate must be >= 0");
+  const auto& net = source.network();
+  Participant p(s.domain);
+  std::vector<dds_entity_t> images, infos;
+  for (const auto& c : net.cameras) {
+    const std::string prefix = "rt/cam_" + std::to_string(c.id);
+    images.push_back(raw ? writer(p.id, prefix + "/image_raw", ros::image_descriptor(), s.reliable)
+                         : writer(p.id, prefix + "/image_raw/compressed",
+                                  ros::compressed_image_descriptor(), s.reliable));
+    if (s.camera_info)
+      infos.push_back(
+          writer(p.id, prefix + "/camera_info", ros::camera_info_descriptor(), s.reliable));
+  }
+  if (s.wait_readers > 0) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto ready = [&] {
+      return std::all_of(images.begin(), images.end(),
+                         [&](dds_entity_t w) { return matched(w) >= s.wait_readers; });
+    };
+    while (!ready()) {
+      if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >
+          s.timeout_s) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf,
+                      "--wait-readers %d: fewer readers of every camera's image topic within %g s",
+                      s.wait_readers, s.timeout_s);
+        throw InputError(buf);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  }
+  // Every image in time order (ties: camera order).
+  std::vector<std::tuple<double, size_t, int>> order;
+  for (size_t i = 0; i < net.cameras.size(); ++i)
+    for (int f = 0; f < source.camera_frame_count(i); ++f)
+      order.emplace_back(source.frame_time(i, f), i, f);
+  std::sort(order.begin(), order.end());
+  PlayStats stats;
+  if (order.empty()) return stats;
+  const double t0 = std::get<0>(order.front());
+  const auto start = std::chrono::steady_clock::now();
+  for (const auto& [t, i, f] : order) {
+    if (s.rate > 0) {
+      const auto due = start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                   std::chrono::duration<double>((t - t0) / s.rate));
+      std::this_thread::sleep_until(due);
+      stats.late_s =
+          std::max(stats.late_s,
+                   std::chrono::duration<double>(std::chrono::steady_clock::now() - due).count());
+    }
+    const cv::Mat gray = source.read(i, f);
+    const std::int64_t ns = ros::stamp_ns_of(t);
+    const std::string frame_id = ros::camera_frame(net.cameras[i].id);
+    const auto write = [&](dds_entity_t w) {
+      return [w](const void* m) { checked(dds_write(w, m), "write"); };
+    };
+    if (raw)
+      ros::with_image(gray, s.encoding, ns, frame_id, write(images[i]));
+    else
+      ros::with_compressed_image(gray, s.encoding, ns, frame_id, 95, write(images[i]));
+    if (s.camera_info) ros::with_camera_info(source.calibration(i), ns, frame_id, write(infos[i]));
+    ++stats.images;
+    if (progress) progress(stats.images, static_cast<int>(order.size()));
+  }
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (s.reliable)
+    for (dds_entity_t w : images)
+      dds_wait_for_acks(w, static_cast<dds_duration_t>(s.linger_s * 1e9));
+  return stats;
+}
+
+}  // namespace netvmo::net
