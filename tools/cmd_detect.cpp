@@ -25,6 +25,7 @@
 #include "netvmo/pipeline/io/output_dir.hpp"
 #include "netvmo/pipeline/io/truth_io.hpp"
 #include "netvmo/pipeline/progress.hpp"
+#include "netvmo/pipeline/run/camera_step.hpp"
 #include "netvmo/pipeline/sources/dataset.hpp"
 
 namespace netvmo::tools {
@@ -131,24 +132,33 @@ int run_detect(DetectOptions o) {
   double seconds = 0.0;
   std::vector<std::string> unreadable;
   Progress progress("detect", ds.frame_count, !o.quiet);
+  std::vector<run::CameraFrame> cams;
   for (int f = 0; f < ds.frame_count; ++f) {
     for (size_t c = 0; c < ds.cameras.size(); ++c) {
       CameraStats& st = stats[c];
       ++st.frames;
+      // The per-camera step of run and node, without PnP: an unreadable image is a blind frame
+      // (reported below, or a warning with --keep-going).
       cv::Mat img;
-      try {
-        img = ds.read(c, f);
-      } catch (const InputError& e) {
-        ++st.unreadable;
-        unreadable.push_back(e.what());
-        if (o.keep_going)
-          std::fprintf(stderr, "netvmo detect: warning: %s (camera blind there)\n", e.what());
-      }
-      if (!img.empty()) ++st.images;
       FrameDetections all;
+      double reading = 0.0;
       const auto t0 = std::chrono::steady_clock::now();
-      const TagObservation obs = fe.observe(img, ds.cameras[c].calib, &all, &tracks[c]);
-      seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      if (const auto error = run::observe_camera([&] { return ds.read(c, f); }, ds.cameras[c].calib,
+                                                 fe, tracks[c], ds.network.targets, o.keep_going,
+                                                 img, cams, &reading, &all, /*pnp=*/false)) {
+        try {
+          std::rethrow_exception(error);
+        } catch (const InputError& e) {
+          ++st.unreadable;
+          unreadable.push_back(e.what());
+          if (o.keep_going)
+            std::fprintf(stderr, "netvmo detect: warning: %s (camera blind there)\n", e.what());
+        }
+      }
+      seconds +=
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() - reading;
+      if (!img.empty()) ++st.images;
+      const TagObservation& obs = cams.front().obs;
       if (const auto it = truth.find({f, ds.cameras[c].id}); it != truth.end())
         tally.add(it->second, obs);
       for (const auto& d : all.all)

@@ -7,28 +7,32 @@
 
 namespace netvmo::run {
 
-std::exception_ptr observe_camera(sources::NetworkSource& source, size_t i, int frame,
-                                  frontend::FrontEnd& front_end, frontend::TrackState& track,
+std::exception_ptr observe_camera(const std::function<cv::Mat()>& read,
+                                  const io::Calibration& calib, frontend::FrontEnd& front_end,
+                                  frontend::TrackState& track,
                                   const std::vector<io::TargetConfig>& targets, bool keep_going,
                                   cv::Mat& image, std::vector<CameraFrame>& out,
-                                  double* seconds_reading) {
+                                  double* seconds_reading, frontend::FrameDetections* all,
+                                  bool pnp) {
   out.assign(targets.size(), CameraFrame{});
+  std::exception_ptr unreadable;
   const auto t0 = std::chrono::steady_clock::now();
   try {
-    image = source.read(i, frame);
+    image = read();
     if (seconds_reading)
       *seconds_reading +=
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   } catch (const InputError&) {
     image.release();
-    for (auto& c : out) c.read_failed = keep_going;
-    return std::current_exception();
+    unreadable = std::current_exception();
   }
-  auto observations = front_end.observe_targets(image, source.calibration(i), nullptr, &track);
+  // An unreadable image is a blind frame for the front end too (its tracking state).
+  auto observations = front_end.observe_targets(image, calib, all, &track);
   for (size_t j = 0; j < targets.size(); ++j) {
     CameraFrame& cam = out[j];
     cam.obs = std::move(observations[j]);
-    if (!cam.obs.delta) continue;
+    cam.read_failed = unreadable && keep_going;
+    if (!cam.obs.delta || !pnp) continue;
     // PnP on the corners of every accepted tag (a bundle's object points).
     const auto m = frontend::observation_model(targets[j], cam.obs);
     const auto pose = frontend::pnp_pose(cam.obs.f_normalized, m);
@@ -39,7 +43,16 @@ std::exception_ptr observe_camera(sources::NetworkSource& source, size_t i, int 
     }
     if (!targets[j].bundle.empty()) cam.points_o = m.points_o;
   }
-  return nullptr;
+  return unreadable;
+}
+
+std::exception_ptr observe_camera(sources::NetworkSource& source, size_t i, int frame,
+                                  frontend::FrontEnd& front_end, frontend::TrackState& track,
+                                  const std::vector<io::TargetConfig>& targets, bool keep_going,
+                                  cv::Mat& image, std::vector<CameraFrame>& out,
+                                  double* seconds_reading) {
+  return observe_camera([&] { return source.read(i, frame); }, source.calibration(i), front_end,
+                        track, targets, keep_going, image, out, seconds_reading);
 }
 
 CameraInput camera_input(const CameraFrame& cam, const std::optional<obs::SE3>& target,

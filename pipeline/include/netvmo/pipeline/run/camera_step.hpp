@@ -1,11 +1,12 @@
 // One camera's step from a frame to the observer's input, written once for `run` (run_images,
-// and `sweep` through it) and `node`: read the image, the front end (every target decided in one
-// pass, the camera's tracking state carried from frame to frame), PnP of each detected target on
-// the corners of its accepted tags (CameraFrame), then the observer's Measurement of it
+// and `sweep` through it), `node` and `detect`: read the image, the front end (every target decided
+// in one pass, the camera's tracking state carried from frame to frame), PnP of each detected
+// target on the corners of its accepted tags (CameraFrame), then the observer's Measurement of it
 // (camera_input).
 #pragma once
 
 #include <exception>
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -30,12 +31,24 @@ struct CameraFrame {
   bool read_failed = false;  ///< the image could not be read (only with keep_going)
 };
 
-/// Camera i's frame `frame` of `source`: the image into `image` (released when unreadable) and
-/// one CameraFrame per target into `out` (front_end's targets, set with frontend::set_targets;
-/// `targets` the same list, for PnP). An unreadable image (the source's InputError) is returned,
-/// not thrown, and with `keep_going` marks every CameraFrame read_failed (the camera blind in that
-/// frame); any other error propagates. `seconds_reading` (optional) is increased by the time a
-/// successful read took.
+/// One camera's step on one image, written once for `run` (run_images, and `sweep` through it),
+/// `node` and `detect`: `read` the image into `image` (an InputError from it, an unreadable
+/// image, is returned, not thrown: the camera is blind in that frame, its front end run on no
+/// image as on any blind frame, and with `keep_going` every CameraFrame is marked read_failed;
+/// any other error propagates), the front end on every target (front_end's targets, set with
+/// frontend::set_targets; `targets` the same list), the camera's tracking state carried in
+/// `track`, and with `pnp` the PnP pose and its covariance of each detected target. One
+/// CameraFrame per target into `out`; every decoded tag into `all` (optional);
+/// `seconds_reading` (optional) is increased by the time a successful read took.
+std::exception_ptr observe_camera(const std::function<cv::Mat()>& read,
+                                  const io::Calibration& calib, frontend::FrontEnd& front_end,
+                                  frontend::TrackState& track,
+                                  const std::vector<io::TargetConfig>& targets, bool keep_going,
+                                  cv::Mat& image, std::vector<CameraFrame>& out,
+                                  double* seconds_reading = nullptr,
+                                  frontend::FrameDetections* all = nullptr, bool pnp = true);
+
+/// The same on camera i's frame `frame` of `source`.
 std::exception_ptr observe_camera(sources::NetworkSource& source, size_t i, int frame,
                                   frontend::FrontEnd& front_end, frontend::TrackState& track,
                                   const std::vector<io::TargetConfig>& targets, bool keep_going,
