@@ -95,24 +95,31 @@ int rogue(int domain, int rounds, double seconds) {
   return 0;
 }
 int pose_stamped(int domain, int camera, int count, double seconds, const char* out) {
-  net::PoseStampedReader reader(domain, camera);
-  std::vector<net::PoseStampedSample> all;
+  net::RosTopicReader reader(domain, "rt/netvmo/camera_" + std::to_string(camera) + "/average_pose",
+                             ros::pose_stamped_descriptor());
+  std::vector<ros::StampedPose> all;
   const auto t0 = std::chrono::steady_clock::now();
   for (;;) {
     const double left =
         seconds - std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (left <= 0 || static_cast<int>(all.size()) >= count) break;
-    for (auto& p : reader.take(std::min(left, 0.5))) all.push_back(p);
+    for (const auto& m : reader.take(std::min(left, 0.5)))
+      all.push_back(ros::decode_pose_stamped(m, "average_pose"));
   }
   std::FILE* f = std::fopen(out, "w");
   if (!f) return 3;
-  for (const auto& p : all)
-    std::fprintf(f, "%d %u %s %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", p.sec, p.nanosec,
-                 p.frame_id.c_str(), p.position.x(), p.position.y(), p.position.z(),
-                 p.orientation.w(), p.orientation.x(), p.orientation.y(), p.orientation.z());
+  for (const auto& p : all) {
+    const Eigen::Quaterniond q(p.pose.linear());
+    std::fprintf(f, "%lld %lld %s %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n",
+                 static_cast<long long>(p.stamp_ns / 1000000000),
+                 static_cast<long long>(p.stamp_ns % 1000000000), p.frame_id.c_str(),
+                 p.pose.translation().x(), p.pose.translation().y(), p.pose.translation().z(),
+                 q.w(), q.x(), q.y(), q.z());
+  }
   std::fclose(f);
   return 0;
 }
+
 void print_ros_pose(std::FILE* f, const obs::SE3& g) {
   const Eigen::Quaterniond q(g.linear());
   std::fprintf(f, " %.17g %.17g %.17g %.17g %.17g %.17g %.17g", g.translation().x(),

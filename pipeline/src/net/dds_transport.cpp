@@ -10,7 +10,7 @@
 #include <ctime>
 
 #include "NetvmoEstimate.h"
-#include "PoseStamped.h"
+#include "dds_util.hpp"
 
 namespace netvmo::net {
 
@@ -48,12 +48,10 @@ std::uint64_t graph_digest(const std::vector<int>& camera_ids,
 
 namespace {
 
-constexpr int kMaxTake = 64;
+using detail::check;
+using detail::make_waitset;
 
-void check(dds_return_t rc, const char* what) {
-  if (rc < 0)
-    throw std::runtime_error(std::string("Cyclone DDS: ") + what + ": " + dds_strretcode(rc));
-}
+constexpr int kMaxTake = 64;
 
 dds_qos_t* estimate_qos(Mode mode, bool writer) {
   dds_qos_t* q = dds_create_qos();
@@ -76,16 +74,6 @@ dds_qos_t* estimate_qos(Mode mode, bool writer) {
   // otherwise be delivered back to it every round (copied, waking the waitset, then discarded).
   if (!writer) dds_qset_ignorelocal(q, DDS_IGNORELOCAL_PARTICIPANT);
   return q;
-}
-
-// A read condition on `reader` and a waitset attached to it, for blocking reads.
-void make_waitset(dds_entity_t participant, dds_entity_t reader, dds_entity_t& readcond,
-                  dds_entity_t& waitset) {
-  readcond = dds_create_readcondition(reader, DDS_ANY_STATE);
-  check(readcond, "create read condition");
-  waitset = dds_create_waitset(participant);
-  check(waitset, "create waitset");
-  check(dds_waitset_attach(waitset, readcond, 0), "attach read condition");
 }
 
 obs::EstimateMessage from_sample(const netvmo_msg_Estimate& s) {
@@ -121,24 +109,6 @@ std::string label(const std::vector<int>& labels, int i) {
   return i >= 0 && static_cast<size_t>(i) < labels.size()
              ? std::to_string(labels[static_cast<size_t>(i)])
              : "#" + std::to_string(i);
-}
-
-// rt/netvmo/camera_<camera>/average_pose (geometry_msgs/msg/PoseStamped), for its reader
-// (PoseStampedReader; the writer is RosPublisher's).
-dds_entity_t create_average_pose_topic(dds_entity_t participant, const std::string& camera) {
-  const std::string name = "rt/netvmo/camera_" + camera + "/average_pose";
-  const dds_entity_t topic = dds_create_topic(
-      participant, &geometry_msgs_msg_dds__PoseStamped__desc, name.c_str(), nullptr, nullptr);
-  check(topic, "create pose topic");
-  return topic;
-}
-
-// The average pose's QoS: reliable, with the history of its side.
-dds_qos_t* average_pose_qos(dds_history_kind_t history, int32_t depth) {
-  dds_qos_t* q = dds_create_qos();
-  dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
-  dds_qset_history(q, history, depth);
-  return q;
 }
 
 }  // namespace
@@ -338,56 +308,6 @@ int RawEstimateWriter::matched_readers() const {
   dds_publication_matched_status_t st;
   check(dds_get_publication_matched_status(writer_, &st), "matched status");
   return static_cast<int>(st.current_count);
-}
-
-PoseStampedReader::PoseStampedReader(int domain, int camera_id) {
-  participant_ = dds_create_participant(static_cast<dds_domainid_t>(domain), nullptr, nullptr);
-  check(participant_, "create participant (check CYCLONEDDS_URI)");
-  try {
-    topic_ = create_average_pose_topic(participant_, std::to_string(camera_id));
-    dds_qos_t* q = average_pose_qos(DDS_HISTORY_KEEP_ALL, 0);
-    reader_ = dds_create_reader(participant_, topic_, q, nullptr);
-    dds_delete_qos(q);
-    check(reader_, "create pose reader");
-    make_waitset(participant_, reader_, readcond_, waitset_);
-  } catch (...) {
-    dds_delete(participant_);
-    throw;
-  }
-}
-
-PoseStampedReader::~PoseStampedReader() {
-  dds_delete(participant_);
-}
-
-std::vector<PoseStampedSample> PoseStampedReader::take(double timeout_s) {
-  std::vector<PoseStampedSample> out;
-  const auto t0 = std::chrono::steady_clock::now();
-  for (;;) {
-    void* samples[kMaxTake] = {nullptr};
-    dds_sample_info_t infos[kMaxTake];
-    const dds_return_t n = dds_take(reader_, samples, infos, kMaxTake, kMaxTake);
-    check(n, "take poses");
-    for (dds_return_t k = 0; k < n; ++k) {
-      if (!infos[k].valid_data) continue;
-      const auto& p = *static_cast<const geometry_msgs_msg_dds__PoseStamped_*>(samples[k]);
-      PoseStampedSample s;
-      s.sec = p.header.stamp.sec;
-      s.nanosec = p.header.stamp.nanosec;
-      s.frame_id = p.header.frame_id ? p.header.frame_id : "";
-      s.position = obs::Vec3(p.pose.position.x, p.pose.position.y, p.pose.position.z);
-      s.orientation = Eigen::Quaterniond(p.pose.orientation.w, p.pose.orientation.x,
-                                         p.pose.orientation.y, p.pose.orientation.z);
-      out.push_back(s);
-    }
-    if (n > 0) dds_return_loan(reader_, samples, n);
-    if (n == kMaxTake) continue;
-    const double left =
-        timeout_s - std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (!out.empty() || left <= 0) return out;
-    check(dds_waitset_wait(waitset_, nullptr, 0, static_cast<dds_duration_t>(left * 1e9)),
-          "wait for poses");
-  }
 }
 
 }  // namespace netvmo::net

@@ -9,6 +9,7 @@
 #include <tuple>
 #include <vector>
 
+#include "dds_util.hpp"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/ros/image_msgs.hpp"
 #include "netvmo/pipeline/ros/pose_msgs.hpp"
@@ -17,25 +18,21 @@ namespace netvmo::net {
 
 namespace {
 
-dds_entity_t checked(dds_entity_t e, const char* what) {
-  if (e < 0)
-    throw std::runtime_error(std::string("Cyclone DDS: ") + what + ": " + dds_strretcode(e));
-  return e;
-}
+using detail::check;
 
 // A participant that deletes itself (and every entity under it).
 struct Participant {
   dds_entity_t id;
   explicit Participant(int domain)
-      : id(checked(dds_create_participant(static_cast<dds_domainid_t>(domain), nullptr, nullptr),
-                   "create participant (check CYCLONEDDS_URI)")) {}
+      : id(check(dds_create_participant(static_cast<dds_domainid_t>(domain), nullptr, nullptr),
+                 "create participant (check CYCLONEDDS_URI)")) {}
   ~Participant() { dds_delete(id); }
 };
 
 dds_entity_t writer(dds_entity_t participant, const std::string& name,
                     const dds_topic_descriptor_t& type, bool reliable) {
   const dds_entity_t topic =
-      checked(dds_create_topic(participant, &type, name.c_str(), nullptr, nullptr), "topic");
+      check(dds_create_topic(participant, &type, name.c_str(), nullptr, nullptr), "topic");
   dds_qos_t* q = dds_create_qos();
   if (reliable)
     dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
@@ -44,12 +41,12 @@ dds_entity_t writer(dds_entity_t participant, const std::string& name,
   dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 5);
   const dds_entity_t w = dds_create_writer(participant, topic, q, nullptr);
   dds_delete_qos(q);
-  return checked(w, "create writer");
+  return check(w, "create writer");
 }
 
 int matched(dds_entity_t w) {
   dds_publication_matched_status_t st;
-  checked(dds_get_publication_matched_status(w, &st), "matched status");
+  check(dds_get_publication_matched_status(w, &st), "matched status");
   return static_cast<int>(st.current_count);
 }
 
@@ -114,7 +111,7 @@ PlayStats play(sources::NetworkSource& source, const PlaySettings& s,
     const std::int64_t ns = ros::stamp_ns_of(t);
     const std::string frame_id = ros::camera_frame(net.cameras[i].id);
     const auto write = [&](dds_entity_t w) {
-      return [w](const void* m) { checked(dds_write(w, m), "write"); };
+      return [w](const void* m) { check(dds_write(w, m), "write"); };
     };
     if (raw)
       ros::with_image(gray, s.encoding, ns, frame_id, write(images[i]));

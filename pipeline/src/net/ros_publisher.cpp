@@ -3,26 +3,23 @@
 #include <chrono>
 #include <stdexcept>
 
+#include "dds_util.hpp"
 #include "netvmo/pipeline/ros/cdr.hpp"
 
 namespace netvmo::net {
 
 namespace {
 
-dds_entity_t checked(dds_entity_t e, const char* what) {
-  if (e < 0)
-    throw std::runtime_error(std::string("Cyclone DDS: ") + what + ": " + dds_strretcode(e));
-  return e;
-}
+using detail::check;
 
 dds_entity_t make_writer(dds_entity_t participant, const std::string& name,
                          const dds_topic_descriptor_t& type, bool tf_static, std::int32_t depth) {
-  const dds_entity_t topic = checked(
+  const dds_entity_t topic = check(
       dds_create_topic(participant, &type, name.c_str(), nullptr, nullptr), "create ROS topic");
   dds_qos_t* q = ros_topic_qos(tf_static, depth);
   const dds_entity_t w = dds_create_writer(participant, topic, q, nullptr);
   dds_delete_qos(q);
-  return checked(w, "create ROS writer");
+  return check(w, "create ROS writer");
 }
 
 }  // namespace
@@ -57,34 +54,34 @@ RosPublisher::~RosPublisher() {
 }
 
 void RosPublisher::average_pose(const ros::StampedPose& m) {
-  ros::with_pose_stamped(m, [&](const void* s) { checked(dds_write(pose_, s), "write pose"); });
+  ros::with_pose_stamped(m, [&](const void* s) { check(dds_write(pose_, s), "write pose"); });
   ros::with_pose_with_covariance(
-      m, [&](const void* s) { checked(dds_write(pose_cov_, s), "write pose with covariance"); });
+      m, [&](const void* s) { check(dds_write(pose_cov_, s), "write pose with covariance"); });
 }
 
 void RosPublisher::measurement(const ros::StampedPose& m) {
   ros::with_pose_with_covariance(
-      m, [&](const void* s) { checked(dds_write(measurement_, s), "write measurement"); });
+      m, [&](const void* s) { check(dds_write(measurement_, s), "write measurement"); });
 }
 
 void RosPublisher::tf(const std::vector<ros::StampedTransform>& m) {
-  ros::with_tf_message(m, [&](const void* s) { checked(dds_write(tf_, s), "write tf"); });
+  ros::with_tf_message(m, [&](const void* s) { check(dds_write(tf_, s), "write tf"); });
 }
 
 void RosPublisher::tf_static(const std::vector<ros::StampedTransform>& m) {
-  ros::with_tf_message(
-      m, [&](const void* s) { checked(dds_write(tf_static_, s), "write tf_static"); });
+  ros::with_tf_message(m,
+                       [&](const void* s) { check(dds_write(tf_static_, s), "write tf_static"); });
 }
 
 RosTopicReader::RosTopicReader(int domain, const std::string& dds_topic,
                                const dds_topic_descriptor_t& type, bool tf_static, bool reliable)
     : type_(type) {
   participant_ =
-      checked(dds_create_participant(static_cast<dds_domainid_t>(domain), nullptr, nullptr),
-              "create participant (check CYCLONEDDS_URI)");
+      check(dds_create_participant(static_cast<dds_domainid_t>(domain), nullptr, nullptr),
+            "create participant (check CYCLONEDDS_URI)");
   try {
-    topic_ = checked(dds_create_topic(participant_, &type, dds_topic.c_str(), nullptr, nullptr),
-                     "create ROS topic");
+    topic_ = check(dds_create_topic(participant_, &type, dds_topic.c_str(), nullptr, nullptr),
+                   "create ROS topic");
     // Every sample of every writer (a keyless topic with several writers, as rt/tf_static, keeps
     // one sample in all at depth 1).
     dds_qos_t* q = ros_topic_qos(tf_static, 0);
@@ -92,10 +89,8 @@ RosTopicReader::RosTopicReader(int domain, const std::string& dds_topic,
     if (!reliable) dds_qset_reliability(q, DDS_RELIABILITY_BEST_EFFORT, 0);
     reader_ = dds_create_reader(participant_, topic_, q, nullptr);
     dds_delete_qos(q);
-    checked(reader_, "create ROS reader");
-    readcond_ = checked(dds_create_readcondition(reader_, DDS_ANY_STATE), "read condition");
-    waitset_ = checked(dds_create_waitset(participant_), "waitset");
-    checked(dds_waitset_attach(waitset_, readcond_, 0), "attach");
+    check(reader_, "create ROS reader");
+    detail::make_waitset(participant_, reader_, readcond_, waitset_);
   } catch (...) {
     dds_delete(participant_);
     throw;
@@ -108,7 +103,7 @@ RosTopicReader::~RosTopicReader() {
 
 int RosTopicReader::matched_writers() const {
   dds_subscription_matched_status_t st;
-  checked(dds_get_subscription_matched_status(reader_, &st), "matched status");
+  check(dds_get_subscription_matched_status(reader_, &st), "matched status");
   return static_cast<int>(st.current_count);
 }
 
@@ -120,7 +115,7 @@ std::vector<std::vector<std::uint8_t>> RosTopicReader::take(double timeout_s) {
     void* samples[kMax] = {nullptr};
     dds_sample_info_t infos[kMax];
     const dds_return_t n = dds_take(reader_, samples, infos, kMax, kMax);
-    checked(n, "take");
+    check(n, "take");
     for (dds_return_t k = 0; k < n; ++k)
       if (infos[k].valid_data) out.push_back(ros::encode(type_, samples[k]));
     if (n > 0) dds_return_loan(reader_, samples, n);
@@ -128,8 +123,7 @@ std::vector<std::vector<std::uint8_t>> RosTopicReader::take(double timeout_s) {
     const double left =
         timeout_s - std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (!out.empty() || left <= 0) return out;
-    checked(dds_waitset_wait(waitset_, nullptr, 0, static_cast<dds_duration_t>(left * 1e9)),
-            "wait");
+    check(dds_waitset_wait(waitset_, nullptr, 0, static_cast<dds_duration_t>(left * 1e9)), "wait");
   }
 }
 

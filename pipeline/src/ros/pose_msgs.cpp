@@ -129,6 +129,19 @@ std::vector<std::uint8_t> encode_tf_message(const std::vector<StampedTransform>&
   return out;
 }
 
+StampedPose decode_pose_stamped(const std::vector<std::uint8_t>& msg, const std::string& where) {
+  Decoded<PoseStamped> d(pose_stamped_descriptor());
+  std::string why;
+  if (!d.read(msg.data(), msg.size(), why)) throw InputError(where + ": " + why);
+  StampedPose out;
+  out.stamp_ns = ns_of(d->header.stamp);
+  out.frame_id = d->header.frame_id ? d->header.frame_id : "";
+  const auto& p = d->pose;
+  out.pose = se3_of(p.position.x, p.position.y, p.position.z, p.orientation.x, p.orientation.y,
+                    p.orientation.z, p.orientation.w, where);
+  return out;
+}
+
 StampedPose decode_pose_with_covariance(const std::vector<std::uint8_t>& msg,
                                         const std::string& where) {
   Decoded<PoseWithCov> d(pose_with_covariance_descriptor());

@@ -135,27 +135,4 @@ class RawEstimateWriter {
   std::int32_t participant_ = 0, topic_ = 0, writer_ = 0;
 };
 
-/// One geometry_msgs/msg/PoseStamped as read from rt/netvmo/camera_<id>/average_pose.
-struct PoseStampedSample {
-  int sec = 0;
-  unsigned nanosec = 0;
-  std::string frame_id;
-  obs::Vec3 position = obs::Vec3::Zero();
-  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
-};
-
-/// Reads a camera's average-pose topic the way a ROS 2 subscriber would (tests, tools).
-class PoseStampedReader {
- public:
-  PoseStampedReader(int domain, int camera_id);
-  ~PoseStampedReader();
-  PoseStampedReader(const PoseStampedReader&) = delete;
-  PoseStampedReader& operator=(const PoseStampedReader&) = delete;
-  /// Every sample that arrived within `timeout_s` (returns early once some have).
-  std::vector<PoseStampedSample> take(double timeout_s);
-
- private:
-  std::int32_t participant_ = 0, topic_ = 0, reader_ = 0, waitset_ = 0, readcond_ = 0;
-};
-
 }  // namespace netvmo::net

@@ -70,6 +70,7 @@ std::vector<std::uint8_t> encode_pose_with_covariance(const StampedPose& m);
 std::vector<std::uint8_t> encode_tf_message(const std::vector<StampedTransform>& m);
 
 /// Read back (tests, tools). Throws InputError(where + ": ...") for a malformed message.
+StampedPose decode_pose_stamped(const std::vector<std::uint8_t>& msg, const std::string& where);
 StampedPose decode_pose_with_covariance(const std::vector<std::uint8_t>& msg,
                                         const std::string& where);
 std::vector<StampedTransform> decode_tf_message(const std::vector<std::uint8_t>& msg,
