@@ -27,6 +27,7 @@
 #include "netvmo/pipeline/progress.hpp"
 #include "netvmo/pipeline/run/camera_step.hpp"
 #include "netvmo/pipeline/sources/dataset.hpp"
+#include "netvmo/pipeline/stopwatch.hpp"
 
 namespace netvmo::tools {
 namespace fs = std::filesystem;
@@ -142,7 +143,7 @@ int run_detect(DetectOptions o) {
       cv::Mat img;
       FrameDetections all;
       double reading = 0.0;
-      const auto t0 = std::chrono::steady_clock::now();
+      const auto t0 = Clock::now();
       if (const auto error = run::observe_camera([&] { return ds.read(c, f); }, ds.cameras[c].calib,
                                                  fe, tracks[c], ds.network.targets, o.keep_going,
                                                  img, cams, &reading, &all, /*pnp=*/false)) {
@@ -155,8 +156,7 @@ int run_detect(DetectOptions o) {
             std::fprintf(stderr, "netvmo detect: warning: %s (camera blind there)\n", e.what());
         }
       }
-      seconds +=
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() - reading;
+      seconds += seconds_since(t0) - reading;
       if (!img.empty()) ++st.images;
       const TagObservation& obs = cams.front().obs;
       if (const auto it = truth.find({f, ds.cameras[c].id}); it != truth.end())

@@ -10,15 +10,12 @@
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/frontend/decision.hpp"
+#include "netvmo/pipeline/stopwatch.hpp"
 #include "netvmo/render/tag_family.hpp"
 
 namespace netvmo::frontend {
 
 namespace {
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0, Clock::time_point t1 = Clock::now()) {
-  return std::chrono::duration<double>(t1 - t0).count();
-}
 
 /// libapriltag reports pixel centres at +0.5 (measured, see tests/pipeline/test_detector.cpp).
 constexpr double kApriltagPixelOffset = 0.5;

@@ -1,9 +1,8 @@
 #include "netvmo/pipeline/run/camera_step.hpp"
 
-#include <chrono>
-
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/frontend/pnp.hpp"
+#include "netvmo/pipeline/stopwatch.hpp"
 
 namespace netvmo::run {
 
@@ -16,12 +15,10 @@ std::exception_ptr observe_camera(const std::function<cv::Mat()>& read,
                                   bool pnp) {
   out.assign(targets.size(), CameraFrame{});
   std::exception_ptr unreadable;
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = Clock::now();
   try {
     image = read();
-    if (seconds_reading)
-      *seconds_reading +=
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (seconds_reading) *seconds_reading += seconds_since(t0);
   } catch (const InputError&) {
     image.release();
     unreadable = std::current_exception();

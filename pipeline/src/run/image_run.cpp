@@ -12,15 +12,9 @@
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/progress.hpp"
+#include "netvmo/pipeline/stopwatch.hpp"
 
 namespace netvmo::run {
-
-namespace {
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-}  // namespace
 
 obs::Graph network_graph(const io::NetworkConfig& net) {
   std::vector<obs::Graph::Edge> edges;
