@@ -23,12 +23,12 @@ void add_play(CLI::App& app, int& exit_code) {
       app, "play", "Publish a dataset folder or bag as ROS 2 camera topics over DDS",
       "Publishes each camera's images on rt/cam_<id>/image_raw (sensor_msgs/msg/Image) or\n"
       "rt/cam_<id>/image_raw/compressed (CompressedImage), and its calibration on\n"
-      "rt/cam_<id>/camera_info (CameraInfo), every image at its time (timestamps.csv, a bag's\n"
-      "stamps, else frame / fps) divided by --rate, header.stamp = the image's time, frame_id\n"
-      "cam_<id> (docs/ros2.md). Best-effort writers (ROS 2's sensor-data QoS) unless\n"
-      "--reliable. Without CYCLONEDDS_URI it uses the loopback-only configuration (this machine\n"
-      "only, multicast off); ROS 2 on another machine needs a configuration of yours\n"
-      "(docs/processes.md, \"Several machines\").");
+      "rt/cam_<id>/camera_info (CameraInfo), every image at its time in the dataset\n"
+      "(timestamps.csv's; a bag's stamps less the earliest first one; else frame / fps) divided\n"
+      "by --rate, header.stamp = that time, frame_id cam_<id> (docs/ros2.md). Best-effort\n"
+      "writers (ROS 2's sensor-data QoS) unless --reliable. Without CYCLONEDDS_URI it uses the\n"
+      "loopback-only configuration (this machine only, multicast off); ROS 2 on another machine\n"
+      "needs a configuration of yours (docs/processes.md, \"Several machines\").");
   cmd->add_option("DATASET", o->dataset, "dataset folder or bag")->required();
   cmd->add_option("--domain", o->play.domain, "DDS domain id")
       ->capture_default_str()

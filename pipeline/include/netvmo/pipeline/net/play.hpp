@@ -3,8 +3,9 @@
 //   rt/cam_<id>/image_raw              sensor_msgs/msg/Image (mono8 or rgb8), or
 //   rt/cam_<id>/image_raw/compressed   sensor_msgs/msg/CompressedImage (jpeg or png)
 //   rt/cam_<id>/camera_info            sensor_msgs/msg/CameraInfo
-// (the topics `netvmo bag` writes), every image at its time (timestamps.csv, a bag's stamps,
-// else frame / fps) scaled by the rate, header.stamp the image's time, frame_id cam_<id>.
+// (the topics `netvmo bag` writes), every image at its time in the dataset (timestamps.csv's; a
+// bag's stamps less the earliest first one; else frame / fps) scaled by the rate, header.stamp
+// that time, frame_id cam_<id>.
 #pragma once
 
 #include <functional>
