@@ -182,7 +182,8 @@ TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
       net_test::netvmo_bounded("launch " + ds.string() + " --out " + launch.string() +
                                    " --domain " + std::to_string(domain) + " --timeout 90",
                                *dir_, 120);
-  const auto tf_result = net::supervise({tf}, 15.0, false);
+  // Bounded past its own 60 s, so that it always writes what it received.
+  const auto tf_result = net::supervise({tf}, 70.0, false);
   ASSERT_EQ(r2.code, 0) << r2.out << r2.err;
   EXPECT_TRUE(tf_result[0].finished && tf_result[0].exit_code == 0)
       << net::describe(tf_result[0]) << test::slurp(*dir_ / "tf.log");

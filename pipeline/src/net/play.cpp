@@ -122,9 +122,10 @@ PlayStats play(sources::NetworkSource& source, const PlaySettings& s,
     if (progress) progress(stats.images, static_cast<int>(order.size()));
   }
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (s.reliable)
-    for (dds_entity_t w : images)
-      dds_wait_for_acks(w, static_cast<dds_duration_t>(s.linger_s * 1e9));
+  if (s.reliable)  // the camera infos' writers too, each up to linger_s
+    for (const auto* writers : {&images, &infos})
+      for (dds_entity_t w : *writers)
+        dds_wait_for_acks(w, static_cast<dds_duration_t>(s.linger_s * 1e9));
   return stats;
 }
 

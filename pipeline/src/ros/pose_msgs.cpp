@@ -46,6 +46,17 @@ obs::SE3 se3_of(double px, double py, double pz, double qx, double qy, double qz
   return g;
 }
 
+// A decoded header and pose (no covariance).
+StampedPose stamped_pose(const std_msgs_msg_dds__Header_& h, const Pose& p,
+                         const std::string& where) {
+  StampedPose out;
+  out.stamp_ns = ns_of(h.stamp);
+  out.frame_id = h.frame_id ? h.frame_id : "";
+  out.pose = se3_of(p.position.x, p.position.y, p.position.z, p.orientation.x, p.orientation.y,
+                    p.orientation.z, p.orientation.w, where);
+  return out;
+}
+
 }  // namespace
 
 std::string camera_frame(int camera_id) {
@@ -133,13 +144,7 @@ StampedPose decode_pose_stamped(const std::vector<std::uint8_t>& msg, const std:
   Decoded<PoseStamped> d(pose_stamped_descriptor());
   std::string why;
   if (!d.read(msg.data(), msg.size(), why)) throw InputError(where + ": " + why);
-  StampedPose out;
-  out.stamp_ns = ns_of(d->header.stamp);
-  out.frame_id = d->header.frame_id ? d->header.frame_id : "";
-  const auto& p = d->pose;
-  out.pose = se3_of(p.position.x, p.position.y, p.position.z, p.orientation.x, p.orientation.y,
-                    p.orientation.z, p.orientation.w, where);
-  return out;
+  return stamped_pose(d->header, d->pose, where);
 }
 
 StampedPose decode_pose_with_covariance(const std::vector<std::uint8_t>& msg,
@@ -147,12 +152,7 @@ StampedPose decode_pose_with_covariance(const std::vector<std::uint8_t>& msg,
   Decoded<PoseWithCov> d(pose_with_covariance_descriptor());
   std::string why;
   if (!d.read(msg.data(), msg.size(), why)) throw InputError(where + ": " + why);
-  StampedPose out;
-  out.stamp_ns = ns_of(d->header.stamp);
-  out.frame_id = d->header.frame_id ? d->header.frame_id : "";
-  const auto& p = d->pose.pose;
-  out.pose = se3_of(p.position.x, p.position.y, p.position.z, p.orientation.x, p.orientation.y,
-                    p.orientation.z, p.orientation.w, where);
+  StampedPose out = stamped_pose(d->header, d->pose.pose, where);
   if (d->pose.covariance[0] != -1.0) {
     Covariance6 c;
     for (int r = 0; r < 6; ++r)
