@@ -35,9 +35,7 @@ int fields(const std::string& line) {
 }
 
 TEST(DatasetWriter, WritesDocumentedLayout) {
-  const fs::path dir = fs::path(NETVMO_BINARY_DIR) / "test_tmp" / "dataset_writer";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = netvmo::test::scratch_dir("dataset_writer");
   std::ofstream(dir / "scenario.yaml") << kScenario;
   const auto scene = netvmo::io::load_render_scenario(dir / "scenario.yaml");
   netvmo::render::Renderer r(scene);
@@ -140,9 +138,7 @@ TEST(DatasetWriter, WritesDocumentedLayout) {
 // sensor.jpeg_quality: the camera's frames are JPEG files at that quality, which the dataset
 // reader takes, and the live renderer gives the same decoded bytes.
 TEST(DatasetWriter, JpegFramesAtTheSensorsQuality) {
-  const fs::path dir = fs::path(NETVMO_BINARY_DIR) / "test_tmp" / "dataset_writer_jpeg";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = netvmo::test::scratch_dir("dataset_writer_jpeg");
   std::ofstream(dir / "scenario.yaml")
       << netvmo::test::replaced(kScenario, "fx: 70, fy: 71, cx: 39, cy: 29}",
                                 "fx: 70, fy: 71, cx: 39, cy: 29}\n    sensor: {jpeg_quality: 60}");

@@ -15,6 +15,7 @@
 #include "netvmo/pipeline/io/calibration.hpp"
 #include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/render/renderer.hpp"
+#include "test_util.hpp"
 
 namespace fs = std::filesystem;
 using netvmo::render::Intrinsics;
@@ -80,8 +81,7 @@ void check_model(Intrinsics::Lens model) {
     EXPECT_NEAR(back->x(), xy.back().x, 1e-9) << i;
   }
   // The front end's conversions, through the files `netvmo render` writes and ROS's.
-  const fs::path dir = fs::path(NETVMO_BINARY_DIR) / "test_tmp" / "lens_models";
-  fs::create_directories(dir);
+  const fs::path dir = netvmo::test::scratch_dir("lens_models");
   netvmo::io::save_calibration_opencv(dir / "cv.yaml", calib);
   netvmo::io::save_calibration_ros(dir / "ros.yaml", calib, "cam_1");
   for (const auto& c : {netvmo::io::load_calibration_opencv(dir / "cv.yaml"),
@@ -109,8 +109,7 @@ TEST(LensModels, FisheyeEqualsFisheyeProjectPoints) {
 }
 
 TEST(LensModels, UnsupportedLensModelNamesFileAndKey) {
-  const fs::path dir = fs::path(NETVMO_BINARY_DIR) / "test_tmp" / "lens_models";
-  fs::create_directories(dir);
+  const fs::path dir = netvmo::test::scratch_dir("lens_models");
   netvmo::io::save_calibration_opencv(dir / "fish.yaml",
                                       calibration(lens(Intrinsics::Lens::Fisheye)));
   std::ifstream in(dir / "fish.yaml");

@@ -18,8 +18,7 @@ const std::string kMinimal =
     netvmo::test::slurp(fs::path(NETVMO_SOURCE_DIR) / "tests/pipeline/data/minimal_scenario.yaml");
 
 fs::path write_scenario(const std::string& name, const std::string& text) {
-  const fs::path dir = fs::path(NETVMO_BINARY_DIR) / "test_tmp" / "scenario_yaml";
-  fs::create_directories(dir);
+  static const fs::path dir = netvmo::test::scratch_dir("scenario_yaml");
   const fs::path f = dir / name;
   std::ofstream(f) << text;
   return f;
