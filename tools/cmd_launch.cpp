@@ -18,6 +18,7 @@
 #include "netvmo/pipeline/net/node.hpp"
 #include "netvmo/pipeline/net/process.hpp"
 #include "netvmo/pipeline/run/run_report.hpp"
+#include "netvmo/pipeline/sources/topic_network.hpp"
 #include "run_options.hpp"
 #include "run_plots.hpp"
 
@@ -71,6 +72,8 @@ void add_launch(CLI::App& app, int& exit_code) {
     double timeout = 600.0, node_timeout = 20.0;
     std::string mode = "lockstep", kill;
     double speed = 1.0, stale = 0.25, drop = 0.0, delay = 0.0, restart_after = -1.0;
+    bool live = false;
+    net::LiveSettings live_settings;
     RunCliOptions run;
   };
   auto o = std::make_shared<Options>();
@@ -84,7 +87,11 @@ void add_launch(CLI::App& app, int& exit_code) {
       "node_<id>.log; the nodes write there with --in-place) and OUT/messages.json. OUT is built "
       "in OUT.partial-<pid> and swapped into place at the end\n"
       "(a killed launch leaves the previous OUT intact), locked by OUT.lock; when a node fails\n"
-      "the unfinished folder is kept as OUT.failed/ for its logs.");
+      "the unfinished folder is kept as OUT.failed/ for its logs.\n"
+      "With --live, DATASET holds network.yaml (each camera's image_topic) and calib/ only; every\n"
+      "node reads its camera's ROS 2 topic (e.g. from a driver or `netvmo play`) until the\n"
+      "stream ends (--idle, --duration); the outputs are on the grid of the images' stamps and\n"
+      "have no overlays (docs/ros2.md).");
   cmd->add_option("DATASET", o->dataset, "Dataset folder")->required();
   cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
   cmd->add_option("--domain", o->domain,
@@ -111,20 +118,38 @@ void add_launch(CLI::App& app, int& exit_code) {
                   "hour)")
       ->capture_default_str()
       ->check(CLI::Range(0.001, 3600.0));
+  add_live_options(*cmd, o->live, o->live_settings);
   add_run_options(*cmd, o->run, /*in_process_transport=*/false);
-  cmd->callback([o, &exit_code] {
+  cmd->callback([o, &exit_code, cmd] {
     exit_code = guarded("launch", [&] {
       const auto options = to_image_run_options(o->run);
       require_single_estimator(options);
-      auto provider = sources::open_dataset_source(o->dataset, {}, options.keep_going);
+      if (!o->live && (cmd->count("--duration") || cmd->count("--idle") || cmd->count("--lag")))
+        throw InputError("--duration, --idle and --lag need --live");
+      if (o->live) {
+        if (cmd->count("--mode") && o->mode != "async")
+          throw InputError("--live runs every node on its images' stamps: --mode async");
+        if (!o->kill.empty()) throw InputError("--kill needs a recorded dataset, not --live");
+        o->mode = "async";
+        o->run.no_overlays = true;  // no images are kept
+      }
+      std::unique_ptr<sources::NetworkSource> provider;
+      if (o->live) {
+        auto topics = std::make_unique<sources::TopicNetwork>(o->dataset);
+        for (size_t i = 0; i < topics->network().cameras.size(); ++i) topics->image_topic(i);
+        provider = std::move(topics);
+      } else {
+        provider = sources::open_dataset_source(o->dataset, {}, options.keep_going);
+      }
       sources::require_static_cameras(*provider, "netvmo launch");
       sources::require_single_target(*provider, "netvmo launch");
       const auto& netcfg = provider->network();
       for (const auto& w : provider->warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
       run::checked_rounds(1.0 / netcfg.fps, options.runner.k_e, options.runner.k_s,
                           run::network_graph(netcfg).max_degree(), options.runner.rounds);
-      int frames = provider->frame_count();
-      if (options.max_frames) frames = std::min(frames, *options.max_frames);
+      int frames = provider->frame_count();  // live: 0 (the nodes' rows decide)
+      if (options.max_frames)
+        frames = o->live ? *options.max_frames : std::min(frames, *options.max_frames);
 
       for (const auto& note : provider->notes()) std::printf("note: %s\n", note.c_str());
       const bool async = o->mode == "async";
@@ -165,6 +190,7 @@ void add_launch(CLI::App& app, int& exit_code) {
       ls.seed = o->seed;
       ls.run_arguments = forwarded(o->run);
       ls.kill = kill;
+      if (o->live) ls.live = o->live_settings;
       const auto outcome = net::run_launch(netcfg, ls, nodes);
       // The logs of a failed launch are kept in OUT.failed/; OUT is untouched.
       net::check_launch(outcome, netcfg, ls, nodes, fs::path(o->out + ".failed") / "nodes",
@@ -200,7 +226,12 @@ void add_merge(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-plots", o->no_plots, "Do not draw energies.png and errors.png");
   cmd->callback([o, &exit_code] {
     exit_code = guarded("merge", [&] {
-      auto provider = sources::open_dataset_source(o->dataset);
+      // A live launch's nodes (node --live) ran on a folder without images.
+      std::unique_ptr<sources::NetworkSource> provider;
+      if (sources::is_topic_network(o->dataset))
+        provider = std::make_unique<sources::TopicNetwork>(o->dataset);
+      else
+        provider = sources::open_dataset_source(o->dataset);
       sources::require_static_cameras(*provider, "netvmo merge");
       sources::require_single_target(*provider, "netvmo merge");
       const auto& netcfg = provider->network();
@@ -250,7 +281,7 @@ void add_merge(CLI::App& app, int& exit_code) {
       } catch (const std::exception& e) {
         throw InputError(ref_file.string() + ": options: " + e.what());
       }
-      cli.no_overlays = o->no_overlays;
+      cli.no_overlays = o->no_overlays || provider->frame_count() == 0;  // live: no images
       cli.no_plots = o->no_plots;
       const bool async = ref["mode"] == "async";
       io::OutputDir out(o->out, "merge");

@@ -41,14 +41,37 @@ void add_async_options(CLI::App& cmd, double& speed, double& stale, double& drop
       ->capture_default_str();
 }
 
+void add_live_options(CLI::App& cmd, bool& on, net::LiveSettings& live) {
+  cmd.add_flag("--live", on,
+               "Live: every camera's images from its ROS 2 image topic (network.yaml's "
+               "image_topic, read best-effort, which also receives reliable publishers; its "
+               "calibration from calib/, else the first message of its camera_info_topic), on "
+               "their stamps (async); DATASET holds network.yaml and calib/ only");
+  cmd.add_option("--duration", live.duration_s,
+                 "live: a camera's run ends at its first image this long [s of image time] after "
+                 "its first one (0 = no bound)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1e7));
+  cmd.add_option("--idle", live.idle_s,
+                 "live: a camera's run ends when no image has come for this long [s]")
+      ->capture_default_str()
+      ->check(CLI::Range(0.001, 3600.0));
+  cmd.add_option("--lag", live.lag_s,
+                 "live: a node runs this far [s] behind its images (frame k is integrated once "
+                 "image k+1 has come: one frame interval plus delivery)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 60.0));
+}
+
 void add_node(CLI::App& app, int& exit_code) {
   struct Options {
     std::string dataset, out, mode = "lockstep";
     int camera = 0, domain = -1, frames = 0;
     double timeout = 20.0, speed = 1.0, stale = 0.25, drop = 0.0, delay = 0.0, start_at = 0.0;
     std::uint64_t seed = 0;
-    bool resume = false, in_place = false;
+    bool resume = false, in_place = false, live = false;
     std::string start_file;
+    net::LiveSettings live_settings;
     RunCliOptions run;
   };
   auto o = std::make_shared<Options>();
@@ -100,9 +123,21 @@ void add_node(CLI::App& app, int& exit_code) {
                   "an hour)")
       ->capture_default_str()
       ->check(CLI::Range(0.001, 3600.0));
+  add_live_options(*cmd, o->live, o->live_settings);
+  cmd->add_option("--image-topic", o->live_settings.image_topic,
+                  "live (implies --live): this ROS 2 image topic instead of network.yaml's "
+                  "(sensor_msgs/msg/Image, or CompressedImage for a name ending in /compressed)");
+  cmd->add_option("--camera-info-topic", o->live_settings.camera_info_topic,
+                  "live: the camera's calibration from the first sensor_msgs/msg/CameraInfo of "
+                  "this topic when calib/ has none");
   add_run_options(*cmd, o->run, /*in_process_transport=*/false);
-  cmd->callback([o, &exit_code] {
+  cmd->callback([o, &exit_code, cmd] {
     exit_code = guarded("node", [&] {
+      const bool live = o->live || !o->live_settings.image_topic.empty();
+      if (live && cmd->count("--mode") == 0) o->mode = "async";  // a live camera's own clock
+      if (!live && (!o->live_settings.camera_info_topic.empty() || cmd->count("--duration") ||
+                    cmd->count("--idle") || cmd->count("--lag")))
+        throw InputError("--camera-info-topic, --duration, --idle and --lag need --live");
       net::NodeOptions no;
       no.run = to_image_run_options(o->run);
       require_single_estimator(no.run);
@@ -130,6 +165,7 @@ void add_node(CLI::App& app, int& exit_code) {
       no.delay_ms = o->delay;
       no.seed = o->seed;
       no.resume = o->resume;
+      if (live) no.live = o->live_settings;
       if (!o->start_file.empty()) no.start_file = o->start_file;
       if (o->start_at > 0) no.start_epoch = o->start_at;
       std::printf("netvmo node: camera %d, DDS domain %d, %s, config %s\n", o->camera, o->domain,

@@ -9,6 +9,8 @@
 #include <functional>
 #include <string>
 
+#include "netvmo/pipeline/net/live_camera.hpp"
+
 namespace netvmo::tools {
 
 /// Runs a command body; a thrown error becomes one line on stderr and exit code 1.
@@ -46,5 +48,8 @@ void add_calibrate(CLI::App& app, int& exit_code);
 /// The async options shared by `node` and `launch` (cmd_node.cpp).
 void add_async_options(CLI::App& cmd, double& speed, double& stale, double& drop, double& delay,
                        std::uint64_t& seed);
+/// --duration, --idle and --lag of a live run (node, launch) into `live`; --live itself into
+/// `on`.
+void add_live_options(CLI::App& cmd, bool& on, net::LiveSettings& live);
 
 }  // namespace netvmo::tools

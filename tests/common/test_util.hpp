@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -79,6 +80,12 @@ void expect_input_error(F f, std::initializer_list<std::string> needles) {
       EXPECT_NE(msg.find(n), std::string::npos) << msg << " lacks " << n;
     EXPECT_EQ(msg.find('\n'), std::string::npos) << "one line: " << msg;
   }
+}
+
+/// A command's standard error is one line holding every needle.
+inline void expect_one_line(const std::string& err, std::initializer_list<std::string> needles) {
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << "one line: " << err;
+  for (const auto& n : needles) EXPECT_NE(err.find(n), std::string::npos) << err << " lacks " << n;
 }
 
 }  // namespace netvmo::test

@@ -70,10 +70,15 @@ std::vector<std::string> node_argv(const LaunchSettings& s, int camera_id,
                                    "--in-place",
                                    "--domain",
                                    std::to_string(s.domain),
-                                   "--frames",
-                                   std::to_string(s.frames),
                                    "--timeout",
                                    num(s.node_timeout)};
+  if (s.frames > 0 || !s.live)
+    for (auto a : {std::string("--frames"), std::to_string(s.frames)}) argv.push_back(a);
+  if (s.live)
+    for (auto a :
+         {std::string("--live"), std::string("--duration"), num(s.live->duration_s),
+          std::string("--idle"), num(s.live->idle_s), std::string("--lag"), num(s.live->lag_s)})
+      argv.push_back(a);
   for (const auto& a : s.run_arguments) argv.push_back(a);
   if (s.async)
     for (auto a :
@@ -124,11 +129,17 @@ LaunchOutcome run_launch(const io::NetworkConfig& net, const LaunchSettings& s,
     outcome.start_epoch = now_epoch() + kLaunchStartMargin;
     io::write_file_atomic(start_file, num(outcome.start_epoch) + "\n");
     plan.kill_at += outcome.start_epoch - now_epoch();  // supervision starts now
-    std::printf(
-        "netvmo launch: async, speed %g, staleness %g s, drop %g, delay %g ms, seed %llu, "
-        "start at %.3f (epoch)\n",
-        s.speed, s.stale, s.drop, s.delay, static_cast<unsigned long long>(s.seed),
-        outcome.start_epoch);
+    if (s.live)
+      std::printf(
+          "netvmo launch: live, every node ready: waiting for images on the cameras' "
+          "topics (each run ends %g s after its camera's last image)\n",
+          s.live->idle_s);
+    else
+      std::printf(
+          "netvmo launch: async, speed %g, staleness %g s, drop %g, delay %g ms, seed %llu, "
+          "start at %.3f (epoch)\n",
+          s.speed, s.stale, s.drop, s.delay, static_cast<unsigned long long>(s.seed),
+          outcome.start_epoch);
     std::fflush(stdout);
   }
   outcome.nodes = supervise(pids, s.timeout, true, s.kill ? &plan : nullptr);

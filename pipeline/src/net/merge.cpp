@@ -130,7 +130,10 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
   const obs::Graph graph = run::network_graph(net);
   // Cameras on their own clocks: each node's rows carry its own images' times, and the merge
   // evaluates on a regular grid (below).
-  const bool own_clocks = sources::clock_mismatch(provider).has_value();
+  // A live network (sources::TopicNetwork) has no images: its nodes' rows are the only record of
+  // them, each on its camera's stamps.
+  const bool live = provider.frame_count() == 0;
+  const bool own_clocks = live || sources::clock_mismatch(provider).has_value();
   std::vector<std::vector<Row>> rows;
   std::vector<fs::path> files;
   for (const auto& c : net.cameras) {
@@ -154,7 +157,23 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
   // its latest row at or before it; estimates.csv keeps every camera's own rows and times. The
   // merged files count time from t0 (the nodes' files keep the dataset's times).
   std::vector<std::vector<const Row*>> held(n);
-  const run::TimeGrid grid = run::time_grid(provider, frames);
+  run::TimeGrid grid;
+  if (live) {  // the grid of the rows' times, as time_grid's of the images'
+    grid.dt = dt;
+    double first = INFINITY, last = -INFINITY;
+    for (const auto& r : rows)
+      if (!r.empty()) {
+        first = std::min(first, r.front().t);
+        last = std::max(last, r.back().t);
+      }
+    if (!std::isfinite(first)) throw InputError(nodes_dir.string() + ": no node ran a frame");
+    grid.t0 = first;
+    grid.frames =
+        frames > 0 ? frames : static_cast<int>(std::floor((last - first) / dt + 1e-9)) + 1;
+    frames = grid.frames;
+  } else {
+    grid = run::time_grid(provider, frames);
+  }
   const double t0 = own_clocks ? grid.t0 : 0.0;
   if (own_clocks) {
     result.source_frames.assign(static_cast<size_t>(frames), std::vector<int>(n, -1));

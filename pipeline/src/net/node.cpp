@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
@@ -15,6 +16,7 @@
 #include "netvmo/pipeline/net/ros_publisher.hpp"
 #include "netvmo/pipeline/run/camera_step.hpp"
 #include "netvmo/pipeline/run/ros_frame.hpp"
+#include "netvmo/pipeline/sources/topic_network.hpp"
 
 namespace netvmo::net {
 namespace fs = std::filesystem;
@@ -143,7 +145,16 @@ fs::path node_ready_file(const fs::path& start_file, int camera_id) {
 NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const NodeOptions& o) {
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
-  auto provider = sources::open_dataset_source(dataset, o.camera_id, o.run.keep_going);
+  const bool live = o.live.has_value();
+  std::unique_ptr<sources::NetworkSource> provider;
+  sources::TopicNetwork* topics = nullptr;  // live: the network the images are appended to
+  if (live) {
+    auto t = std::make_unique<sources::TopicNetwork>(dataset, o.camera_id);
+    topics = t.get();
+    provider = std::move(t);
+  } else {
+    provider = sources::open_dataset_source(dataset, o.camera_id, o.run.keep_going);
+  }
   const io::NetworkConfig& netcfg = provider->network();
   sources::require_static_cameras(*provider, "a camera process (netvmo launch, node)");
   sources::require_single_target(*provider, "a camera process (netvmo launch, node)");
@@ -173,6 +184,10 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
       std::chrono::system_clock::now().time_since_epoch() / std::chrono::nanoseconds(1));
   net.set_incarnation(incarnation);
   const bool async = o.dds.mode == Mode::async;
+  if (live && !async)
+    throw InputError(
+        "a live camera (--live, --image-topic) runs on its images' stamps: --mode "
+        "async");
   if (!async && netcfg.camera_fps(si) != netcfg.fps)
     throw InputError(netcfg.source + ": cameras[" + std::to_string(si) + "].fps: camera " +
                      std::to_string(o.camera_id) +
@@ -186,9 +201,11 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
                       o.run.runner.rounds);
   const int own_frames = provider->camera_frame_count(si);
   const auto frame_time = [&](int k) { return async ? provider->frame_time(si, k) : k * dt; };
+  std::optional<LiveCamera> camera;  // live: the image stream
   const auto frame_length = [&](int k) {
     if (!async) return dt;
-    const double len = k + 1 < own_frames ? frame_time(k + 1) - frame_time(k) : dt_own;
+    const bool next = camera ? camera->wait_frame(k + 1, 0.0) : k + 1 < own_frames;
+    const double len = next ? frame_time(k + 1) - frame_time(k) : dt_own;
     return len > 0 ? len : dt_own;  // (a missing image without a time)
   };
   // Sub-steps as NetworkedObserver::substeps, by the same stability rule for each frame's
@@ -205,13 +222,16 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   frontend::FrontEnd front_end(ds, o.run.tracking);
   frontend::TrackState track;
 
-  int frames = o.frames ? *o.frames : provider->frame_count();
+  int frames = o.frames ? *o.frames
+               : live   ? std::numeric_limits<int>::max()
+                        : provider->frame_count();
   if (o.run.max_frames) frames = std::min(frames, *o.run.max_frames);
-  const int dataset_frames = frames;  // the run's, on the dataset's clock
+  // The run's, on the dataset's clock (live: none; the merge takes the nodes' rows' times).
+  const int dataset_frames = live ? 0 : frames;
   // Async: the run covers `frames` frames of the dataset's clock from the earliest camera's
   // first image (t0); this camera runs its own images within that span.
   double t0 = 0.0;
-  if (async) {
+  if (async && !live) {
     t0 = provider->frame_time(0, 0);
     for (size_t i = 1; i < n; ++i) t0 = std::min(t0, provider->frame_time(i, 0));
     const double t_end = t0 + frames * dt;
@@ -224,20 +244,26 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   dds.graph_digest = graph_digest(labels, netcfg.edges);
   DdsTransport transport(self, graph.neighbors(self), labels, dds);
   transport.wait_for_writers(static_cast<int>(graph.neighbors(self).size()), o.dds.timeout_s);
-  // The camera's ROS 2 topics (RosPublisher): its pose in the rig once, on rt/tf_static.
   std::optional<RosPublisher> ros;
-  if (o.publish_ros_pose) {
-    ros.emplace(transport.participant(), o.camera_id);
-    ros->tf_static({run::camera_transform(o.camera_id, frame_time(0), g_wi)});
-  }
+  if (o.publish_ros_pose) ros.emplace(transport.participant(), o.camera_id);
 
   io::ensure_directory(out_dir);
   const NodeFiles files = node_files(out_dir, o.camera_id);
   std::optional<double> start_epoch = o.start_epoch;
+  // Live: the image topic is read once the node is set up and matched with its neighbours.
+  if (live) camera.emplace(o.dds.domain, *topics, si, *o.live);
   if (async && o.start_file) {  // ready: tell the launcher, then wait for the common start
     io::write_file_atomic(node_ready_file(*o.start_file, o.camera_id), "ready\n");
-    start_epoch = read_start(*o.start_file, o.dds.timeout_s);
+    if (!live) start_epoch = read_start(*o.start_file, o.dds.timeout_s);
   }
+  // Live: the node's clock starts at the first image.
+  if (live) {
+    camera->wait_frame(0, o.dds.timeout_s);
+    t0 = frame_time(0);
+    start_epoch = camera->first_wall() + o.live->lag_s;
+  }
+  // The camera's ROS 2 topics (RosPublisher): its pose in the rig once, on rt/tf_static.
+  if (ros) ros->tf_static({run::camera_transform(o.camera_id, frame_time(0), g_wi)});
   NodeSummary summary;
   summary.notes = provider->notes();
   summary.substeps = substeps(dt_own, net);
@@ -246,7 +272,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   if (async && !(o.speed > 0)) throw InputError("--speed must be > 0");
   // A node started after the common start (a restart) joins at its next image, on schedule.
   int first = 0;
-  if (async && start_epoch) {
+  if (async && start_epoch && !live) {
     const double now_cam = t0 + (now_epoch() - start) * o.speed;
     while (first < frames && frame_time(first) < now_cam) ++first;
   }
@@ -265,7 +291,8 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
                          o.seed * 1000003ULL + static_cast<std::uint64_t>(o.camera_id), now_epoch);
   obs::Transport& exchange = async ? static_cast<obs::Transport&>(faulty) : transport;
   std::vector<run::CameraFrame> cams;
-  for (int k = first; k < frames; ++k) {
+  int k = first;
+  for (; k < frames && (!camera || camera->wait_frame(k, 0.0)); ++k) {
     cv::Mat image;
     if (const auto error = run::observe_camera(*provider, si, k, front_end, track, targets,
                                                o.run.keep_going, image, cams)) {
@@ -343,6 +370,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   transport.flush(async ? 0.2 : 5.0);
   csv.commit();
   links.commit();
+  if (live) frames = k;
   summary.frames = frames;
   summary.stats = transport.stats();
   summary.stats.dropped = faulty.dropped();
@@ -355,6 +383,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   j["domain"] = o.dds.domain;
   j["frames"] = frames;
   j["dataset_frames"] = dataset_frames;
+  if (live) j["image_topic"] = camera->image_topic();
   // What the merge of the run's outputs needs (netvmo merge): the same for every node of a run.
   j["options"] = {{"estimator", o.run.runner.estimator},
                   {"k_e", o.run.runner.k_e},

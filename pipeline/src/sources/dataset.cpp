@@ -226,6 +226,24 @@ io::Calibration bag_calibration(const fs::path& dir, const std::string& topic) {
 
 }  // namespace
 
+std::optional<io::Calibration> find_calibration(const fs::path& dir, int camera_id) {
+  const std::string name = "cam_" + std::to_string(camera_id);
+  const fs::path cdir = dir / "calib";
+  for (const char* ext : {".yaml", ".yml"})
+    if (fs::exists(cdir / (name + ext))) return io::load_calibration_yaml(cdir / (name + ext));
+  const fs::path xml = cdir / (name + ".xml");
+  if (fs::exists(xml))
+    return looks_like_opencv_storage(xml) ? io::load_calibration_opencv(xml)
+                                          : io::load_calibration_visp_xml(xml, name);
+  return std::nullopt;
+}
+
+std::string calibration_not_found(const fs::path& dir, int camera_id) {
+  const std::string name = "cam_" + std::to_string(camera_id);
+  return (dir / "calib" / (name + ".yaml")).string() + ": calibration not found for camera " +
+         std::to_string(camera_id) + " (also looked for " + name + ".yml and " + name + ".xml)";
+}
+
 obs::SE3 Dataset::camera_pose(size_t camera_index, int frame) const {
   const DatasetCamera& cam = cameras.at(camera_index);
   if (cam.poses.empty()) return network.cameras.at(camera_index).g_wi;
@@ -283,8 +301,9 @@ Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera, bool k
           std::pair{"camera_info_topic", ds.network.cameras[i].camera_info_topic}})
       if (topic)
         throw InputError((dir / "network.yaml").string() + ": cameras[" + std::to_string(i) + "]." +
-                         key + ": only a rosbag2 bag's dataset names topics (" + dir.string() +
-                         " has no metadata.yaml)");
+                         key + ": only a rosbag2 bag's dataset (" + dir.string() +
+                         " has no metadata.yaml) or a live folder (launch, node --live) names "
+                         "topics");
 
   std::set<std::string> declared;
   for (const auto& cc : ds.network.cameras) {
@@ -297,23 +316,13 @@ Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera, bool k
       continue;
     }
     // Calibration
-    const fs::path cdir = dir / "calib";
-    const fs::path yaml = cdir / (name + ".yaml"), yml = cdir / (name + ".yml"),
-                   xml = cdir / (name + ".xml");
-    const auto load_yaml = [](const fs::path& p) { return io::load_calibration_yaml(p); };
-    if (fs::exists(yaml)) {
-      cam.calib = load_yaml(yaml);
-    } else if (fs::exists(yml)) {
-      cam.calib = load_yaml(yml);
-    } else if (fs::exists(xml)) {
-      cam.calib = looks_like_opencv_storage(xml) ? io::load_calibration_opencv(xml)
-                                                 : io::load_calibration_visp_xml(xml, name);
+    if (auto calib = find_calibration(dir, cc.id)) {
+      cam.calib = std::move(*calib);
     } else if (bag && cc.camera_info_topic) {
       cam.calib = bag_calibration(dir, *cc.camera_info_topic);
     } else {
-      throw InputError(yaml.string() + ": calibration not found for camera " +
-                       std::to_string(cc.id) + " (also looked for " + name + ".yml and " + name +
-                       ".xml" + (bag ? "; network.yaml names no camera_info_topic for it)" : ")"));
+      throw InputError(calibration_not_found(dir, cc.id) +
+                       (bag ? "; network.yaml names no camera_info_topic for it" : ""));
     }
     // Frames: a bag's image topic, or exactly one entry of one registered stream kind (image
     // folder, video, ...).

@@ -12,10 +12,11 @@
 //     - {id: 1, p_wi: [x, y, z], r_wi: [rx, ry, rz]}   # r_wi: rotation vector of R_wi
 //       fps: 15                               # optional: this camera's own frame rate (> 0;
 //                                             #   default: the dataset's fps)
-//       image_topic: /cam1/image_raw          # a rosbag2 bag's dataset only: the camera's
-//                                             #   sensor_msgs Image or CompressedImage topic
-//       camera_info_topic: /cam1/camera_info  # optional, a bag's: its calibration, where
-//                                             #   calib/ has none
+//       image_topic: /cam1/image_raw          # a rosbag2 bag's dataset or a live folder only:
+//                                             #   the camera's sensor_msgs Image or
+//                                             #   CompressedImage topic
+//       camera_info_topic: /cam1/camera_info  # optional, a bag's or a live folder's: its
+//                                             #   calibration, where calib/ has none
 //   edges: [[1, 2], [2, 3]]                   # undirected communication graph (camera ids)
 //
 // Read strictly: a misspelt or unknown key anywhere is an InputError naming network.yaml and

@@ -49,6 +49,9 @@ struct LaunchSettings {
   /// The node's share of the run options (gains, error model, estimator, ...), as arguments.
   std::vector<std::string> run_arguments;
   std::optional<NodeKill> kill;  ///< async only
+  /// Live (async): every node reads its camera's image topic of network.yaml (NodeOptions::live;
+  /// the topics there, so image_topic and camera_info_topic are left empty here).
+  std::optional<LiveSettings> live;
 };
 
 /// Async: the common start is this many seconds after every node is ready.

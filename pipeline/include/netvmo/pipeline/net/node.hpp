@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "netvmo/pipeline/net/dds_transport.hpp"
+#include "netvmo/pipeline/net/live_camera.hpp"
 #include "netvmo/pipeline/run/image_run.hpp"
 
 namespace netvmo::net {
@@ -51,6 +52,13 @@ struct NodeOptions {
   double drop = 0.0;       ///< probability that a received message is dropped (seeded)
   double delay_ms = 0.0;   ///< every received message is handed to the observer this late
   std::uint64_t seed = 0;  ///< seed of the drops (with the camera id)
+  /// Live (async only): the camera's images come from its ROS 2 image topic (LiveCamera) and
+  /// DATASET holds network.yaml and calib/ only (sources::TopicNetwork). The node's clock is the
+  /// images' stamps: frame k is image k, integrated from its stamp to the next image's once that
+  /// has come, its rounds due `lag_s` after the wall time the first image came plus their stamp's
+  /// distance from it (/ speed); `frames` bounds the frames, the stream's end (LiveSettings) ends
+  /// the run. Neither a common start nor a join-late restart applies.
+  std::optional<LiveSettings> live;
   /// A restart (`launch --restart-after`): keep the killed predecessor's finished rows of
   /// node_<id>.csv.partial in out_dir (frames before the one this node joins at). `netvmo node`
   /// makes out_dir the predecessor's folder: its staging folder (io::OutputDir with resume), or
@@ -95,8 +103,10 @@ NodeSummary run_node(const std::filesystem::path& dataset, const std::filesystem
 /// Reads every camera's node_<id>.csv from nodes_dir and rebuilds the in-process run's result
 /// (history with the same evaluation, front-end frames, substeps, step factor) for `frames`
 /// frames. With `allow_gaps` (async runs with restarts) a frame a node has no row for counts as
-/// blind and uninitialised there; otherwise every frame must be present. Throws InputError naming
-/// the file on a missing or malformed one.
+/// blind and uninitialised there; otherwise every frame must be present. A provider without
+/// images (a live network, sources::TopicNetwork) is evaluated on the grid of its nodes' rows'
+/// times (`frames` 0: up to the last row). Throws InputError naming the file on a missing or
+/// malformed one.
 run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
                                 const run::ImageRunOptions& options,
                                 const std::filesystem::path& nodes_dir, int frames,

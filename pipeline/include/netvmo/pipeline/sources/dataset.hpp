@@ -90,6 +90,12 @@ struct Dataset {
   obs::SE3 camera_pose(size_t camera_index, int frame) const;
 };
 
+/// Camera `camera_id`'s calibration in `dir`/calib (cam_<id>.yaml, .yml or .xml, in that order;
+/// the formats above), or nothing when there is none. Throws InputError naming a bad file.
+std::optional<io::Calibration> find_calibration(const std::filesystem::path& dir, int camera_id);
+/// The one-line message for a camera without a calibration file in `dir`/calib.
+std::string calibration_not_found(const std::filesystem::path& dir, int camera_id);
+
 /// Opens a dataset folder: network.yaml, then for every camera its calibration and its image
 /// folder or video. Throws InputError naming the offending file (missing calibration, no
 /// images or video for a declared camera, both a folder and a video, ...). With `only_camera`
