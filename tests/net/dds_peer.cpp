@@ -1,6 +1,6 @@
-// A test participant of the estimates topic, in its own process.
+// A test participant of the estimate topics, in its own process.
 //   dds_peer peer  DOMAIN SELF NEIGHBOUR ROUNDS WRITERS OUT   one camera of a two-camera network
-//   dds_peer rogue DOMAIN ROUNDS SECONDS                       garbage on the topic
+//   dds_peer rogue DOMAIN ROUNDS SECONDS                       garbage on both peers' topics
 //   dds_peer ros   DOMAIN CAMERA COUNT SECONDS OUT             reads a camera's PoseStamped topic
 //     until COUNT samples or SECONDS; OUT: "sec nanosec frame_id px py pz qw qx qy qz" per sample
 //   dds_peer tf    DOMAIN CAMERA STATIC COUNT SECONDS OUT      reads rt/tf_static, rt/tf and camera
@@ -74,22 +74,25 @@ int peer(int domain, int self, int neighbour, int rounds, int writers, const cha
 }
 
 int rogue(int domain, int rounds, double seconds) {
-  net::RawEstimateWriter w(domain);
+  // The peers' topics (cameras 10 and 11 at indices 0 and 1).
+  net::RawEstimateWriter w0(domain, net::estimate_topic("netvmo_estimates", 10)),
+      w1(domain, net::estimate_topic("netvmo_estimates", 11));
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (int k = 1; k <= rounds; ++k) {
     obs::EstimateMessage m;
     m.initialized = true;
     m.round = static_cast<std::uint64_t>(k);
-    m.sender = 0;  // camera 0's id with a NaN position
+    m.sender = 0;  // camera 0's index on its topic with a NaN position
     m.g_w.translation() = obs::Vec3(nan, 0, 0);
-    w.write(m);
-    m.sender = 1;  // camera 1's id with a sheared "rotation"
+    w0.write(m);
+    m.sender = 1;  // camera 1's index on its topic with a sheared "rotation"
     m.g_w = obs::SE3::Identity();
     m.g_w.linear()(0, 1) = 0.5;
-    w.write(m);
-    m.sender = 7;  // a camera that is nobody's neighbour, well-formed
+    w1.write(m);
+    m.sender = 7;  // another camera's index on both, well-formed
     m.g_w = obs::SE3::Identity();
-    w.write(m);
+    w0.write(m);
+    w1.write(m);
   }
   ::usleep(static_cast<useconds_t>(seconds * 1e6));
   return 0;

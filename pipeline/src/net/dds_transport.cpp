@@ -49,7 +49,6 @@ std::uint64_t graph_digest(const std::vector<int>& camera_ids,
 namespace {
 
 using detail::check;
-using detail::make_waitset;
 
 constexpr int kMaxTake = 64;
 
@@ -113,6 +112,10 @@ std::string label(const std::vector<int>& labels, int i) {
 
 }  // namespace
 
+std::string estimate_topic(const std::string& base, int camera_id) {
+  return base + "_" + std::to_string(camera_id);
+}
+
 obs::EstimateMessage decode_estimate(const netvmo_msg_Estimate& s, std::uint64_t own_digest,
                                      int self, const std::vector<int>& labels) {
   if (own_digest != 0 && s.graph != 0 && s.graph != own_digest) {
@@ -135,18 +138,27 @@ DdsTransport::DdsTransport(int self, std::vector<int> neighbours, std::vector<in
       dds_create_participant(static_cast<dds_domainid_t>(settings_.domain), nullptr, nullptr);
   check(participant_, "create participant (check CYCLONEDDS_URI)");
   try {
-    topic_ = dds_create_topic(participant_, &netvmo_msg_Estimate_desc, settings_.topic.c_str(),
-                              nullptr, nullptr);
-    check(topic_, "create topic");
+    const auto topic = [&](int index) {
+      const std::string name =
+          estimate_topic(settings_.topic, labels_.at(static_cast<size_t>(index)));
+      return check(
+          dds_create_topic(participant_, &netvmo_msg_Estimate_desc, name.c_str(), nullptr, nullptr),
+          "create topic");
+    };
     dds_qos_t* wq = estimate_qos(settings_.mode, true);
-    writer_ = dds_create_writer(participant_, topic_, wq, nullptr);
+    writer_ = dds_create_writer(participant_, topic(self_), wq, nullptr);
     dds_delete_qos(wq);
     check(writer_, "create writer");
-    dds_qos_t* rq = estimate_qos(settings_.mode, false);
-    reader_ = dds_create_reader(participant_, topic_, rq, nullptr);
-    dds_delete_qos(rq);
-    check(reader_, "create reader");
-    make_waitset(participant_, reader_, readcond_, waitset_);
+    waitset_ = check(dds_create_waitset(participant_), "create waitset");
+    for (int j : neighbours_) {  // one reader per neighbour's topic, all on one waitset
+      dds_qos_t* rq = estimate_qos(settings_.mode, false);
+      const dds_entity_t r = dds_create_reader(participant_, topic(j), rq, nullptr);
+      dds_delete_qos(rq);
+      readers_.push_back(check(r, "create reader"));
+      readconds_.push_back(
+          check(dds_create_readcondition(r, DDS_ANY_STATE), "create read condition"));
+      check(dds_waitset_attach(waitset_, readconds_.back(), 0), "attach read condition");
+    }
   } catch (...) {
     dds_delete(participant_);
     throw;
@@ -168,24 +180,31 @@ void DdsTransport::send(const obs::EstimateMessage& m) {
 void DdsTransport::take_all() {
   void* samples[kMaxTake] = {nullptr};
   dds_sample_info_t infos[kMaxTake];
-  for (;;) {
-    const dds_return_t n = dds_take(reader_, samples, infos, kMaxTake, kMaxTake);
-    check(n, "take estimates");
-    for (dds_return_t k = 0; k < n; ++k) {
-      // (Our own writer's samples never arrive: the reader ignores its own participant.
-      // Anything else claiming our index goes to the observer, which refuses it.)
-      if (!infos[k].valid_data) continue;
-      const auto& s = *static_cast<const netvmo_msg_Estimate*>(samples[k]);
-      ++stats_.received;
-      try {
-        pending_.push_back(decode_estimate(s, settings_.graph_digest, self_, labels_));
-      } catch (const GraphMismatch&) {
-        dds_return_loan(reader_, samples, n);
-        throw;
+  for (size_t a = 0; a < readers_.size(); ++a) {
+    const dds_entity_t reader = readers_[a];
+    for (;;) {
+      const dds_return_t n = dds_take(reader, samples, infos, kMaxTake, kMaxTake);
+      check(n, "take estimates");
+      for (dds_return_t k = 0; k < n; ++k) {
+        if (!infos[k].valid_data) continue;
+        const auto& s = *static_cast<const netvmo_msg_Estimate*>(samples[k]);
+        ++stats_.received;
+        // Neighbour j's topic carries j's estimates only: a sample under another sender's
+        // index there is not j's (a misconfigured or impersonating writer) and is dropped.
+        if (s.sender != neighbours_[a]) {
+          ++stats_.foreign;
+          continue;
+        }
+        try {
+          pending_.push_back(decode_estimate(s, settings_.graph_digest, self_, labels_));
+        } catch (const GraphMismatch&) {
+          dds_return_loan(reader, samples, n);
+          throw;
+        }
       }
+      if (n > 0) dds_return_loan(reader, samples, n);
+      if (n < kMaxTake) break;
     }
-    if (n > 0) dds_return_loan(reader_, samples, n);
-    if (n < kMaxTake) return;
   }
 }
 
@@ -194,7 +213,8 @@ bool DdsTransport::poll(double us) const {
   const auto until =
       std::chrono::steady_clock::now() + std::chrono::duration<double, std::micro>(us);
   for (;;) {
-    if (dds_triggered(readcond_) > 0) return true;
+    for (const dds_entity_t c : readconds_)
+      if (dds_triggered(c) > 0) return true;
     if (std::chrono::steady_clock::now() >= until) return false;
     // Gives the core to a runnable thread, above all this machine's DDS receive threads, which
     // deliver what this one waits for.
@@ -207,15 +227,9 @@ void DdsTransport::receive(int receiver, std::vector<obs::EstimateMessage>& out)
   if (receiver != self_)
     throw std::invalid_argument("DdsTransport of camera " + label(labels_, self_) +
                                 " asked for camera " + label(labels_, receiver) + "'s messages");
-  take_all();
-  const auto is_neighbour = [&](int j) {
-    return std::find(neighbours_.begin(), neighbours_.end(), j) != neighbours_.end();
-  };
+  take_all();  // (every pending message is a neighbour's: take_all reads their topics only)
   if (settings_.mode == Mode::async) {
-    for (const auto& m : pending_) {
-      if (!is_neighbour(m.sender)) ++stats_.foreign;
-      out.push_back(m);
-    }
+    out.assign(pending_.begin(), pending_.end());
     pending_.clear();
     return;
   }
@@ -227,9 +241,7 @@ void DdsTransport::receive(int receiver, std::vector<obs::EstimateMessage>& out)
     for (auto it = pending_.begin(); it != pending_.end();) {
       const auto& m = *it;
       const auto a = std::find(neighbours_.begin(), neighbours_.end(), m.sender);
-      if (a == neighbours_.end()) {
-        ++stats_.foreign;
-      } else if (m.round > round_) {
+      if (m.round > round_) {
         ++it;  // a neighbour already in a later round: keep it for that round
         continue;
       } else if (m.round < round_) {
@@ -272,9 +284,13 @@ void DdsTransport::flush(double timeout_s) {
 bool DdsTransport::wait_for_writers(int count, double timeout_s) {
   const auto t0 = std::chrono::steady_clock::now();
   for (;;) {
-    dds_subscription_matched_status_t st;
-    check(dds_get_subscription_matched_status(reader_, &st), "matched status");
-    if (static_cast<int>(st.current_count) >= count) return true;
+    int matched = 0;
+    for (const dds_entity_t r : readers_) {
+      dds_subscription_matched_status_t st;
+      check(dds_get_subscription_matched_status(r, &st), "matched status");
+      matched += static_cast<int>(st.current_count);
+    }
+    if (matched >= count) return true;
     if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeout_s)
       return false;
     dds_sleepfor(DDS_MSECS(10));

@@ -246,9 +246,10 @@ MergedRun merge_run_outputs(sources::NetworkSource& provider, const run::ImageRu
 }
 
 std::string message_table(const json& messages, const io::NetworkConfig& net) {
-  // Every node reads the one estimates topic: messages of non-neighbours are ignored (and
-  // counted apart from those refused as malformed or out of order).
-  std::string t = "messages: camera    sent  received  dropped  late  non-neighbour  rejected\n";
+  // Every node reads its neighbours' estimate topics: a sample there under another sender's
+  // index (dropped by the transport) or from a non-neighbour (refused by the observer) is
+  // foreign, counted apart from those refused as malformed or out of order.
+  std::string t = "messages: camera    sent  received  dropped  late  foreign  rejected\n";
   char line[200];
   for (const auto& c : net.cameras) {
     const auto& m = messages[std::to_string(c.id)];
@@ -257,11 +258,11 @@ std::string message_table(const json& messages, const io::NetworkConfig& net) {
       t += line;
       continue;
     }
-    unsigned long long rejected = 0, foreign = 0;
+    unsigned long long rejected = 0, foreign = m.value("foreign", 0ULL);
     for (const auto& [k, v] : m["rejected"].items())
       (k == obs::to_string(obs::MessageVerdict::not_a_neighbour) ? foreign : rejected) +=
           v.get<unsigned long long>();
-    std::snprintf(line, sizeof line, "          %6d  %6llu  %8llu  %7llu  %4llu  %13llu  %8llu\n",
+    std::snprintf(line, sizeof line, "          %6d  %6llu  %8llu  %7llu  %4llu  %7llu  %8llu\n",
                   c.id, m["sent"].get<unsigned long long>(),
                   m["received"].get<unsigned long long>(), m["dropped"].get<unsigned long long>(),
                   m["late"].get<unsigned long long>(), foreign, rejected);

@@ -383,7 +383,10 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   j["domain"] = o.dds.domain;
   j["frames"] = frames;
   j["dataset_frames"] = dataset_frames;
-  if (live) j["image_topic"] = camera->image_topic();
+  if (live) {
+    j["image_topic"] = camera->image_topic();
+    j["images_out_of_order"] = camera->out_of_order();  // dropped: stamp not after the last
+  }
   // What the merge of the run's outputs needs (netvmo merge): the same for every node of a run.
   j["options"] = {{"estimator", o.run.runner.estimator},
                   {"k_e", o.run.runner.k_e},

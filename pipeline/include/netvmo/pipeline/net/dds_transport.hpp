@@ -1,7 +1,10 @@
 // obs::Transport over Eclipse Cyclone DDS: one camera's side of the exchange, in its own
-// process. Every camera publishes its EstimateMessage on the topic "netvmo_estimates"
-// (type netvmo::msg::Estimate, pipeline/idl/NetvmoEstimate.idl) and reads everyone's; the
-// checks of a message (neighbour, finite, rotation, order) are CameraObserver::receive's.
+// process. Camera <id> publishes its EstimateMessage on its own topic "netvmo_estimates_<id>"
+// (type netvmo::msg::Estimate, pipeline/idl/NetvmoEstimate.idl) and reads its neighbours' topics
+// only, so that a node receives |N_i| messages a round, not one from every camera (and DDS
+// Security's permissions can name who may write each topic). A sample on neighbour j's topic
+// under another sender's index is dropped (counted as foreign); the checks of a message (finite,
+// rotation, order) are CameraObserver::receive's.
 //
 // Lock-step: reliable, transient-local (a late-joining reader still gets the first rounds),
 // keep-all at the reader. receive() blocks until the current round's message of every
@@ -40,11 +43,15 @@ struct DdsSettings {
   /// taken without the thread wake-up a waitset costs (tens of us on a virtual machine, as much
   /// as the message's trip itself; docs/benchmarks.md). 0: sleep at once.
   double poll_us = 50.0;
+  /// The estimate topics' base name: camera <id> publishes on <topic>_<id> (estimate_topic).
   std::string topic = "netvmo_estimates";
   /// This camera's graph_digest() of network.yaml, sent with every estimate; a received estimate
   /// carrying another non-zero digest throws GraphMismatch. 0: none sent, nothing checked.
   std::uint64_t graph_digest = 0;
 };
+
+/// Camera `camera_id`'s estimate topic: "<base>_<id>".
+std::string estimate_topic(const std::string& base, int camera_id);
 
 /// 64-bit FNV-1a digest of a communication graph: the camera ids in network.yaml order, then the
 /// edges as sorted (smaller id, larger id) pairs. Never 0.
@@ -71,10 +78,10 @@ struct DdsTimeout : std::runtime_error {
 /// What crossed this camera's side of the transport.
 struct MessageStats {
   std::uint64_t sent = 0;      ///< estimates published
-  std::uint64_t received = 0;  ///< samples taken from the topic (never this camera's own)
+  std::uint64_t received = 0;  ///< samples taken from the neighbours' topics
   std::uint64_t dropped = 0;   ///< discarded on purpose before the observer (fault injection)
   std::uint64_t late = 0;      ///< a neighbour's message of an earlier round than expected
-  std::uint64_t foreign = 0;   ///< from a sender that is not a neighbour
+  std::uint64_t foreign = 0;   ///< on a neighbour's topic under another sender's index (dropped)
 };
 
 class DdsTransport final : public obs::Transport {
@@ -97,8 +104,8 @@ class DdsTransport final : public obs::Transport {
   /// Waits until every reliable reader has acknowledged what this camera sent (before exit).
   void flush(double timeout_s);
 
-  /// Waits until at least `count` writers of other participants (this camera's own writer never
-  /// matches: its reader ignores its own participant) match the estimates reader, or
+  /// Waits until at least `count` writers of other participants match the neighbours' readers
+  /// in all (each neighbour's node has one: `count` = |N_i| waits for every neighbour), or
   /// `timeout_s` passes; returns whether they did.
   bool wait_for_writers(int count, double timeout_s);
 
@@ -112,17 +119,17 @@ class DdsTransport final : public obs::Transport {
   int self_;
   std::vector<int> neighbours_, labels_;
   DdsSettings settings_;
-  std::int32_t participant_ = 0, topic_ = 0, writer_ = 0, reader_ = 0;
-  std::int32_t waitset_ = 0, readcond_ = 0;
-  std::uint64_t round_ = 0;  ///< the round of this camera's last send()
+  std::int32_t participant_ = 0, writer_ = 0, waitset_ = 0;
+  std::vector<std::int32_t> readers_, readconds_;  ///< by neighbour, in neighbours_' order
+  std::uint64_t round_ = 0;                        ///< the round of this camera's last send()
   std::deque<obs::EstimateMessage> pending_;
   MessageStats stats_;
 };
 
-/// Publishes arbitrary estimate messages on the estimates topic (tests: a rogue participant).
+/// Publishes arbitrary estimate messages on one estimate topic (tests: a rogue participant).
 class RawEstimateWriter {
  public:
-  RawEstimateWriter(int domain, const std::string& topic = "netvmo_estimates");
+  RawEstimateWriter(int domain, const std::string& topic);
   ~RawEstimateWriter();
   RawEstimateWriter(const RawEstimateWriter&) = delete;
   RawEstimateWriter& operator=(const RawEstimateWriter&) = delete;
