@@ -74,6 +74,7 @@ void add_launch(CLI::App& app, int& exit_code) {
     double speed = 1.0, stale = 0.25, drop = 0.0, delay = 0.0, restart_after = -1.0;
     bool live = false;
     net::LiveSettings live_settings;
+    std::string security;
     RunCliOptions run;
   };
   auto o = std::make_shared<Options>();
@@ -119,6 +120,9 @@ void add_launch(CLI::App& app, int& exit_code) {
       ->capture_default_str()
       ->check(CLI::Range(0.001, 3600.0));
   add_live_options(*cmd, o->live, o->live_settings);
+  cmd->add_option("--security", o->security,
+                  "DDS Security: every node with its cam_<id> identity of this folder (netvmo "
+                  "security init)");
   add_run_options(*cmd, o->run, /*in_process_transport=*/false);
   cmd->callback([o, &exit_code, cmd] {
     exit_code = guarded("launch", [&] {
@@ -191,6 +195,11 @@ void add_launch(CLI::App& app, int& exit_code) {
       ls.run_arguments = forwarded(o->run);
       ls.kill = kill;
       if (o->live) ls.live = o->live_settings;
+      if (!o->security.empty()) {
+        for (const auto& c : netcfg.cameras)  // every node's files, before any starts
+          net::security_identity(o->security, net::camera_identity(c.id));
+        ls.security = fs::absolute(o->security);
+      }
       const auto outcome = net::run_launch(netcfg, ls, nodes);
       // The logs of a failed launch are kept in OUT.failed/; OUT is untouched.
       net::check_launch(outcome, netcfg, ls, nodes, fs::path(o->out + ".failed") / "nodes",

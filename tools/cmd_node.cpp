@@ -70,7 +70,7 @@ void add_node(CLI::App& app, int& exit_code) {
     double timeout = 20.0, speed = 1.0, stale = 0.25, drop = 0.0, delay = 0.0, start_at = 0.0;
     std::uint64_t seed = 0;
     bool resume = false, in_place = false, live = false;
-    std::string start_file;
+    std::string start_file, security;
     net::LiveSettings live_settings;
     RunCliOptions run;
   };
@@ -124,6 +124,9 @@ void add_node(CLI::App& app, int& exit_code) {
       ->capture_default_str()
       ->check(CLI::Range(0.001, 3600.0));
   add_live_options(*cmd, o->live, o->live_settings);
+  cmd->add_option("--security", o->security,
+                  "DDS Security: this folder's cam_<id> identity, certificates and permissions "
+                  "(netvmo security init; docs/processes.md, \"Security\")");
   cmd->add_option("--image-topic", o->live_settings.image_topic,
                   "live (implies --live): this ROS 2 image topic instead of network.yaml's "
                   "(sensor_msgs/msg/Image, or CompressedImage for a name ending in /compressed)");
@@ -166,6 +169,8 @@ void add_node(CLI::App& app, int& exit_code) {
       no.seed = o->seed;
       no.resume = o->resume;
       if (live) no.live = o->live_settings;
+      if (!o->security.empty())
+        no.dds.security = net::security_identity(o->security, net::camera_identity(o->camera));
       if (!o->start_file.empty()) no.start_file = o->start_file;
       if (o->start_at > 0) no.start_epoch = o->start_at;
       std::printf("netvmo node: camera %d, DDS domain %d, %s, config %s\n", o->camera, o->domain,

@@ -17,6 +17,7 @@ void add_play(CLI::App& app, int& exit_code) {
     std::string dataset;
     net::PlaySettings play;
     bool no_camera_info = false, quiet = false;
+    std::string security;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = add_command(
@@ -50,9 +51,13 @@ void add_play(CLI::App& app, int& exit_code) {
       ->capture_default_str()
       ->check(CLI::Range(0.1, 3600.0));
   cmd->add_flag("--quiet", o->quiet, "no progress bar");
+  cmd->add_option("--security", o->security,
+                  "DDS Security: publish as the `player` identity of this folder (netvmo security "
+                  "init)");
   cmd->callback([o, &exit_code]() {
     exit_code = guarded("play", [&]() {
       o->play.camera_info = !o->no_camera_info;
+      if (!o->security.empty()) o->play.security = net::security_identity(o->security, "player");
       // The loopback-only configuration, given inline, when the user has none.
       if (!std::getenv("CYCLONEDDS_URI"))
         ::setenv("CYCLONEDDS_URI", net::loopback_config_xml().c_str(), 1);

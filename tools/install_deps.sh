@@ -12,6 +12,8 @@ packages=(
   libceres-dev
   # rosbag2 bags as datasets (their sqlite3 storage).
   libsqlite3-dev
+  # DDS Security's test PKI (netvmo security init: keys, certificates, signed documents).
+  libssl-dev
   # A real photo of printed tags every machine can have (ViSP's AprilTag.pgm, read in place by
   # the test RealPhotos.DeskPhoto*; GPL-2 data of Debian's ViSP packaging, not copied here).
   visp-images-data

@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
   netvmo::tools::add_node(app, exit_code);
   netvmo::tools::add_launch(app, exit_code);
   netvmo::tools::add_merge(app, exit_code);
+  netvmo::tools::add_security(app, exit_code);
   if (argc == 1) {
     std::fputs(app.help().c_str(), stdout);
     return 1;

@@ -1,6 +1,8 @@
 // A test participant of the estimate topics, in its own process.
 //   dds_peer peer  DOMAIN SELF NEIGHBOUR ROUNDS WRITERS OUT   one camera of a two-camera network
 //   dds_peer rogue DOMAIN ROUNDS SECONDS                       garbage on both peers' topics
+//   dds_peer writer DOMAIN TOPIC SECDIR IDENTITY SECONDS OUT   a (secured) estimate writer: see
+//     writer() below
 //   dds_peer ros   DOMAIN CAMERA COUNT SECONDS OUT             reads a camera's PoseStamped topic
 //     until COUNT samples or SECONDS; OUT: "sec nanosec frame_id px py pz qw qx qy qz" per sample
 //   dds_peer tf    DOMAIN CAMERA STATIC COUNT SECONDS OUT      reads rt/tf_static, rt/tf and camera
@@ -19,6 +21,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <memory>
+#include <optional>
 #include <string>
 
 #include "dds_peer_setup.hpp"
@@ -181,6 +185,44 @@ int tf(int domain, int camera, int statics, int count, double seconds, const cha
   std::fclose(f);
   return 0;
 }
+// A writer of estimate topic TOPIC as identity IDENTITY of security folder SECDIR ("-": unsecured):
+// OUT gets "refused <why>" when the writer cannot be created, else "matched N" once a reader
+// matches (or after SECONDS); a matched writer then writes 5 estimates of camera index 0.
+int writer(int domain, const std::string& topic, const std::string& secdir,
+           const std::string& identity, double seconds, const char* out) {
+  std::FILE* f = std::fopen(out, "w");
+  if (!f) return 3;
+  std::optional<net::SecurityIdentity> id;
+  if (secdir != "-") id = net::security_identity(secdir, identity);
+  std::unique_ptr<net::RawEstimateWriter> w;
+  try {
+    w = std::make_unique<net::RawEstimateWriter>(domain, topic, id ? &*id : nullptr);
+  } catch (const std::runtime_error& e) {
+    std::fprintf(f, "refused %s\n", e.what());
+    std::fclose(f);
+    return 0;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  while (w->matched_readers() == 0 &&
+         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < seconds)
+    ::usleep(20000);
+  const int matched = w->matched_readers();
+  if (matched > 0) {
+    ::usleep(300000);  // the match on both sides
+    for (int k = 1; k <= 5; ++k) {
+      obs::EstimateMessage m;
+      m.sender = 0;
+      m.round = static_cast<std::uint64_t>(k);
+      m.initialized = true;
+      w->write(m);
+    }
+    ::usleep(500000);  // reliable delivery
+  }
+  std::fprintf(f, "matched %d\n", matched);
+  std::fclose(f);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -195,6 +237,8 @@ int main(int argc, char** argv) {
     if (what == "tf" && argc == 8)
       return tf(std::atoi(argv[2]), std::atoi(argv[3]), std::atoi(argv[4]), std::atoi(argv[5]),
                 std::atof(argv[6]), argv[7]);
+    if (what == "writer" && argc == 8)
+      return writer(std::atoi(argv[2]), argv[3], argv[4], argv[5], std::atof(argv[6]), argv[7]);
     if (what == "rogue" && argc == 5)
       return rogue(std::atoi(argv[2]), std::atoi(argv[3]), std::atof(argv[4]));
   } catch (const std::exception& e) {
@@ -204,6 +248,6 @@ int main(int argc, char** argv) {
   std::fprintf(stderr,
                "usage: dds_peer peer DOMAIN SELF NEIGHBOUR ROUNDS WRITERS OUT | rogue DOMAIN "
                "ROUNDS SECONDS | ros DOMAIN CAMERA COUNT SECONDS OUT | tf DOMAIN CAMERA STATIC "
-               "COUNT SECONDS OUT\n");
+               "COUNT SECONDS OUT | writer DOMAIN TOPIC SECDIR IDENTITY SECONDS OUT\n");
   return 64;
 }

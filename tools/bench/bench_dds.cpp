@@ -15,6 +15,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <time.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
@@ -30,6 +32,7 @@
 #include "netvmo/pipeline/net/cyclone_config.hpp"
 #include "netvmo/pipeline/net/dds_transport.hpp"
 #include "netvmo/pipeline/net/process.hpp"
+#include "netvmo/pipeline/net/security.hpp"
 
 using namespace netvmo;
 
@@ -91,11 +94,14 @@ std::optional<Anchor> ddsperf_anchor(const std::filesystem::path& dir, int domai
 }
 
 void run_rounds(int self, int domain, int rounds, double poll_us, benchmark::State* state,
-                std::vector<double>* round_us = nullptr) {
+                std::vector<double>* round_us = nullptr, const std::filesystem::path& security = {},
+                double* cpu_s = nullptr) {
   net::DdsSettings ds;
   ds.domain = domain;
   ds.timeout_s = 10.0;
   ds.poll_us = poll_us;
+  if (!security.empty())  // cameras 1 and 2 of the test PKI
+    ds.security = net::security_identity(security, net::camera_identity(self + 1));
   net::DdsTransport t(self, {1 - self}, {1, 2}, ds);
   t.wait_for_writers(1, 10.0);
   obs::CameraObserver cam(self, {1 - self}, obs::ObserverSettings{});
@@ -106,6 +112,8 @@ void run_rounds(int self, int domain, int rounds, double poll_us, benchmark::Sta
     for (const auto& m : inbox) cam.receive(m);
     cam.step(1e-3);
   };
+  timespec c0{}, c1{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
   if (state) {
     for (auto _ : *state) {
       const auto t0 = std::chrono::steady_clock::now();
@@ -118,22 +126,38 @@ void run_rounds(int self, int domain, int rounds, double poll_us, benchmark::Sta
   } else {
     for (int k = 0; k < rounds; ++k) round();
   }
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
+  if (cpu_s) *cpu_s = static_cast<double>(c1.tv_sec - c0.tv_sec) + 1e-9 * (c1.tv_nsec - c0.tv_nsec);
   t.flush(5.0);
 }
 
-void BM_LockStepRoundTwoProcesses(benchmark::State& state) {
+// The round between two processes; `secured`: both with DDS Security (a test PKI of cameras 1
+// and 2: authenticated, access-controlled, every message encrypted).
+void lock_step_rounds(benchmark::State& state, bool secured) {
   const auto poll_us = static_cast<double>(state.range(0));
   const auto dir =
       std::filesystem::temp_directory_path() / ("netvmo_bench_dds_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   net::write_loopback_config(dir / "cyclonedds.xml");
   net::use_config(dir / "cyclonedds.xml");
+  std::filesystem::path security;
+  if (secured) {
+    io::NetworkConfig net;
+    for (int id : {1, 2}) {
+      io::CameraConfig c;
+      c.id = id;
+      net.cameras.push_back(c);
+    }
+    net.edges = {{1, 2}};
+    security = dir / "security";
+    net::write_test_pki(security, net);
+  }
   const int domain = net::domain_from_pid(::getpid());
   const auto anchor = ddsperf_anchor(dir, domain);
   const pid_t peer = ::fork();
   if (peer == 0) {
     try {
-      run_rounds(1, domain, kRounds, poll_us, nullptr);
+      run_rounds(1, domain, kRounds, poll_us, nullptr, nullptr, security);
     } catch (...) {
       ::_exit(1);
     }
@@ -141,7 +165,9 @@ void BM_LockStepRoundTwoProcesses(benchmark::State& state) {
   }
   std::vector<double> us;
   us.reserve(kRounds);
-  run_rounds(0, domain, kRounds, poll_us, &state, &us);
+  double cpu_s = 0.0;
+  run_rounds(0, domain, kRounds, poll_us, &state, &us, security, &cpu_s);
+  state.counters["cpu_us_per_round"] = 1e6 * cpu_s / static_cast<double>(state.iterations());
   int status = 0;
   ::waitpid(peer, &status, 0);
   std::filesystem::remove_all(dir);
@@ -162,7 +188,20 @@ void BM_LockStepRoundTwoProcesses(benchmark::State& state) {
     }
   }
 }
-// DdsSettings::poll_us: 0 (every wait sleeps on the waitset) and the default.
+void BM_LockStepRoundTwoProcesses(benchmark::State& state) {
+  lock_step_rounds(state, false);
+}
+void BM_LockStepRoundTwoProcessesSecured(benchmark::State& state) {
+  lock_step_rounds(state, true);
+}
+// DdsSettings::poll_us: 0 (every wait sleeps on the waitset) and the default; secured at the
+// default.
+BENCHMARK(BM_LockStepRoundTwoProcessesSecured)
+    ->ArgName("poll_us")
+    ->Arg(static_cast<int64_t>(net::DdsSettings{}.poll_us))
+    ->Iterations(kRounds)
+    ->UseRealTime()
+    ->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_LockStepRoundTwoProcesses)
     ->ArgName("poll_us")
     ->Arg(0)

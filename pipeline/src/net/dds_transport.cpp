@@ -135,8 +135,8 @@ DdsTransport::DdsTransport(int self, std::vector<int> neighbours, std::vector<in
       labels_(std::move(labels)),
       settings_(std::move(settings)) {
   participant_ =
-      dds_create_participant(static_cast<dds_domainid_t>(settings_.domain), nullptr, nullptr);
-  check(participant_, "create participant (check CYCLONEDDS_URI)");
+      create_participant(settings_.domain, settings_.security ? &*settings_.security : nullptr,
+                         "create participant (check CYCLONEDDS_URI)");
   try {
     const auto topic = [&](int index) {
       const std::string name =
@@ -297,9 +297,9 @@ bool DdsTransport::wait_for_writers(int count, double timeout_s) {
   }
 }
 
-RawEstimateWriter::RawEstimateWriter(int domain, const std::string& topic) {
-  participant_ = dds_create_participant(static_cast<dds_domainid_t>(domain), nullptr, nullptr);
-  check(participant_, "create participant (check CYCLONEDDS_URI)");
+RawEstimateWriter::RawEstimateWriter(int domain, const std::string& topic,
+                                     const SecurityIdentity* security) {
+  participant_ = create_participant(domain, security, "create participant (check CYCLONEDDS_URI)");
   topic_ =
       dds_create_topic(participant_, &netvmo_msg_Estimate_desc, topic.c_str(), nullptr, nullptr);
   if (topic_ < 0) dds_delete(participant_);

@@ -74,6 +74,8 @@ std::vector<std::string> node_argv(const LaunchSettings& s, int camera_id,
                                    num(s.node_timeout)};
   if (s.frames > 0 || !s.live)
     for (auto a : {std::string("--frames"), std::to_string(s.frames)}) argv.push_back(a);
+  if (!s.security.empty())
+    for (auto a : {std::string("--security"), s.security.string()}) argv.push_back(a);
   if (s.live)
     for (auto a :
          {std::string("--live"), std::string("--duration"), num(s.live->duration_s),

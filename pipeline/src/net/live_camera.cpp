@@ -26,7 +26,7 @@ std::string dds_topic_of(const std::string& ros_topic) {
 }
 
 LiveCamera::LiveCamera(int domain, sources::TopicNetwork& network, size_t camera_index,
-                       const LiveSettings& settings)
+                       const LiveSettings& settings, const SecurityIdentity* security)
     : net_(network), index_(camera_index), settings_(settings) {
   const auto& cam = net_.network().cameras.at(camera_index);
   image_topic_ =
@@ -43,10 +43,11 @@ LiveCamera::LiveCamera(int domain, sources::TopicNetwork& network, size_t camera
   image_type_ = compressed ? ros::kCompressedImageType : ros::kImageType;
   images_ = std::make_unique<RosTopicReader>(
       domain, dds_topic_of(image_topic_),
-      compressed ? ros::compressed_image_descriptor() : ros::image_descriptor(), false, false);
+      compressed ? ros::compressed_image_descriptor() : ros::image_descriptor(), false, false,
+      security);
   if (!net_.has_calibration(camera_index))
-    infos_ = std::make_unique<RosTopicReader>(domain, dds_topic_of(info_topic_),
-                                              ros::camera_info_descriptor(), false, false);
+    infos_ = std::make_unique<RosTopicReader>(
+        domain, dds_topic_of(info_topic_), ros::camera_info_descriptor(), false, false, security);
 }
 
 LiveCamera::~LiveCamera() = default;

@@ -251,7 +251,8 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   const NodeFiles files = node_files(out_dir, o.camera_id);
   std::optional<double> start_epoch = o.start_epoch;
   // Live: the image topic is read once the node is set up and matched with its neighbours.
-  if (live) camera.emplace(o.dds.domain, *topics, si, *o.live);
+  if (live)
+    camera.emplace(o.dds.domain, *topics, si, *o.live, o.dds.security ? &*o.dds.security : nullptr);
   if (async && o.start_file) {  // ready: tell the launcher, then wait for the common start
     io::write_file_atomic(node_ready_file(*o.start_file, o.camera_id), "ready\n");
     if (!live) start_epoch = read_start(*o.start_file, o.dds.timeout_s);

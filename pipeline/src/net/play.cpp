@@ -23,9 +23,8 @@ using detail::check;
 // A participant that deletes itself (and every entity under it).
 struct Participant {
   dds_entity_t id;
-  explicit Participant(int domain)
-      : id(check(dds_create_participant(static_cast<dds_domainid_t>(domain), nullptr, nullptr),
-                 "create participant (check CYCLONEDDS_URI)")) {}
+  Participant(int domain, const SecurityIdentity* security)
+      : id(create_participant(domain, security, "create participant (check CYCLONEDDS_URI)")) {}
   ~Participant() { dds_delete(id); }
 };
 
@@ -59,7 +58,7 @@ PlayStats play(sources::NetworkSource& source, const PlaySettings& s,
     throw InputError("--encoding " + s.encoding + ": expected mono8, rgb8, jpeg or png");
   if (!(s.rate >= 0.0)) throw InputError("--rate must be >= 0");
   const auto& net = source.network();
-  Participant p(s.domain);
+  Participant p(s.domain, s.security ? &*s.security : nullptr);
   std::vector<dds_entity_t> images, infos;
   for (const auto& c : net.cameras) {
     const std::string prefix = "rt/cam_" + std::to_string(c.id);

@@ -74,11 +74,10 @@ void RosPublisher::tf_static(const std::vector<ros::StampedTransform>& m) {
 }
 
 RosTopicReader::RosTopicReader(int domain, const std::string& dds_topic,
-                               const dds_topic_descriptor_t& type, bool tf_static, bool reliable)
+                               const dds_topic_descriptor_t& type, bool tf_static, bool reliable,
+                               const SecurityIdentity* security)
     : type_(type) {
-  participant_ =
-      check(dds_create_participant(static_cast<dds_domainid_t>(domain), nullptr, nullptr),
-            "create participant (check CYCLONEDDS_URI)");
+  participant_ = create_participant(domain, security, "create participant (check CYCLONEDDS_URI)");
   try {
     topic_ = check(dds_create_topic(participant_, &type, dds_topic.c_str(), nullptr, nullptr),
                    "create ROS topic");

@@ -52,6 +52,8 @@ struct LaunchSettings {
   /// Live (async): every node reads its camera's image topic of network.yaml (NodeOptions::live;
   /// the topics there, so image_topic and camera_info_topic are left empty here).
   std::optional<LiveSettings> live;
+  /// DDS Security: the security folder every node takes its cam_<id> identity from; empty: none.
+  std::filesystem::path security;
 };
 
 /// Async: the common start is this many seconds after every node is ready.

@@ -41,7 +41,7 @@ class LiveCamera {
   /// Subscribes to camera `camera_index`'s topics of `network` (not owned) on `domain`.
   /// Throws InputError when the camera names no image topic (settings' or network.yaml's).
   LiveCamera(int domain, sources::TopicNetwork& network, size_t camera_index,
-             const LiveSettings& settings);
+             const LiveSettings& settings, const SecurityIdentity* security = nullptr);
   ~LiveCamera();
   LiveCamera(const LiveCamera&) = delete;
   LiveCamera& operator=(const LiveCamera&) = delete;

@@ -9,8 +9,10 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
 
+#include "netvmo/pipeline/net/security.hpp"
 #include "netvmo/pipeline/sources/network_source.hpp"
 
 namespace netvmo::net {
@@ -31,6 +33,8 @@ struct PlaySettings {
   double timeout_s = 30.0;
   /// After the last image, wait this long for reliable readers to acknowledge [s].
   double linger_s = 2.0;
+  /// DDS Security: the identity to publish with (a security folder's `player`); none: unsecured.
+  std::optional<SecurityIdentity> security;
 };
 
 struct PlayStats {

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "netvmo/pipeline/net/security.hpp"
 #include "netvmo/pipeline/ros/pose_msgs.hpp"
 
 namespace netvmo::net {
@@ -50,8 +51,10 @@ dds_qos_t* ros_topic_qos(bool tf_static, std::int32_t depth);
 /// `reliable` false: best-effort, which also matches best-effort writers (camera drivers).
 class RosTopicReader {
  public:
+  /// `security`: the participant's identity (none: unsecured).
   RosTopicReader(int domain, const std::string& dds_topic, const dds_topic_descriptor_t& type,
-                 bool tf_static = false, bool reliable = true);
+                 bool tf_static = false, bool reliable = true,
+                 const SecurityIdentity* security = nullptr);
   ~RosTopicReader();
   RosTopicReader(const RosTopicReader&) = delete;
   RosTopicReader& operator=(const RosTopicReader&) = delete;

@@ -1,0 +1,154 @@
+// DDS Security (docs/processes.md, "Security"): `netvmo security init`'s test PKI with Cyclone
+// DDS's authentication, access-control and cryptography plugins. A secured lock-step launch
+// equals `netvmo run` bit for bit while a participant without a certificate of the run's CA sees
+// nothing; a camera cannot write another camera's estimate topic; a missing security file is one
+// line.
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include "net_test_util.hpp"
+#include "netvmo/pipeline/net/dds_transport.hpp"
+#include "netvmo/pipeline/net/ros_publisher.hpp"
+#include "netvmo/pipeline/net/security.hpp"
+#include "netvmo/pipeline/ros/pose_msgs.hpp"
+
+using namespace netvmo;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr int kFrames = 8;
+
+// A two-camera network 1 - 2 (no images: the PKI needs only the cameras and the graph).
+io::NetworkConfig two_cameras() {
+  io::NetworkConfig net;
+  for (int id : {1, 2}) {
+    io::CameraConfig c;
+    c.id = id;
+    net.cameras.push_back(c);
+  }
+  net.edges = {{1, 2}};
+  return net;
+}
+
+}  // namespace
+
+// A lock-step launch with every node secured equals `netvmo run` bit for bit; during it, a
+// participant with the run's `viewer` certificate (this process) receives camera 1's average pose,
+// and an unsecured participant (another process: Cyclone DDS secures a process's
+// domain as a whole) receives nothing.
+TEST(Security, SecuredLaunchEqualsRunAndStrangersSeeNothing) {
+  const fs::path dir = test::scratch_dir("security_launch");
+  auto r = net_test::netvmo_bounded("render " + std::string(NETVMO_SOURCE_DIR) +
+                                        "/datasets/paper5_render.yaml --frames " +
+                                        std::to_string(kFrames) + " --out " + (dir / "ds").string(),
+                                    dir, 120);
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = net_test::netvmo_bounded(
+      "security init " + (dir / "sec").string() + " " + (dir / "ds").string(), dir, 60);
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  r = net_test::netvmo_bounded(
+      "run " + (dir / "ds").string() + " --no-plots --no-overlays --out " + (dir / "run").string(),
+      dir, 120);
+  ASSERT_EQ(r.code, 0) << r.err;
+
+  const int domain = net_test::loopback_domain(dir);
+  const net::SecurityIdentity viewer = net::security_identity(dir / "sec", "viewer");
+  net::RosTopicReader seen(domain, "rt/netvmo/camera_1/average_pose",
+                           ros::pose_stamped_descriptor(), false, true, &viewer);
+  // The stranger listens for as long as the launch may take, then writes what it received.
+  const pid_t stranger =
+      net::spawn({NETVMO_DDS_PEER, "ros", std::to_string(domain), "1", std::to_string(kFrames),
+                  "20", (dir / "stranger.txt").string()},
+                 dir / "stranger.log");
+  fs::create_directories(dir / "launch_logs");
+  r = net_test::netvmo_bounded("launch " + (dir / "ds").string() + " --security " +
+                                   (dir / "sec").string() + " --domain " + std::to_string(domain) +
+                                   " --no-plots --no-overlays --timeout 90 --out " +
+                                   (dir / "launch").string(),
+                               dir / "launch_logs", 120);
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  std::vector<std::vector<std::uint8_t>> seen_msgs;
+  for (int k = 0; k < 20 && static_cast<int>(seen_msgs.size()) < kFrames; ++k)
+    for (auto& m : seen.take(0.5)) seen_msgs.push_back(std::move(m));
+  const auto s = net::supervise({stranger}, 40.0, false);
+  ASSERT_TRUE(s[0].finished && s[0].exit_code == 0) << test::slurp(dir / "stranger.log");
+  EXPECT_EQ(test::slurp(dir / "launch" / "estimates.csv"),
+            test::slurp(dir / "run" / "estimates.csv"));
+  // The viewer matches once its handshake with camera 1's node is done (the node does not wait
+  // for it): the later frames' poses, each the node's estimate of its frame.
+  EXPECT_GE(seen_msgs.size(), 1u);
+  const auto rows = net_test::read_csv(dir / "launch" / "nodes" / "node_1.csv");
+  ASSERT_EQ(rows.size(), static_cast<size_t>(kFrames + 1));
+  for (const auto& m : seen_msgs) {
+    const auto p = ros::decode_pose_stamped(m, "average_pose");
+    const int k = static_cast<int>(std::llround(p.stamp_ns * 1e-9 * 30));  // paper5: 30 fps
+    ASSERT_TRUE(k >= 0 && k < kFrames) << p.stamp_ns;
+    const obs::SE3 est = net_test::pose_at(rows[static_cast<size_t>(k) + 1], 38);  // est_w
+    EXPECT_LE((p.pose.translation() - est.translation()).norm(), 1e-12) << "frame " << k;
+  }
+  EXPECT_EQ(test::slurp(dir / "stranger.txt"), "");  // one line per received pose
+  fs::remove_all(dir);
+}
+
+// Access control and authentication on the estimate topics of a two-camera network, each
+// participant a process of its own: camera 2's secured transport (this process) reads camera 1's
+// topic; camera 1's certificate may write it (the control: its 5 messages arrive), camera 2's may
+// not (its writer is refused), and neither an unsecured writer nor one certified by another CA
+// ever matches camera 2's reader.
+TEST(Security, ACameraWritesOnlyItsOwnTopicAndStrangersNone) {
+  const fs::path dir = test::scratch_dir("security_acl");
+  const auto net = two_cameras();
+  net::write_test_pki(dir / "sec", net);
+  net::write_test_pki(dir / "other", net);  // another PKI: its certificates are strangers here
+  const int domain = net_test::loopback_domain(dir);
+  net::DdsSettings ds;
+  ds.domain = domain;
+  ds.mode = net::Mode::async;
+  ds.security = net::security_identity(dir / "sec", net::camera_identity(2));
+  net::DdsTransport camera2(1, {0}, {1, 2}, ds);
+  const std::string topic1 = net::estimate_topic("netvmo_estimates", 1);
+  const auto writer = [&](const std::string& name, const std::string& secdir,
+                          const std::string& identity, const std::string& seconds) {
+    return std::vector<std::string>{
+        NETVMO_DDS_PEER, "writer", std::to_string(domain),          topic1, secdir,
+        identity,        seconds,  (dir / (name + ".txt")).string()};
+  };
+  const auto res = net_test::run_all(
+      {writer("own", (dir / "sec").string(), "cam_1", "30"),
+       writer("wrong", (dir / "sec").string(), "cam_2", "30"), writer("unsecured", "-", "-", "8"),
+       writer("foreign_ca", (dir / "other").string(), "cam_1", "8")},
+      dir, 60.0);
+  for (size_t k = 0; k < res.size(); ++k)
+    ASSERT_TRUE(res[k].finished && res[k].exit_code == 0)
+        << "writer " << k << ": " << test::slurp(dir / ("child_" + std::to_string(k) + ".log"));
+  EXPECT_EQ(test::slurp(dir / "own.txt"), "matched 1\n");
+  EXPECT_EQ(test::slurp(dir / "wrong.txt")
+                .rfind("refused Cyclone DDS: create writer: Not Allowed "
+                       "By Security",
+                       0),
+            0u)
+      << test::slurp(dir / "wrong.txt");
+  EXPECT_EQ(test::slurp(dir / "unsecured.txt"), "matched 0\n");
+  EXPECT_EQ(test::slurp(dir / "foreign_ca.txt"), "matched 0\n");
+  std::vector<obs::EstimateMessage> inbox, all;
+  for (int k = 0; k < 50 && all.size() < 5; ++k) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    camera2.receive(1, inbox);
+    all.insert(all.end(), inbox.begin(), inbox.end());
+  }
+  EXPECT_EQ(all.size(), 5u);  // camera 1's, from its own certificate only
+  EXPECT_EQ(camera2.stats().received, 5u);
+  fs::remove_all(dir);
+}
+
+TEST(Security, AMissingSecurityFileIsOneLine) {
+  const fs::path dir = test::scratch_dir("security_missing");
+  net::write_test_pki(dir / "sec", two_cameras());
+  fs::remove(dir / "sec" / "cam_2.permissions.p7s");
+  test::expect_input_error([&] { net::security_identity(dir / "sec", net::camera_identity(2)); },
+                           {"cam_2.permissions.p7s: not found", "netvmo security init"});
+  EXPECT_NO_THROW(net::security_identity(dir / "sec", net::camera_identity(1)));
+  fs::remove_all(dir);
+}
