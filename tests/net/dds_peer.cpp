@@ -187,7 +187,8 @@ int tf(int domain, int camera, int statics, int count, double seconds, const cha
 }
 // A writer of estimate topic TOPIC as identity IDENTITY of security folder SECDIR ("-": unsecured):
 // OUT gets "refused <why>" when the writer cannot be created, else "matched N" once a reader
-// matches (or after SECONDS); a matched writer then writes 5 estimates of camera index 0.
+// matches (or after SECONDS); a matched writer then writes 5 estimates of camera index 0 at the
+// position (kMarker, kMarker, kMarker).
 int writer(int domain, const std::string& topic, const std::string& secdir,
            const std::string& identity, double seconds, const char* out) {
   std::FILE* f = std::fopen(out, "w");
@@ -214,6 +215,7 @@ int writer(int domain, const std::string& topic, const std::string& secdir,
       m.sender = 0;
       m.round = static_cast<std::uint64_t>(k);
       m.initialized = true;
+      m.g_w.translation().setConstant(net_test::kMarker);  // looked for in packet captures
       w->write(m);
     }
     ::usleep(500000);  // reliable delivery

@@ -8,6 +8,8 @@
 namespace netvmo::net_test {
 
 constexpr double kH = 1.0 / 330.0;  // one sub-step of a 30 frames/s frame with 11 rounds
+/// The position coordinate `dds_peer writer` sends: eight bytes a packet capture looks for.
+constexpr double kMarker = 4242.4242424242;
 
 inline obs::ObserverSettings peer_settings() {
   obs::ObserverSettings s;
