@@ -14,6 +14,9 @@ packages=(
   libsqlite3-dev
   # DDS Security's test PKI (netvmo security init: keys, certificates, signed documents).
   libssl-dev
+  # Several machines emulated by the tests (tools/netns_run.sh): network namespaces, loss and
+  # partitions in the kernel.
+  iproute2 nftables
   # A real photo of printed tags every machine can have (ViSP's AprilTag.pgm, read in place by
   # the test RealPhotos.DeskPhoto*; GPL-2 data of Debian's ViSP packaging, not copied here).
   visp-images-data
