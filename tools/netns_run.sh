@@ -48,7 +48,14 @@ if ! ip netns add "$probe" 2>/dev/null; then
   echo "netns_run: this machine does not allow network namespaces (ip netns add failed)" >&2
   exit 77
 fi
+# What the harness needs inside a namespace: a veth pair, a bridge and nftables.
+why=""
+ip -n "$probe" link add va type veth peer name vb 2>/dev/null || why="no veth pairs"
+[ -n "$why" ] || ip -n "$probe" link add vbr type bridge 2>/dev/null || why="no bridges"
+[ -n "$why" ] || command -v nft > /dev/null || why="no nft (Debian's nftables)"
+[ -n "$why" ] || ip netns exec "$probe" nft list ruleset > /dev/null 2>&1 || why="nftables refused"
 ip netns del "$probe"
+if [ -n "$why" ]; then echo "netns_run: network namespaces without what the harness needs: $why" >&2; exit 77; fi
 
 # The cameras of network.yaml, in order ("- id: N" or "- {id: N").
 mapfile -t ids < <(grep -oE '^[[:space:]]*-[[:space:]]*\{?[[:space:]]*id:[[:space:]]*[0-9]+' \
