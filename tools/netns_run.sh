@@ -16,6 +16,8 @@
 #                             seconds after the start (nftables in the bridge's namespace)
 #                             (async: a partition; cameras behind it are isolated);
 #                             OUT/events.txt: the cut's and the heal's wall-clock times
+#     --delay MS:JITTER       every namespace delays its outgoing packets MS +- JITTER ms
+#                             (tc netem); exits 77 where the kernel has no netem
 #     --timeout S             every node is killed after S seconds (default 120)
 #
 # Needs root, `ip netns` and, for --loss and --cut, nft. Exits 77 (with the reason on stderr) when this
@@ -26,13 +28,14 @@ set -euo pipefail
 usage() { echo "usage: tools/netns_run.sh NETVMO DATASET OUT [--mode M] [--loss PCT] [--cut ID@T:D] [--timeout S] [-- node options]" >&2; exit 2; }
 [ $# -ge 3 ] || usage
 netvmo=$(realpath "$1"); dataset=$(realpath "$2"); out=$3; shift 3
-mode=lockstep loss=0 cut="" timeout=120
+mode=lockstep loss=0 cut="" delay="" timeout=120
 node_args=()
 while [ $# -gt 0 ]; do
   case $1 in
     --mode) mode=$2; shift 2 ;;
     --loss) loss=$2; shift 2 ;;
     --cut) cut=$2; shift 2 ;;
+    --delay) delay=$2; shift 2 ;;
     --timeout) timeout=$2; shift 2 ;;
     --) shift; node_args=("$@"); break ;;
     *) usage ;;
@@ -43,7 +46,20 @@ template=$here/datasets/cyclonedds_multihost.template.xml
 
 if [ "$(id -u)" != 0 ]; then echo "netns_run: needs root (ip netns)" >&2; exit 77; fi
 tag=nv$$
+namespaces=()
+pids=()
+cleanup() {  # every process inside the namespaces (the nodes), the harness's own, the namespaces
+  for ns in "${namespaces[@]:-}"; do
+    [ -n "$ns" ] && ip netns pids "$ns" 2>/dev/null | xargs -r kill -KILL 2>/dev/null || true
+  done
+  for p in "${pids[@]:-}"; do [ -n "$p" ] && kill -KILL "$p" 2>/dev/null || true; done
+  for ns in "${namespaces[@]:-}"; do [ -n "$ns" ] && ip netns del "$ns" 2>/dev/null || true; done
+}
+trap cleanup EXIT
+trap 'exit 130' INT
+trap 'exit 143' TERM
 probe=${tag}probe
+namespaces+=("$probe")
 if ! ip netns add "$probe" 2>/dev/null; then
   echo "netns_run: this machine does not allow network namespaces (ip netns add failed)" >&2
   exit 77
@@ -54,6 +70,10 @@ ip -n "$probe" link add va type veth peer name vb 2>/dev/null || why="no veth pa
 [ -n "$why" ] || ip -n "$probe" link add vbr type bridge 2>/dev/null || why="no bridges"
 [ -n "$why" ] || command -v nft > /dev/null || why="no nft (Debian's nftables)"
 [ -n "$why" ] || ip netns exec "$probe" nft list ruleset > /dev/null 2>&1 || why="nftables refused"
+if [ -z "$why" ] && [ -n "$delay" ] &&
+   ! ip netns exec "$probe" tc qdisc add dev va root netem delay 1ms > /dev/null 2>&1; then
+  why="no netem in this kernel (tc qdisc add ... netem: $(ip netns exec "$probe" tc qdisc add dev va root netem delay 1ms 2>&1 | head -n 1 || true))"
+fi
 ip netns del "$probe"
 if [ -n "$why" ]; then echo "netns_run: network namespaces without what the harness needs: $why" >&2; exit 77; fi
 
@@ -63,15 +83,6 @@ mapfile -t ids < <(grep -oE '^[[:space:]]*-[[:space:]]*\{?[[:space:]]*id:[[:spac
 [ ${#ids[@]} -ge 1 ] || { echo "netns_run: $dataset/network.yaml: no cameras" >&2; exit 2; }
 net=198.18.$(( $$ % 250 ))
 bridge=${tag}br
-namespaces=()
-pids=()
-cleanup() {
-  for p in "${pids[@]:-}"; do [ -n "$p" ] && kill -KILL "$p" 2>/dev/null || true; done
-  for ns in "${namespaces[@]:-}"; do [ -n "$ns" ] && ip netns del "$ns" 2>/dev/null || true; done
-}
-trap cleanup EXIT
-trap 'exit 130' INT
-trap 'exit 143' TERM
 
 ip netns add "$bridge"; namespaces+=("$bridge")
 ip -n "$bridge" link add br0 type bridge
@@ -87,6 +98,9 @@ for k in "${!ids[@]}"; do
   ip -n "$ns" addr add "$net.$((k + 1))/24" dev eth0
   ip -n "$ns" link set eth0 up
   ip -n "$ns" link set lo up
+  if [ -n "$delay" ]; then
+    ip netns exec "$ns" tc qdisc add dev eth0 root netem delay "${delay%:*}ms" "${delay#*:}ms"
+  fi
   if [ "$loss" != 0 ]; then
     ip netns exec "$ns" nft add table inet netvmo_loss
     ip netns exec "$ns" nft add chain inet netvmo_loss input '{ type filter hook input priority 0; }'

@@ -5,9 +5,13 @@
 // machine does not allow network namespaces (not root).
 #include <sys/wait.h>
 
+#include <cctype>
+#include <chrono>
+#include <csignal>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 #include "net_test_util.hpp"
 
@@ -144,5 +148,81 @@ TEST(NetNs, APartitionIsForgottenAndReadmitted) {
               1)
         << "camera " << id;
   expect_converged(dir / "ns" / "merged" / "summary.json");
+  fs::remove_all(dir);
+}
+
+// Kernel delay and jitter where the kernel has netem (50 ms +- 10 ms on every namespace's
+// outgoing packets): async still converges within its bound. Skipped, with the reason, where
+// netem is missing (this project's machines: "Specified qdisc kind is unknown"); the
+// receiver-side --delay covers delay there (Async.*).
+TEST(NetNs, AsyncConvergesUnderKernelDelayAndJitter) {
+  const fs::path dir = test::scratch_dir("netns_delay");
+  const fs::path ds = render(dir, 60);
+  std::string err;
+  const int code = netns_run(ds, dir / "ns",
+                             "--mode async --delay 50:10 --timeout 100 -- --ke 10 --ks 100 "
+                             "--speed 0.25",
+                             err);
+  if (code == 77) GTEST_SKIP() << err;
+  ASSERT_EQ(code, 0) << err;
+  expect_converged(dir / "ns" / "merged" / "summary.json");
+  fs::remove_all(dir);
+}
+
+namespace {
+
+// The network namespaces of the harness run by process `pid` (named nv<pid>...).
+std::vector<std::string> namespaces_of(pid_t pid) {
+  std::vector<std::string> out;
+  if (!fs::is_directory("/var/run/netns")) return out;
+  const std::string prefix = "nv" + std::to_string(pid);
+  for (const auto& e : fs::directory_iterator("/var/run/netns")) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind(prefix, 0) == 0 &&
+        !std::isdigit(static_cast<unsigned char>(name[prefix.size()])))
+      out.push_back(name);
+  }
+  return out;
+}
+
+}  // namespace
+
+// Every path removes the harness's namespaces and the nodes in them: an error after they were
+// made (a --cut naming no camera) and a SIGTERM in mid-run.
+TEST(NetNs, EveryPathRemovesItsNamespaces) {
+  const fs::path dir = test::scratch_dir("netns_cleanup");
+  const fs::path ds = render(dir, 60);
+  const std::string script = std::string(NETVMO_SOURCE_DIR) + "/tools/netns_run.sh";
+  const std::string exe = std::string(NETVMO_BINARY_DIR) + "/netvmo";
+  {
+    const pid_t p = net::spawn({"/bin/bash", script, exe, ds.string(), (dir / "a").string(),
+                                "--mode", "async", "--cut", "9@1:1", "--", "--speed", "0.25"},
+                               dir / "a.log");
+    const auto r = net::supervise({p}, 60.0, true);
+    if (r[0].finished && r[0].exit_code == 77) GTEST_SKIP() << test::slurp(dir / "a.log");
+    EXPECT_TRUE(r[0].finished && r[0].exit_code == 2) << test::slurp(dir / "a.log");
+    EXPECT_NE(test::slurp(dir / "a.log").find("--cut 9@1:1: no camera 9"), std::string::npos);
+    EXPECT_TRUE(namespaces_of(p).empty());
+  }
+  {
+    const pid_t p = net::spawn({"/bin/bash", script, exe, ds.string(), (dir / "b").string(),
+                                "--mode", "async", "--", "--speed", "0.25"},
+                               dir / "b.log");
+    // Once every camera's namespace exists and its node runs (its log has its first line).
+    bool running = false;
+    for (int k = 0; k < 300 && !running; ++k) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      running = namespaces_of(p).size() >= 6 &&  // the bridge's and the five cameras'
+                !test::slurp(dir / "b" / "node_5.log").empty();
+    }
+    ASSERT_TRUE(running) << test::slurp(dir / "b.log");
+    ::kill(p, SIGTERM);
+    const auto r = net::supervise({p}, 30.0, true);
+    EXPECT_TRUE(r[0].finished) << net::describe(r[0]);
+    EXPECT_TRUE(namespaces_of(p).empty());
+    // No node of this dataset left running.
+    const std::string left = "pgrep -f '[n]etvmo node " + ds.string() + " ' > /dev/null";
+    EXPECT_NE(std::system(left.c_str()), 0) << "a node of the harness still runs";
+  }
   fs::remove_all(dir);
 }

@@ -12,7 +12,7 @@ namespace netvmo::net {
 
 /// Largest participant index the loopback configuration probes during unicast discovery: at
 /// most this many + 1 participants (nodes, tools) per domain on the machine.
-constexpr int kMaxParticipants = 40;
+constexpr int kMaxParticipants = 100;
 
 /// The loopback-only configuration (XML) for any domain id.
 std::string loopback_config_xml();
