@@ -33,14 +33,7 @@ constexpr int kFrames = 8;
 
 // A two-camera network 1 - 2 (no images: the PKI needs only the cameras and the graph).
 io::NetworkConfig two_cameras() {
-  io::NetworkConfig net;
-  for (int id : {1, 2}) {
-    io::CameraConfig c;
-    c.id = id;
-    net.cameras.push_back(c);
-  }
-  net.edges = {{1, 2}};
-  return net;
+  return io::graph_network({1, 2}, {{1, 2}});
 }
 
 }  // namespace

@@ -142,15 +142,8 @@ void lock_step_rounds(benchmark::State& state, bool secured) {
   net::use_config(dir / "cyclonedds.xml");
   std::filesystem::path security;
   if (secured) {
-    io::NetworkConfig net;
-    for (int id : {1, 2}) {
-      io::CameraConfig c;
-      c.id = id;
-      net.cameras.push_back(c);
-    }
-    net.edges = {{1, 2}};
     security = dir / "security";
-    net::write_test_pki(security, net);
+    net::write_test_pki(security, io::graph_network({1, 2}, {{1, 2}}));
   }
   const int domain = net::domain_from_pid(::getpid());
   const auto anchor = ddsperf_anchor(dir, domain);

@@ -220,6 +220,18 @@ NetworkConfig load_network_config(const std::filesystem::path& file) {
   return net;
 }
 
+NetworkConfig graph_network(const std::vector<int>& ids,
+                            const std::vector<std::pair<int, int>>& edges) {
+  NetworkConfig net;
+  for (int id : ids) {
+    CameraConfig c;
+    c.id = id;
+    net.cameras.push_back(c);
+  }
+  net.edges = edges;
+  return net;
+}
+
 std::string network_yaml(const NetworkConfig& net) {
   YAML::Emitter y;
   y.SetDoublePrecision(12);

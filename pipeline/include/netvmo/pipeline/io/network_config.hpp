@@ -115,6 +115,11 @@ std::string read_tag_family(const Value& family);
 /// integer. Fails naming the key.
 int read_tag_id(const Value& id);
 
+/// The graph alone: cameras `ids` (every pose the identity) joined by `edges` (camera ids), e.g.
+/// for a PKI or a benchmark of the exchange.
+NetworkConfig graph_network(const std::vector<int>& ids,
+                            const std::vector<std::pair<int, int>>& edges);
+
 /// network.yaml text of a configuration (what load_network_config reads back).
 std::string network_yaml(const NetworkConfig& net);
 
