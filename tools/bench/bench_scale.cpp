@@ -24,6 +24,7 @@
 #include "netvmo/pipeline/net/cyclone_config.hpp"
 #include "netvmo/pipeline/net/dds_transport.hpp"
 #include "netvmo/pipeline/net/process.hpp"
+#include "netvmo/pipeline/stopwatch.hpp"
 
 using namespace netvmo;
 namespace fs = std::filesystem;
@@ -31,10 +32,6 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr int kRounds = 300;
-
-double now_s() {
-  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
-}
 
 std::vector<int> neighbours(int i, int n) {
   if (n == 2) return {1 - i};
@@ -54,7 +51,7 @@ int camera(int i, int n, int domain, const fs::path& out) {
   ds.timeout_s = 120.0;
   net::DdsTransport t(i, nb, labels, ds);
   if (!t.wait_for_writers(static_cast<int>(nb.size()), 120.0)) return 2;
-  const double matched = now_s();
+  const double matched = epoch_seconds();
   obs::CameraObserver cam(i, nb, obs::ObserverSettings{});
   std::vector<obs::EstimateMessage> inbox;
   std::vector<double> us;
@@ -86,7 +83,7 @@ void BM_LockStepRoundNProcesses(benchmark::State& state) {
   net::use_config(dir / "cyclonedds.xml");
   const int domain = 1 + (net::domain_from_pid(::getpid()) + n) % 200;
   for (auto _ : state) {
-    const double t_fork = now_s();
+    const double t_fork = epoch_seconds();
     std::vector<pid_t> pids;
     for (int i = 0; i < n; ++i) {
       const pid_t p = ::fork();

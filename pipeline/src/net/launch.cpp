@@ -14,16 +14,13 @@
 #include "netvmo/pipeline/net/node.hpp"
 #include "netvmo/pipeline/run/overlay.hpp"
 #include "netvmo/pipeline/run/run_report.hpp"
+#include "netvmo/pipeline/stopwatch.hpp"
 
 namespace netvmo::net {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
-
-double now_epoch() {
-  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
-}
 
 std::string num(double v) {
   char b[40];
@@ -118,19 +115,19 @@ LaunchOutcome run_launch(const io::NetworkConfig& net, const LaunchSettings& s,
   if (s.async) {
     // The common start, once every node is ready (or one has ended, or --node-timeout has
     // passed: then supervise reports it); printed for the record.
-    const double give_up = now_epoch() + s.node_timeout;
+    const double give_up = epoch_seconds() + s.node_timeout;
     for (;;) {
       bool ready = true, ended = false;
       for (size_t i = 0; i < pids.size(); ++i) {
         ready = ready && fs::exists(node_ready_file(start_file, net.cameras[i].id));
         ended = ended || has_exited(pids[i]);
       }
-      if (ready || ended || now_epoch() > give_up) break;
+      if (ready || ended || epoch_seconds() > give_up) break;
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
-    outcome.start_epoch = now_epoch() + kLaunchStartMargin;
+    outcome.start_epoch = epoch_seconds() + kLaunchStartMargin;
     io::write_file_atomic(start_file, num(outcome.start_epoch) + "\n");
-    plan.kill_at += outcome.start_epoch - now_epoch();  // supervision starts now
+    plan.kill_at += outcome.start_epoch - epoch_seconds();  // supervision starts now
     if (s.live)
       std::printf(
           "netvmo launch: live, every node ready: waiting for images on the cameras' "

@@ -6,14 +6,11 @@
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/ros/image_msgs.hpp"
 #include "netvmo/pipeline/sources/dataset.hpp"
+#include "netvmo/pipeline/stopwatch.hpp"
 
 namespace netvmo::net {
 
 namespace {
-
-double now_epoch() {
-  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
-}
 
 bool ends_with(const std::string& s, const std::string& tail) {
   return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
@@ -53,9 +50,9 @@ LiveCamera::LiveCamera(int domain, sources::TopicNetwork& network, size_t camera
 LiveCamera::~LiveCamera() = default;
 
 bool LiveCamera::take_images(double timeout_s) {
-  const double give_up = now_epoch() + timeout_s;
+  const double give_up = epoch_seconds() + timeout_s;
   while (!net_.has_calibration(index_)) {  // the first camera info, before any image is used
-    const double left = give_up - now_epoch();
+    const double left = give_up - epoch_seconds();
     const auto infos = infos_->take(std::max(0.0, left));
     if (!infos.empty()) {
       net_.set_calibration(index_, ros::decode_camera_info(infos.front(), info_topic_));
@@ -63,7 +60,7 @@ bool LiveCamera::take_images(double timeout_s) {
     }
     if (left <= 0) return false;
   }
-  auto msgs = images_->take(std::max(0.0, give_up - now_epoch()));
+  auto msgs = images_->take(std::max(0.0, give_up - epoch_seconds()));
   if (msgs.empty()) return false;
   std::vector<std::pair<double, size_t>> order;
   for (size_t m = 0; m < msgs.size(); ++m) {
@@ -86,7 +83,7 @@ bool LiveCamera::take_images(double timeout_s) {
       continue;
     }
     net_.append(index_, t, ros::decode_gray(image_type_, msgs[m], where), where);
-    const double now = now_epoch();
+    const double now = epoch_seconds();
     if (!first_stamp_) {
       first_stamp_ = t;
       first_wall_ = now;
@@ -107,9 +104,9 @@ bool LiveCamera::wait_frame(int frame, double first_timeout_s) {
             (net_.has_calibration(index_) ? "" : " (nor camera info on " + info_topic_ + ")"));
       continue;
     }
-    const double left = last_wall_ + settings_.idle_s - now_epoch();
+    const double left = last_wall_ + settings_.idle_s - epoch_seconds();
     if (left <= 0 || !take_images(left))
-      ended_ = ended_ || now_epoch() >= last_wall_ + settings_.idle_s;
+      ended_ = ended_ || epoch_seconds() >= last_wall_ + settings_.idle_s;
   }
   return true;
 }

@@ -158,8 +158,7 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
   // merged files count time from t0 (the nodes' files keep the dataset's times).
   std::vector<std::vector<const Row*>> held(n);
   run::TimeGrid grid;
-  if (live) {  // the grid of the rows' times, as time_grid's of the images'
-    grid.dt = dt;
+  if (live) {  // the grid of the rows' times, as of the images' elsewhere
     double first = INFINITY, last = -INFINITY;
     for (const auto& r : rows)
       if (!r.empty()) {
@@ -167,9 +166,7 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
         last = std::max(last, r.back().t);
       }
     if (!std::isfinite(first)) throw InputError(nodes_dir.string() + ": no node ran a frame");
-    grid.t0 = first;
-    grid.frames =
-        frames > 0 ? frames : static_cast<int>(std::floor((last - first) / dt + 1e-9)) + 1;
+    grid = run::time_grid(first, last, dt, frames);
     frames = grid.frames;
   } else {
     grid = run::time_grid(provider, frames);

@@ -17,6 +17,7 @@
 #include "netvmo/pipeline/run/camera_step.hpp"
 #include "netvmo/pipeline/run/ros_frame.hpp"
 #include "netvmo/pipeline/sources/topic_network.hpp"
+#include "netvmo/pipeline/stopwatch.hpp"
 
 namespace netvmo::net {
 namespace fs = std::filesystem;
@@ -69,24 +70,20 @@ std::string frame_row(int k, double t, const run::CameraFrame& cam, const obs::C
   return s + "\n";
 }
 
-double now_epoch() {
-  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
-}
-
 void sleep_until_epoch(double t) {
-  const double wait = t - now_epoch();
+  const double wait = t - epoch_seconds();
   if (wait > 0) std::this_thread::sleep_for(std::chrono::duration<double>(wait));
 }
 
 // The common start from `file` (one number, seconds since the epoch), waiting for it to
 // appear for at most timeout_s.
 double read_start(const fs::path& file, double timeout_s) {
-  const double give_up = now_epoch() + timeout_s;
+  const double give_up = epoch_seconds() + timeout_s;
   for (;;) {
     std::ifstream in(file);
     double t = 0;
     if (in >> t) return t;
-    if (now_epoch() > give_up)
+    if (epoch_seconds() > give_up)
       throw std::runtime_error(file.string() + ": no common start within " +
                                std::to_string(timeout_s) + " s");
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
@@ -269,12 +266,12 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   summary.notes = provider->notes();
   summary.substeps = substeps(dt_own, net);
   std::vector<obs::EstimateMessage> inbox;
-  const double start = start_epoch ? *start_epoch : now_epoch();
+  const double start = start_epoch ? *start_epoch : epoch_seconds();
   if (async && !(o.speed > 0)) throw InputError("--speed must be > 0");
   // A node started after the common start (a restart) joins at its next image, on schedule.
   int first = 0;
   if (async && start_epoch && !live) {
-    const double now_cam = t0 + (now_epoch() - start) * o.speed;
+    const double now_cam = t0 + (epoch_seconds() - start) * o.speed;
     while (first < frames && frame_time(first) < now_cam) ++first;
   }
   summary.first_frame = first;
@@ -289,7 +286,8 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   const double hold_until = frame_time(first) + o.stale_s;
   // Async: the faults injected on this side (--drop, --delay), between DDS and the observer.
   FaultyTransport faulty(transport, o.drop, o.delay_ms / 1000.0,
-                         o.seed * 1000003ULL + static_cast<std::uint64_t>(o.camera_id), now_epoch);
+                         o.seed * 1000003ULL + static_cast<std::uint64_t>(o.camera_id),
+                         epoch_seconds);
   obs::Transport& exchange = async ? static_cast<obs::Transport&>(faulty) : transport;
   std::vector<run::CameraFrame> cams;
   int k = first;

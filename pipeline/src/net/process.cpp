@@ -11,6 +11,8 @@
 #include <stdexcept>
 #include <thread>
 
+#include "netvmo/pipeline/stopwatch.hpp"
+
 namespace netvmo::net {
 namespace fs = std::filesystem;
 
@@ -65,10 +67,6 @@ std::vector<ChildResult> supervise(const std::vector<pid_t>& pids_in, double tim
   bool killing = false;
   double kill_time = 0.0;
   double kill_epoch = 0.0;  // when the planned victim was killed
-  const auto epoch_now = [] {
-    return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
-        .count();
-  };
   for (size_t i = 0; i < pids.size(); ++i) res[i].pid = pids[i];
   // Stops every child still running (SIGTERM now, SIGKILL two seconds later, below).
   const auto stop_all = [&] {
@@ -117,7 +115,7 @@ std::vector<ChildResult> supervise(const std::vector<pid_t>& pids_in, double tim
       const size_t i = plan->index;
       if (plan_state == Plan::waiting && elapsed() >= plan->kill_at && !done[i]) {
         ::kill(pids[i], SIGKILL);
-        kill_epoch = epoch_now();
+        kill_epoch = epoch_seconds();
         res[i].kill_epoch = kill_epoch;
         plan_state = Plan::killed;
       } else if (plan_state == Plan::killed && plan->restart_after >= 0 && res[i].planned_kill &&
@@ -127,7 +125,7 @@ std::vector<ChildResult> supervise(const std::vector<pid_t>& pids_in, double tim
         res[i].pid = pids[i];
         res[i].restarted = true;
         res[i].kill_epoch = kill_epoch;
-        res[i].restart_epoch = epoch_now();
+        res[i].restart_epoch = epoch_seconds();
         plan_state = Plan::restarted;
         awaiting = false;
       }

@@ -92,21 +92,28 @@ Cert certificate(const std::string& cn, EVP_PKEY* key, X509* issuer, EVP_PKEY* i
   return c;
 }
 
-std::string pem(X509* cert) {
-  Bio b(ok(BIO_new(BIO_s_mem()), "memory"));
-  ok(PEM_write_bio_X509(b.get(), cert), "write certificate");
+Bio memory_bio() {
+  return Bio(ok(BIO_new(BIO_s_mem()), "memory"));
+}
+
+// What was written into a memory BIO.
+std::string text_of(BIO* b) {
   char* data = nullptr;
-  const long n = BIO_get_mem_data(b.get(), &data);
+  const long n = BIO_get_mem_data(b, &data);
   return std::string(data, static_cast<size_t>(n));
 }
 
+std::string pem(X509* cert) {
+  const Bio b = memory_bio();
+  ok(PEM_write_bio_X509(b.get(), cert), "write certificate");
+  return text_of(b.get());
+}
+
 std::string pem(EVP_PKEY* key) {
-  Bio b(ok(BIO_new(BIO_s_mem()), "memory"));
+  const Bio b = memory_bio();
   ok(PEM_write_bio_PrivateKey(b.get(), key, nullptr, nullptr, 0, nullptr, nullptr),
      "write private key");
-  char* data = nullptr;
-  const long n = BIO_get_mem_data(b.get(), &data);
-  return std::string(data, static_cast<size_t>(n));
+  return text_of(b.get());
 }
 
 // `text` S/MIME-signed (clear text, detached signature), as `openssl smime -sign -text` writes.
@@ -114,11 +121,9 @@ std::string smime_signed(const std::string& text, X509* signer, EVP_PKEY* key) {
   Bio in(ok(BIO_new_mem_buf(text.data(), static_cast<int>(text.size())), "memory"));
   const int flags = PKCS7_TEXT | PKCS7_DETACHED | PKCS7_STREAM;
   Pkcs7 p7(ok(PKCS7_sign(signer, key, nullptr, in.get(), flags), "sign document"));
-  Bio out(ok(BIO_new(BIO_s_mem()), "memory"));
+  const Bio out = memory_bio();
   ok(SMIME_write_PKCS7(out.get(), p7.get(), in.get(), flags), "write signed document");
-  char* data = nullptr;
-  const long n = BIO_get_mem_data(out.get(), &data);
-  return std::string(data, static_cast<size_t>(n));
+  return text_of(out.get());
 }
 
 std::string iso_time(std::time_t t) {

@@ -75,21 +75,26 @@ int checked_rounds(double dt, double k_e, double k_s, int max_degree, int rounds
   return rounds > 0 ? rounds : static_cast<int>(stable);
 }
 
+TimeGrid time_grid(double first, double last, double dt, int frames) {
+  TimeGrid g;
+  g.dt = dt;
+  g.t0 = first;
+  g.frames = frames > 0 ? frames : static_cast<int>(std::floor((last - first) / dt + 1e-9)) + 1;
+  return g;
+}
+
 TimeGrid time_grid(const sources::NetworkSource& provider, int frames) {
   const io::NetworkConfig& net = provider.network();
-  TimeGrid g;
-  g.dt = 1.0 / net.fps;
+  double first = std::numeric_limits<double>::infinity();
   double last = -std::numeric_limits<double>::infinity();
-  g.t0 = std::numeric_limits<double>::infinity();
   for (size_t i = 0; i < net.cameras.size(); ++i) {
     const auto images = sources::camera_images(provider, i);
     if (images.empty()) continue;
-    g.t0 = std::min(g.t0, images.front().second);
+    first = std::min(first, images.front().second);
     last = std::max(last, images.back().second);
   }
-  if (!std::isfinite(g.t0)) g.t0 = last = 0.0;
-  g.frames = frames > 0 ? frames : static_cast<int>(std::floor((last - g.t0) / g.dt + 1e-9)) + 1;
-  return g;
+  if (!std::isfinite(first)) first = last = 0.0;
+  return time_grid(first, last, 1.0 / net.fps, frames);
 }
 
 int latest_at_or_before(const std::vector<double>& times, double t) {

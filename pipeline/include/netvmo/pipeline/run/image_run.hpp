@@ -101,6 +101,9 @@ struct TimeGrid {
 /// The grid of a source: `frames` grid times, or when 0 every grid time up to the last image of
 /// any camera (1e-9 s slack).
 TimeGrid time_grid(const sources::NetworkSource& provider, int frames = 0);
+/// The grid from `first` to `last` (the earliest and latest image times) at `dt`: `frames` grid
+/// times, or when 0 every one up to `last` (1e-9 s slack).
+TimeGrid time_grid(double first, double last, double dt, int frames = 0);
 /// What a camera holds at time t: the index of its latest image at or before t (times in
 /// increasing order, 1e-9 s slack), or -1 before its first.
 int latest_at_or_before(const std::vector<double>& times, double t);
