@@ -1,8 +1,8 @@
 // A test participant of the estimate topics, in its own process.
 //   dds_peer peer  DOMAIN SELF NEIGHBOUR ROUNDS WRITERS OUT   one camera of a two-camera network
 //   dds_peer rogue DOMAIN ROUNDS SECONDS                       garbage on both peers' topics
-//   dds_peer writer DOMAIN TOPIC SECDIR IDENTITY SECONDS OUT   a (secured) estimate writer: see
-//     writer() below
+//   dds_peer writer DOMAIN TOPIC SECDIR IDENTITY SECONDS OUT [LINGER]   a (secured) estimate
+//     writer: see writer() below; it stays LINGER seconds after writing OUT
 //   dds_peer ros   DOMAIN CAMERA COUNT SECONDS OUT             reads a camera's PoseStamped topic
 //     until COUNT samples or SECONDS; OUT: "sec nanosec frame_id px py pz qw qx qy qz" per sample
 //   dds_peer tf    DOMAIN CAMERA STATIC COUNT SECONDS OUT      reads rt/tf_static, rt/tf and camera
@@ -190,7 +190,7 @@ int tf(int domain, int camera, int statics, int count, double seconds, const cha
 // matches (or after SECONDS); a matched writer then writes 5 estimates of camera index 0 at the
 // position (kMarker, kMarker, kMarker).
 int writer(int domain, const std::string& topic, const std::string& secdir,
-           const std::string& identity, double seconds, const char* out) {
+           const std::string& identity, double seconds, const char* out, double linger) {
   std::FILE* f = std::fopen(out, "w");
   if (!f) return 3;
   std::optional<net::SecurityIdentity> id;
@@ -222,6 +222,8 @@ int writer(int domain, const std::string& topic, const std::string& secdir,
   }
   std::fprintf(f, "matched %d\n", matched);
   std::fclose(f);
+  // Stays matched (the tests' injected packets need a live writer on the other side).
+  if (linger > 0) ::usleep(static_cast<useconds_t>(linger * 1e6));
   return 0;
 }
 
@@ -239,8 +241,9 @@ int main(int argc, char** argv) {
     if (what == "tf" && argc == 8)
       return tf(std::atoi(argv[2]), std::atoi(argv[3]), std::atoi(argv[4]), std::atoi(argv[5]),
                 std::atof(argv[6]), argv[7]);
-    if (what == "writer" && argc == 8)
-      return writer(std::atoi(argv[2]), argv[3], argv[4], argv[5], std::atof(argv[6]), argv[7]);
+    if (what == "writer" && (argc == 8 || argc == 9))
+      return writer(std::atoi(argv[2]), argv[3], argv[4], argv[5], std::atof(argv[6]), argv[7],
+                    argc == 9 ? std::atof(argv[8]) : 0.0);
     if (what == "rogue" && argc == 5)
       return rogue(std::atoi(argv[2]), std::atoi(argv[3]), std::atof(argv[4]));
   } catch (const std::exception& e) {
