@@ -59,6 +59,7 @@ json merge_and_report(sources::NetworkSource& provider, const run::ImageRunOptio
     plot_run(dir, provider.network());
   }
   std::printf("%s", net::message_table(merged.messages, provider.network()).c_str());
+  std::printf("%s", net::exchange_line(merged.exchange).c_str());
   return merged.summary;
 }
 
@@ -70,7 +71,7 @@ void add_launch(CLI::App& app, int& exit_code) {
     int domain = -1;
     std::uint64_t seed = 0;
     double timeout = 600.0, node_timeout = 20.0;
-    std::string mode = "lockstep", kill;
+    std::string mode = "lockstep", kill, clock_offsets;
     double speed = 1.0, stale = 0.25, drop = 0.0, delay = 0.0, restart_after = -1.0;
     bool live = false;
     net::LiveSettings live_settings;
@@ -106,6 +107,9 @@ void add_launch(CLI::App& app, int& exit_code) {
   add_async_options(*cmd, o->speed, o->stale, o->drop, o->delay, o->seed);
   cmd->add_option("--kill", o->kill,
                   "async: ID@T kills camera ID's node T seconds (wall) after the start");
+  cmd->add_option("--clock-offsets", o->clock_offsets,
+                  "async: ID:S[,ID:S...] runs camera ID's node as on a host whose clock is S "
+                  "seconds off (node --clock-offset; docs/processes.md, \"Clocks\")");
   cmd->add_option("--restart-after", o->restart_after,
                   "async: restart the killed node this many seconds later (it joins at the "
                   "current frame, with a new incarnation)")
@@ -157,8 +161,10 @@ void add_launch(CLI::App& app, int& exit_code) {
 
       for (const auto& note : provider->notes()) std::printf("note: %s\n", note.c_str());
       const bool async = o->mode == "async";
-      if (!async && (o->drop > 0 || o->delay > 0 || !o->kill.empty() || o->restart_after >= 0))
-        throw InputError("--drop, --delay, --kill and --restart-after need --mode async");
+      if (!async && (o->drop > 0 || o->delay > 0 || !o->kill.empty() || o->restart_after >= 0 ||
+                     !o->clock_offsets.empty()))
+        throw InputError(
+            "--drop, --delay, --kill, --restart-after and --clock-offsets need --mode async");
       if (!async)
         if (auto m = sources::clock_mismatch(*provider))
           throw InputError(*m + ": lock-step needs one clock for every camera (use --mode async)");
@@ -194,6 +200,8 @@ void add_launch(CLI::App& app, int& exit_code) {
       ls.seed = o->seed;
       ls.run_arguments = forwarded(o->run);
       ls.kill = kill;
+      if (!o->clock_offsets.empty())
+        ls.clock_offsets = net::parse_clock_offsets(o->clock_offsets, netcfg);
       if (o->live) ls.live = o->live_settings;
       if (!o->security.empty()) {
         for (const auto& c : netcfg.cameras)  // every node's files, before any starts

@@ -68,6 +68,7 @@ void add_node(CLI::App& app, int& exit_code) {
     std::string dataset, out, mode = "lockstep";
     int camera = 0, domain = -1, frames = 0;
     double timeout = 20.0, speed = 1.0, stale = 0.25, drop = 0.0, delay = 0.0, start_at = 0.0;
+    double clock_offset = 0.0;
     std::uint64_t seed = 0;
     bool resume = false, in_place = false, live = false;
     std::string start_file, security;
@@ -107,6 +108,12 @@ void add_node(CLI::App& app, int& exit_code) {
   cmd->add_option("--start-file", o->start_file,
                   "async: instead of --start-at, write node_<id>.ready next to this file once set "
                   "up, then wait (at most --timeout) for this file to hold the common start");
+  cmd->add_option("--clock-offset", o->clock_offset,
+                  "async: emulate a host whose clock is this many seconds off: the node's stamps "
+                  "and its exchange's clock are shifted, its images still come in real time "
+                  "(docs/processes.md, \"Clocks\")")
+      ->capture_default_str()
+      ->check(CLI::Range(-86400.0, 86400.0));
   cmd->add_flag("--resume", o->resume,
                 "async restart: keep the rows a killed predecessor finished before the frame this "
                 "node joins at (node_<id>.csv.partial: in its staging folder OUT.partial-<pid>, "
@@ -161,6 +168,7 @@ void add_node(CLI::App& app, int& exit_code) {
       no.dds.domain = o->domain;
       no.dds.mode = net::parse_mode(o->mode);
       no.dds.timeout_s = o->timeout;
+      no.dds.clock_offset_s = o->clock_offset;
       if (o->frames > 0) no.frames = o->frames;
       no.speed = o->speed;
       no.stale_s = o->stale;

@@ -96,9 +96,10 @@ produce() {  # produce NETVMO NAME: outputs in $work/NAME, produced under one co
   "$bin" sweep "$out/dataset" --out "$out/sweep" --ks 2,20 --no-plot >/dev/null 2>&1
   "$bin" launch "$out/dataset" --out "$out/launch" --domain "$domain" --no-overlays --no-plots \
     --timeout 300 >/dev/null 2>&1
-  # The nodes' logs and statistics hold wall-clock times; the DDS configuration its own path.
+  # The nodes' logs, statistics and exchange timings hold wall-clock times; the DDS
+  # configuration its own path.
   rm -f "$out"/launch/nodes/*.log "$out"/launch/nodes/*.json "$out/launch/cyclonedds.xml" \
-    "$out/launch/messages.json"
+    "$out/launch/messages.json" "$out/launch/exchange.json"
   # Wall-clock timings differ from run to run; everything else must not.
   for r in run launch; do
     awk '/^  "timing": \{/ {skip = 1} !skip {print} skip && /^  \},?$/ {skip = 0}' \

@@ -19,17 +19,20 @@
 #     --delay MS:JITTER       every namespace delays its outgoing packets MS +- JITTER ms
 #                             (tc netem); exits 77 where the kernel has no netem
 #     --timeout S             every node is killed after S seconds (default 120)
+#     --clock-offsets ID:S,...  camera ID's node runs as on a host whose clock is S seconds off
+#                             (node --clock-offset; the namespaces share this machine's clock)
 #
 # Needs root, `ip netns` and, for --loss and --cut, nft. Exits 77 (with the reason on stderr) when this
 # machine does not allow network namespaces. Removes every namespace it made on every path
 # (exit, error, SIGINT, SIGTERM).
 set -euo pipefail
 
-usage() { echo "usage: tools/netns_run.sh NETVMO DATASET OUT [--mode M] [--loss PCT] [--cut ID@T:D] [--timeout S] [-- node options]" >&2; exit 2; }
+usage() { echo "usage: tools/netns_run.sh NETVMO DATASET OUT [--mode M] [--loss PCT] [--cut ID@T:D] [--delay MS:J] [--clock-offsets ID:S,...] [--timeout S] [-- node options]" >&2; exit 2; }
 [ $# -ge 3 ] || usage
 netvmo=$(realpath "$1"); dataset=$(realpath "$2"); out=$3; shift 3
 mode=lockstep loss=0 cut="" delay="" timeout=120
 node_args=()
+declare -A clock_offset=()
 while [ $# -gt 0 ]; do
   case $1 in
     --mode) mode=$2; shift 2 ;;
@@ -37,6 +40,13 @@ while [ $# -gt 0 ]; do
     --cut) cut=$2; shift 2 ;;
     --delay) delay=$2; shift 2 ;;
     --timeout) timeout=$2; shift 2 ;;
+    --clock-offsets)
+      IFS=, read -ra items <<<"$2"
+      for item in "${items[@]}"; do
+        [[ $item =~ ^([0-9]+):(-?[0-9.]+)$ ]] || { echo "netns_run: --clock-offsets $2: '$item' is not ID:SECONDS" >&2; exit 2; }
+        clock_offset[${BASH_REMATCH[1]}]=${BASH_REMATCH[2]}
+      done
+      shift 2 ;;
     --) shift; node_args=("$@"); break ;;
     *) usage ;;
   esac
@@ -81,6 +91,9 @@ if [ -n "$why" ]; then echo "netns_run: network namespaces without what the harn
 mapfile -t ids < <(grep -oE '^[[:space:]]*-[[:space:]]*\{?[[:space:]]*id:[[:space:]]*[0-9]+' \
   "$dataset/network.yaml" | grep -oE '[0-9]+$')
 [ ${#ids[@]} -ge 1 ] || { echo "netns_run: $dataset/network.yaml: no cameras" >&2; exit 2; }
+for c in "${!clock_offset[@]}"; do
+  [[ " ${ids[*]} " == *" $c "* ]] || { echo "netns_run: --clock-offsets: no camera $c in $dataset/network.yaml" >&2; exit 2; }
+done
 net=198.18.$(( $$ % 250 ))
 bridge=${tag}br
 
@@ -121,9 +134,11 @@ if [ "$mode" = async ]; then
 fi
 for k in "${!ids[@]}"; do
   id=${ids[$k]} ns=${tag}c${ids[$k]}
+  clock_args=()
+  if [ -n "${clock_offset[$id]:-}" ]; then clock_args=(--clock-offset "${clock_offset[$id]}"); fi
   ip netns exec "$ns" env CYCLONEDDS_URI="file://$(realpath "$out/cyclonedds_$id.xml")" \
     timeout -k 5 "$timeout" "$netvmo" node "$dataset" --camera "$id" --out "$out/node_$id" \
-    --domain "$domain" --mode "$mode" "${start_args[@]}" "${node_args[@]}" \
+    --domain "$domain" --mode "$mode" "${start_args[@]}" "${clock_args[@]}" "${node_args[@]}" \
     > "$out/node_$id.log" 2>&1 &
   pids+=($!)
 done

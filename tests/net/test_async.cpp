@@ -277,8 +277,11 @@ TEST_F(Async, ARestartedNodeMovesNoNeighbourAndLeavesNoGap) {
 // times frame / fps). In async mode each node integrates over its own images' intervals and
 // every camera ends within 1 cm and 1 degree of g*; estimates.csv keeps each camera's own rows
 // and times, errors.csv is on the 30 frames/s grid. `run` and lock-step refuse different rates.
-TEST_F(Async, CamerasAtDifferentRatesConverge) {
-  const fs::path dir = *dir_, src = dir / "ds", ds = dir / "rates";
+namespace {
+
+// The recorded folder of CamerasAtDifferentRatesConverge in `ds` (from the render in `src`);
+// returns each camera's image times.
+std::map<int, std::vector<double>> make_rates_dataset(const fs::path& src, const fs::path& ds) {
   fs::create_directories(ds / "calib");
   for (const char* f : {"target.csv", "truth_cameras.csv"}) fs::copy_file(src / f, ds / f);
   auto net = io::load_network_config(src / "network.yaml");
@@ -308,6 +311,15 @@ TEST_F(Async, CamerasAtDifferentRatesConverge) {
   }
   times.close();
   std::ofstream(ds / "network.yaml") << io::network_yaml(net);
+  return expected_t;
+}
+
+}  // namespace
+
+TEST_F(Async, CamerasAtDifferentRatesConverge) {
+  const fs::path dir = *dir_, ds = dir / "rates";
+  const auto expected_t = make_rates_dataset(dir / "ds", ds);
+  const std::map<int, int> every = {{1, 1}, {2, 2}, {3, 3}, {4, 1}, {5, 1}};
 
   // `run` takes the union of the cameras' timestamps (with the test's gains); lock-step needs
   // one clock: one line, before any node starts.
@@ -352,8 +364,8 @@ TEST_F(Async, CamerasAtDifferentRatesConverge) {
     const double t = std::stod(est[r][1]);
     EXPECT_GE(t, last_t);
     last_t = t;
-    ASSERT_LT(static_cast<size_t>(j), expected_t[id].size()) << "camera " << id;
-    EXPECT_NEAR(t, expected_t[id][static_cast<size_t>(j)], 1e-6) << "camera " << id;
+    ASSERT_LT(static_cast<size_t>(j), expected_t.at(id).size()) << "camera " << id;
+    EXPECT_NEAR(t, expected_t.at(id)[static_cast<size_t>(j)], 1e-6) << "camera " << id;
     EXPECT_EQ(j, count[id]++) << "camera " << id;
     const auto node = net_test::read_csv(out / "nodes" / ("node_" + std::to_string(id) + ".csv"));
     const auto& nrow = node[static_cast<size_t>(j + 1)];
@@ -368,4 +380,111 @@ TEST_F(Async, CamerasAtDifferentRatesConverge) {
   ASSERT_EQ(err.size(), 1u + kFrames);
   for (int k = 0; k < kFrames; ++k)
     EXPECT_NEAR(std::stod(err[static_cast<size_t>(k + 1)][1]), k / 30.0, 1e-6);
+}
+
+// Clocks that disagree (docs/processes.md, "Clocks"): on the recorded folder of
+// CamerasAtDifferentRatesConverge, camera 2's host clock runs 40 ms ahead, camera 3's 40 ms
+// behind and camera 4's 2 s ahead (launch --clock-offsets); cameras 1 (the reference) and 5 are
+// right. Each node stamps its rows and messages on its own clock, and its images still come in
+// real time.
+// - The nodes' exchange measures each neighbour's offset (ClockSync); the merge chains them from
+//   camera 1 (clocks.json): each camera's offset lies within its derived bound (half the round
+//   trip's delay, summed along the chain) of the injected one, and that bound is below half a
+//   frame at 30 frames/s, so that no row lands on the wrong grid frame. Each row of
+//   estimates.csv is back at its image's time within its camera's bound.
+// - Async still converges (1 cm, 1 degree), and no node forgets a neighbour: the staleness bound
+//   compares stamps on the receiver's clock. Without the offsets, camera 4's messages would look
+//   2 s in the future to its neighbours and theirs 2 s old to it: forgotten every round.
+// - A node whose offset no round trip gives is reported by `netvmo merge` (its neighbours'
+//   reports of it, and its own, removed from the gathered node files): one warning line, null
+//   in clocks.json, its rows left on its own clock.
+TEST_F(Async, ClocksThatDisagreeAreMeasuredAndAligned) {
+  const fs::path dir = *dir_, ds = dir / "clocks_ds", out = dir / "clocks_out";
+  const auto expected_t = make_rates_dataset(dir / "ds", ds);
+  const std::map<int, double> injected = {{1, 0.0}, {2, 0.04}, {3, -0.04}, {4, 2.0}, {5, 0.0}};
+  const auto a = net_test::netvmo_bounded(
+      launch(ds, "--clock-offsets 2:0.04,3:-0.04,4:2 --out " + out.string()), dir, 90);
+  ASSERT_EQ(a.code, 0) << a.out << a.err;
+
+  // The emulation: camera 4's node stamped its rows 2 s ahead.
+  const auto node4 = net_test::read_csv(out / "nodes" / "node_4.csv");
+  ASSERT_GE(node4.size(), 2u);
+  EXPECT_NEAR(std::stod(node4[1][1]), expected_t.at(4)[0] + 2.0, 1e-9);
+
+  const auto clocks = net_test::read_json(out / "clocks.json");
+  EXPECT_EQ(clocks["reference_camera"].get<int>(), 1);
+  std::map<int, double> bound;
+  for (const auto& c : clocks["cameras"]) {
+    const int id = c["camera"].get<int>();
+    ASSERT_FALSE(c["offset_s"].is_null()) << "camera " << id;
+    const double offset = c["offset_s"].get<double>(), b = c["bound_s"].get<double>();
+    bound[id] = b;
+    EXPECT_LE(std::abs(offset - injected.at(id)), b + 1e-9) << "camera " << id;
+    EXPECT_LT(b, 0.5 / 30.0) << "camera " << id;
+    if (injected.at(id) != 0.0) {
+      EXPECT_EQ(c["correction_s"].get<double>(), offset) << "camera " << id;
+    }
+  }
+  ASSERT_EQ(bound.size(), 5u);
+
+  const auto est = net_test::read_csv(out / "estimates.csv");
+  std::map<int, int> count;
+  for (size_t r = 1; r < est.size(); ++r) {
+    const int id = std::stoi(est[r][2]), j = std::stoi(est[r][0]);
+    ASSERT_LT(static_cast<size_t>(j), expected_t.at(id).size()) << "camera " << id;
+    EXPECT_NEAR(std::stod(est[r][1]), expected_t.at(id)[static_cast<size_t>(j)],
+                bound.at(id) + 1e-6)
+        << "camera " << id << " frame " << j;
+    ++count[id];
+  }
+  for (const auto& [id, ts] : expected_t) EXPECT_EQ(count[id], static_cast<int>(ts.size()));
+
+  expect_converged(net_test::read_json(out / "summary.json"), "clock offsets 40 ms, -40 ms, 2 s");
+  const auto m = net_test::read_json(out / "messages.json");
+  for (const auto& [id, s] : m.items())
+    EXPECT_EQ(s["forgotten_stale"].get<int>(), 0) << "camera " << id;
+
+  // Camera 4 unmeasured: its neighbours' reports of it and its own removed.
+  const fs::path gathered = dir / "clocks_gathered";
+  fs::copy(out / "nodes", gathered, fs::copy_options::recursive);
+  for (int id = 1; id <= 5; ++id) {
+    const fs::path f = gathered / ("node_" + std::to_string(id) + ".json");
+    auto j = net_test::read_json(f);
+    auto& nb = j["clock"]["neighbours"];
+    nlohmann::json kept = nlohmann::json::array();
+    for (const auto& e : nb)
+      if (id != 4 && e["camera"].get<int>() != 4) kept.push_back(e);
+    nb = kept;
+    std::ofstream(f) << j.dump(2);
+  }
+  const auto mg = net_test::netvmo_bounded(
+      "merge " + gathered.string() + " --dataset " + ds.string() + " --out " +
+          (dir / "clocks_merged").string() + " --no-overlays --no-plots",
+      dir, 60);
+  ASSERT_EQ(mg.code, 0) << mg.err;
+  EXPECT_NE(mg.err.find("camera 4: its clock's offset to camera 1's is unknown"), std::string::npos)
+      << mg.err;
+  const auto c2 = net_test::read_json(dir / "clocks_merged" / "clocks.json");
+  for (const auto& c : c2["cameras"])
+    EXPECT_EQ(c["offset_s"].is_null(), c["camera"].get<int>() == 4) << c.dump();
+}
+
+// --clock-offsets: a camera the dataset lacks, a value that is not a number, a camera twice,
+// and lock-step: one line naming the option, before any node starts.
+TEST_F(Async, BadClockOffsetsAreRefused) {
+  const fs::path dir = *dir_;
+  for (const std::string spec : {"9:1", "2:x", "2:1,2:0", "2"}) {
+    const auto r = net_test::netvmo_bounded(
+        launch(dir / "ds", "--clock-offsets " + spec + " --out " + (dir / "bad_clock").string()),
+        dir, 30);
+    EXPECT_NE(r.code, 0) << spec;
+    EXPECT_NE(r.err.find("--clock-offsets " + spec + ": "), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "bad_clock")) << spec;
+  }
+  const auto l =
+      net_test::netvmo_bounded("launch " + (dir / "ds").string() + " --clock-offsets 2:1 --out " +
+                                   (dir / "bad_clock").string(),
+                               dir, 30);
+  EXPECT_NE(l.code, 0);
+  EXPECT_NE(l.err.find("--clock-offsets need --mode async"), std::string::npos) << l.err;
 }

@@ -7,9 +7,11 @@
 
 #include <cctype>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <thread>
 
@@ -101,6 +103,36 @@ TEST(NetNs, AsyncConvergesUnderTenPercentKernelLoss) {
     ASSERT_GT(packets, 100) << "camera " << id;
     EXPECT_NEAR(dropped / packets, 0.10, 0.04)
         << "camera " << id << ": " << dropped << " of " << packets;
+  }
+  EXPECT_EQ(cameras, 5);
+  fs::remove_all(dir);
+}
+
+// Clocks that disagree across namespaces (docs/processes.md, "Clocks that disagree"): camera 2's
+// node runs 40 ms ahead, camera 3's 40 ms behind, camera 4's 2 s ahead. The merge of the gathered
+// node files finds each offset within its bound (below half a frame) of the injected one, and
+// async converges.
+TEST(NetNs, ClocksThatDisagreeAreMeasuredAcrossNamespaces) {
+  const fs::path dir = test::scratch_dir("netns_clocks");
+  const fs::path ds = render(dir, 30);
+  std::string err;
+  const int code = netns_run(ds, dir / "ns",
+                             "--mode async --clock-offsets 2:0.04,3:-0.04,4:2 --timeout 100 -- "
+                             "--ke 10 --ks 100 --speed 0.25",
+                             err);
+  if (code == 77) GTEST_SKIP() << err;
+  ASSERT_EQ(code, 0) << err;
+  expect_converged(dir / "ns" / "merged" / "summary.json");
+  const std::map<int, double> injected = {{1, 0.0}, {2, 0.04}, {3, -0.04}, {4, 2.0}, {5, 0.0}};
+  const auto clocks = net_test::read_json(dir / "ns" / "merged" / "clocks.json");
+  int cameras = 0;
+  for (const auto& c : clocks["cameras"]) {
+    const int id = c["camera"].get<int>();
+    ASSERT_FALSE(c["offset_s"].is_null()) << "camera " << id;
+    const double b = c["bound_s"].get<double>();
+    EXPECT_LE(std::abs(c["offset_s"].get<double>() - injected.at(id)), b + 1e-9) << "camera " << id;
+    EXPECT_LT(b, 0.5 / 30.0) << "camera " << id;
+    ++cameras;
   }
   EXPECT_EQ(cameras, 5);
   fs::remove_all(dir);

@@ -11,6 +11,7 @@
 
 #include "NetvmoEstimate.h"
 #include "dds_util.hpp"
+#include "netvmo/pipeline/stopwatch.hpp"
 
 namespace netvmo::net {
 
@@ -133,7 +134,8 @@ DdsTransport::DdsTransport(int self, std::vector<int> neighbours, std::vector<in
     : self_(self),
       neighbours_(std::move(neighbours)),
       labels_(std::move(labels)),
-      settings_(std::move(settings)) {
+      settings_(std::move(settings)),
+      clock_(self_, neighbours_) {
   participant_ =
       create_participant(settings_.domain, settings_.security ? &*settings_.security : nullptr,
                          "create participant (check CYCLONEDDS_URI)");
@@ -169,9 +171,22 @@ DdsTransport::~DdsTransport() {
   dds_delete(participant_);
 }
 
+double DdsTransport::now() const {
+  return epoch_seconds() + settings_.clock_offset_s;
+}
+
 void DdsTransport::send(const obs::EstimateMessage& m) {
   netvmo_msg_Estimate s = to_sample(m);
   s.graph = settings_.graph_digest;
+  // The exchange's own timing (ClockSync): this message's time, and the latest of each neighbour.
+  const auto& heard = clock_.echoes();
+  echo_buffer_.resize(heard.size());
+  for (size_t e = 0; e < heard.size(); ++e)
+    echo_buffer_[e] = {heard[e].camera, heard[e].sent, heard[e].received};
+  s.echoes._buffer = echo_buffer_.data();
+  s.echoes._length = s.echoes._maximum = static_cast<std::uint32_t>(echo_buffer_.size());
+  s.echoes._release = false;
+  s.sent = now();
   check(dds_write(writer_, &s), "write estimate");
   round_ = m.round;
   ++stats_.sent;
@@ -185,6 +200,7 @@ void DdsTransport::take_all() {
     for (;;) {
       const dds_return_t n = dds_take(reader, samples, infos, kMaxTake, kMaxTake);
       check(n, "take estimates");
+      const double taken = now();  // (after the take: every sample of it had arrived)
       for (dds_return_t k = 0; k < n; ++k) {
         if (!infos[k].valid_data) continue;
         const auto& s = *static_cast<const netvmo_msg_Estimate*>(samples[k]);
@@ -201,6 +217,14 @@ void DdsTransport::take_all() {
           dds_return_loan(reader, samples, n);
           throw;
         }
+        echo_in_.clear();
+        for (std::uint32_t e = 0; e < s.echoes._length; ++e)
+          echo_in_.push_back(
+              {s.echoes._buffer[e].camera, s.echoes._buffer[e].sent, s.echoes._buffer[e].received});
+        clock_.taken(s.sender, s.sent, taken, echo_in_.data(), echo_in_.size());
+        // Stamps are handed on on this camera's clock (the staleness bound compares them with
+        // its own time).
+        pending_.back().stamp = clock_.to_own_clock(s.sender, s.stamp);
       }
       if (n > 0) dds_return_loan(reader, samples, n);
       if (n < kMaxTake) break;

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 #include <thread>
 
@@ -55,6 +57,33 @@ NodeKill parse_node_kill(const std::string& spec, double restart_after,
   return {id, t, restart_after};
 }
 
+std::map<int, double> parse_clock_offsets(const std::string& spec, const io::NetworkConfig& net) {
+  std::map<int, double> out;
+  std::stringstream in(spec);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    const auto colon = item.find(':');
+    int id = -1;
+    double s = NAN;
+    try {
+      if (colon != std::string::npos) {
+        size_t used = 0;
+        id = std::stoi(item.substr(0, colon), &used);
+        if (used != colon) id = -1;
+        const std::string v = item.substr(colon + 1);
+        s = std::stod(v, &used);
+        if (used != v.size()) s = NAN;
+      }
+    } catch (const std::exception&) {
+    }
+    if (colon == std::string::npos || net.index_of(id) < 0 || !std::isfinite(s) || out.count(id))
+      throw InputError("--clock-offsets " + spec + ": '" + item +
+                       "': expected ID:SECONDS, each camera of " + net.source + " at most once");
+    out[id] = s;
+  }
+  return out;
+}
+
 std::vector<std::string> node_argv(const LaunchSettings& s, int camera_id,
                                    const fs::path& nodes_dir) {
   std::vector<std::string> argv = {s.exe.string(),
@@ -86,6 +115,8 @@ std::vector<std::string> node_argv(const LaunchSettings& s, int camera_id,
           std::string("--delay"), num(s.delay), std::string("--seed"), std::to_string(s.seed),
           std::string("--start-file"), (nodes_dir / "start.txt").string()})
       argv.push_back(a);
+  if (const auto c = s.clock_offsets.find(camera_id); c != s.clock_offsets.end())
+    for (auto a : {std::string("--clock-offset"), num(c->second)}) argv.push_back(a);
   return argv;
 }
 
@@ -201,26 +232,132 @@ json read_node_json(const fs::path& f) {
   return j;
 }
 
+namespace {
+
+// The nodes' reports of their neighbours' clocks (node_<id>.json "clock"), aligned on the first
+// camera's clock.
+ClockAlignment node_clocks(const io::NetworkConfig& net, const std::vector<json>& node_json,
+                           const fs::path& nodes_dir) {
+  std::vector<ClockLink> links;
+  for (size_t i = 0; i < node_json.size(); ++i) {
+    const json& j = node_json[i];
+    if (j.is_null() || !j.contains("clock")) continue;
+    const fs::path f = node_files(nodes_dir, net.cameras[i].id).json;
+    try {
+      for (const auto& e : j.at("clock").at("neighbours")) {
+        ClockLink l;
+        l.by = static_cast<int>(i);
+        l.of = net.index_of(e.at("camera").get<int>());
+        if (l.of < 0)
+          throw InputError(f.string() + ": clock: camera " + e.at("camera").dump() + " is not in " +
+                           net.source);
+        l.offset.offset_s = e.at("offset_s").get<double>();
+        l.offset.delay_s = e.at("delay_s").is_null() ? INFINITY : e.at("delay_s").get<double>();
+        l.offset.round_trips = e.at("round_trips").get<std::uint64_t>();
+        links.push_back(l);
+      }
+    } catch (const json::exception& e) {
+      throw InputError(f.string() + ": clock: " + e.what());
+    }
+  }
+  return align_clocks(net.cameras.size(), 0, links);
+}
+
+json exchange_json(const io::NetworkConfig& net, const std::vector<json>& node_json) {
+  json nodes = json::object();
+  std::vector<double> medians, p99s, firsts, taken, discovery;
+  for (size_t i = 0; i < node_json.size(); ++i) {
+    const json& j = node_json[i];
+    if (j.is_null() || !j.contains("timing")) continue;
+    json t = j["timing"];
+    const double rounds = t.value("rounds", 0.0);
+    const double received = j["messages"].value("received", 0.0);
+    t["taken_per_round"] = rounds > 0 ? json(received / rounds) : json(nullptr);
+    nodes[std::to_string(net.cameras[i].id)] = t;
+    discovery.push_back(t.value("discovery_s", 0.0));
+    medians.push_back(t.value("round_median_us", 0.0));
+    p99s.push_back(t.value("round_p99_us", 0.0));
+    firsts.push_back(t.value("first_round_median_us", 0.0));
+    if (rounds > 0) taken.push_back(received / rounds);
+  }
+  json all = json::object();
+  if (!medians.empty()) {
+    const auto median = [](std::vector<double> m) {
+      std::nth_element(m.begin(), m.begin() + static_cast<std::ptrdiff_t>(m.size() / 2), m.end());
+      return m[m.size() / 2];
+    };
+    double sum = 0.0;
+    for (double v : taken) sum += v;
+    all = {{"nodes", medians.size()},
+           {"discovery_max_s", *std::max_element(discovery.begin(), discovery.end())},
+           {"round_median_us", median(medians)},
+           {"round_p99_max_us", *std::max_element(p99s.begin(), p99s.end())},
+           {"first_round_median_us", median(firsts)},
+           {"taken_per_round_mean",
+            taken.empty() ? json(nullptr) : json(sum / static_cast<double>(taken.size()))}};
+  }
+  return {{"all", all}, {"nodes", nodes}};
+}
+
+json clocks_json(const ClockAlignment& a, const io::NetworkConfig& net) {
+  json cams = json::array();
+  for (size_t i = 0; i < net.cameras.size(); ++i) {
+    json c = {{"camera", net.cameras[i].id}};
+    c["offset_s"] = a.offset_s[i] ? json(*a.offset_s[i]) : json(nullptr);
+    c["bound_s"] = a.bound_s[i] ? json(*a.bound_s[i]) : json(nullptr);
+    c["correction_s"] = a.correction_s[i];
+    cams.push_back(c);
+  }
+  return {{"reference_camera", net.cameras[static_cast<size_t>(a.reference)].id},
+          {"cameras", cams}};
+}
+
+}  // namespace
+
 MergedRun merge_run_outputs(sources::NetworkSource& provider, const run::ImageRunOptions& options,
                             const fs::path& nodes_dir, const fs::path& dir, int frames,
                             bool allow_gaps, const run::OverlaySettings* overlays) {
   const auto& netcfg = provider.network();
-  auto result = merge_nodes(provider, options, nodes_dir, frames, allow_gaps);
   MergedRun merged;
   merged.messages = json::object();
+  std::vector<json> node_json;  // by camera (null: none)
+  bool async = false;
   for (const auto& c : netcfg.cameras) {
     const fs::path f = node_files(nodes_dir, c.id).json;
     if (allow_gaps && !fs::exists(f)) {  // killed and not restarted: it never finished
       merged.messages[std::to_string(c.id)] = nullptr;
+      node_json.emplace_back();
       continue;
     }
-    const json j = read_node_json(f);
-    merged.messages[std::to_string(c.id)] = j["messages"];
+    node_json.push_back(read_node_json(f));
+    merged.messages[std::to_string(c.id)] = node_json.back()["messages"];
+    async = async || node_json.back()["mode"] == "async";
+  }
+  // Async nodes may run on hosts whose clocks disagree: their rows go onto the first camera's
+  // clock (ClockSync, align_clocks); lock-step runs on one clock by construction.
+  std::optional<ClockAlignment> clocks;
+  if (async) clocks = node_clocks(netcfg, node_json, nodes_dir);
+  auto result = merge_nodes(provider, options, nodes_dir, frames, allow_gaps,
+                            clocks ? clocks->correction_s : std::vector<double>{});
+  for (const auto& j : node_json) {
+    if (j.is_null()) continue;
     for (const auto& w : j["warnings"]) result.warnings.push_back(w.get<std::string>());
     result.seconds = std::max(result.seconds, j["seconds"].get<double>());
   }
+  merged.exchange = exchange_json(netcfg, node_json);
   io::ensure_directory(dir);
   io::write_file_atomic(dir / "messages.json", merged.messages.dump(2) + "\n");
+  io::write_file_atomic(dir / "exchange.json", merged.exchange.dump(2) + "\n");
+  if (clocks) {
+    io::write_file_atomic(dir / "clocks.json", clocks_json(*clocks, netcfg).dump(2) + "\n");
+    for (size_t i = 0; i < netcfg.cameras.size(); ++i)
+      if (!clocks->offset_s[i])
+        result.warnings.push_back(
+            "camera " + std::to_string(netcfg.cameras[i].id) + ": its clock's offset to camera " +
+            std::to_string(netcfg.cameras[static_cast<size_t>(clocks->reference)].id) +
+            "'s is unknown (no chain of round trips of estimates joins them); its rows stay on "
+            "its own clock");
+  }
   if (overlays) {
     run::OverlayWriter writer(dir, provider, *overlays);
     const size_t n = netcfg.cameras.size();
@@ -242,6 +379,21 @@ MergedRun merge_run_outputs(sources::NetworkSource& provider, const run::ImageRu
     std::fprintf(stderr, "warning: %s\n", result.warnings[k].c_str());
   merged.summary = run::write_run_outputs(dir, provider, options, result);
   return merged;
+}
+
+std::string exchange_line(const json& exchange) {
+  const json& a = exchange.at("all");
+  if (a.empty()) return "exchange: no node timing\n";
+  char line[400];
+  std::snprintf(
+      line, sizeof line,
+      "exchange: %d nodes, discovery %.3f s (slowest), round %.1f us (median of the "
+      "nodes' medians), p99 %.1f us (largest), a frame's first round %.1f us (with "
+      "the neighbours' front ends), %.2f estimates taken per round\n",
+      a["nodes"].get<int>(), a["discovery_max_s"].get<double>(), a["round_median_us"].get<double>(),
+      a["round_p99_max_us"].get<double>(), a["first_round_median_us"].get<double>(),
+      a["taken_per_round_mean"].is_null() ? 0.0 : a["taken_per_round_mean"].get<double>());
+  return line;
 }
 
 std::string message_table(const json& messages, const io::NetworkConfig& net) {

@@ -124,7 +124,8 @@ std::vector<const Row*> by_frame(const std::vector<Row>& rows, const fs::path& f
 
 run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
                                 const run::ImageRunOptions& options, const fs::path& nodes_dir,
-                                int frames, bool allow_gaps) {
+                                int frames, bool allow_gaps,
+                                const std::vector<double>& clock_correction) {
   const io::NetworkConfig& net = provider.network();
   const size_t n = net.cameras.size();
   const obs::Graph graph = run::network_graph(net);
@@ -139,6 +140,9 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
   for (const auto& c : net.cameras) {
     files.push_back(node_files(nodes_dir, c.id).csv);
     rows.push_back(read_node_csv(files.back(), allow_gaps || own_clocks));
+    // Onto the reference clock (ClockAlignment::correction_s).
+    if (clock_correction.size() > rows.size() - 1)
+      for (auto& r : rows.back()) r.t -= clock_correction[rows.size() - 1];
   }
 
   run::RunnerSettings rs = options.runner;

@@ -1,5 +1,6 @@
 #include "netvmo/pipeline/net/node.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -239,8 +240,23 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
 
   DdsSettings dds = o.dds;
   dds.graph_digest = graph_digest(labels, netcfg.edges);
+  // What this node's clock says of a time of the run (its stamps: rows, messages, ROS 2): the
+  // dataset's time plus its host's clock error (DdsSettings::clock_offset_s; 0 on one machine).
+  // Its images still come in real time: the pacing below is on the dataset's time.
+  const double clock = dds.clock_offset_s;
+  if (clock != 0.0 && !async)
+    throw InputError("--clock-offset: lock-step needs one clock for every camera (--mode async)");
   DdsTransport transport(self, graph.neighbors(self), labels, dds);
-  transport.wait_for_writers(static_cast<int>(graph.neighbors(self).size()), o.dds.timeout_s);
+  const auto t_discovery = Clock::now();
+  const bool discovered =
+      transport.wait_for_writers(static_cast<int>(graph.neighbors(self).size()), o.dds.timeout_s);
+  // Setup (reading, the front end, the participant) and discovery (every neighbour's writer
+  // matched), for the record.
+  const double setup_s = std::chrono::duration<double>(t_discovery - t_start).count(),
+               discovery_s = std::chrono::duration<double>(Clock::now() - t_discovery).count();
+  // Each round's publish and receive [us] (lock-step: the wait for the neighbours too): a frame's
+  // first round, which also waits for the neighbours' front ends, and the others.
+  std::vector<double> first_round_us, round_us;
   std::optional<RosPublisher> ros;
   if (o.publish_ros_pose) ros.emplace(transport.participant(), o.camera_id);
 
@@ -261,7 +277,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
     start_epoch = camera->first_wall() + o.live->lag_s;
   }
   // The camera's ROS 2 topics (RosPublisher): its pose in the rig once, on rt/tf_static.
-  if (ros) ros->tf_static({run::camera_transform(o.camera_id, frame_time(0), g_wi)});
+  if (ros) ros->tf_static({run::camera_transform(o.camera_id, frame_time(0) + clock, g_wi)});
   NodeSummary summary;
   summary.notes = provider->notes();
   summary.substeps = substeps(dt_own, net);
@@ -326,14 +342,18 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
       if (async) sleep_until_epoch(start + (tr - t0) / o.speed);
       // Lock-step neighbours wait for every round's message; an async node publishes nothing
       // while it has no estimate.
-      if (!async || net.initialized()) transport.send(net.publish(tr));
+      const auto round_start = Clock::now();
+      if (!async || net.initialized()) transport.send(net.publish(tr + clock));
       exchange.receive(self, inbox);
+      (r == 0 ? first_round_us : round_us)
+          .push_back(std::chrono::duration<double, std::micro>(Clock::now() - round_start).count());
       for (const auto& m : inbox) net.receive(m);
       if (async) {
-        // The latest value of each neighbour, forgotten once older than the staleness bound.
+        // The latest value of each neighbour, forgotten once older than the staleness bound
+        // (its stamp on this node's clock: DdsTransport::receive).
         const auto& latest = net.latest();
         for (size_t a = 0; a < latest.size(); ++a)
-          if (latest[a] && tr - latest[a]->stamp > o.stale_s) {
+          if (latest[a] && tr + clock - latest[a]->stamp > o.stale_s) {
             net.forget(net.neighbours()[a]);
             ++summary.forgotten;
           }
@@ -341,14 +361,14 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
       net.step(h);
     }
     for (int r = 0; r < N_ind; ++r) ind.step(h_ind);
-    csv.row(frame_row(k, t, cam, net, ind));
+    csv.row(frame_row(k, t + clock, cam, net, ind));
     std::string in_term;
     for (size_t a = 0; a < net.latest().size(); ++a)
       if (net.latest()[a] && net.latest()[a]->initialized)
         in_term += (in_term.empty() ? "" : " ") +
                    std::to_string(labels[static_cast<size_t>(net.neighbours()[a])]);
     std::string link = std::to_string(k);
-    put(link, t);
+    put(link, t + clock);
     links.row(link + "," + in_term + "\n");
     csv.flush();
     links.flush();
@@ -358,7 +378,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
         if (m && m->initialized) neighbours_w.push_back(m->g_w);
       const std::optional<SE3> estimate =
           net.initialized() ? std::optional<SE3>(net.estimate_world()) : std::nullopt;
-      const run::RosFrame f = run::ros_frame(o.camera_id, t, cam, estimate, neighbours_w);
+      const run::RosFrame f = run::ros_frame(o.camera_id, t + clock, cam, estimate, neighbours_w);
       if (f.measurement) ros->measurement(*f.measurement);
       if (f.average_pose) ros->average_pose(*f.average_pose);
       if (!f.tf.empty()) ros->tf(f.tf);
@@ -395,6 +415,20 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
                   {"rounds", o.run.runner.rounds}};
   j["rounds_per_frame"] = summary.substeps;
   j["seconds"] = summary.seconds;
+  const auto quantile = [&](std::vector<double> v, double q) {
+    if (v.empty()) return 0.0;
+    const auto at = v.begin() + static_cast<std::ptrdiff_t>(q * static_cast<double>(v.size() - 1));
+    std::nth_element(v.begin(), at, v.end());
+    return *at;
+  };
+  j["timing"] = {{"setup_s", setup_s},
+                 {"discovery_s", discovery_s},
+                 {"discovered", discovered},
+                 {"rounds", first_round_us.size() + round_us.size()},
+                 {"round_median_us", quantile(round_us, 0.5)},
+                 {"round_p99_us", quantile(round_us, 0.99)},
+                 {"first_round_median_us", quantile(first_round_us, 0.5)},
+                 {"first_round_p99_us", quantile(first_round_us, 0.99)}};
   j["messages"] = {{"sent", summary.stats.sent},
                    {"received", summary.stats.received},
                    {"dropped", summary.stats.dropped},
@@ -406,6 +440,20 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   j["messages"]["rejected"] = rej;
   j["messages"]["forgotten_stale"] = summary.forgotten;
   j["first_frame"] = summary.first_frame;
+  // Each neighbour's clock as this node's exchange measured it (ClockSync; netvmo merge aligns
+  // the nodes' rows with them).
+  nlohmann::json clocks = nlohmann::json::array();
+  for (const int nb : graph.neighbors(self))
+    if (const auto c = transport.clock().offset(nb)) {
+      nlohmann::json e = {{"camera", labels[static_cast<size_t>(nb)]},
+                          {"offset_s", c->offset_s},
+                          {"round_trips", c->round_trips}};
+      e["delay_s"] = c->round_trip() ? nlohmann::json(c->delay_s) : nlohmann::json(nullptr);
+      clocks.push_back(e);
+    }
+  j["clock"] = {{"neighbours", clocks},
+                {"ignored_samples", transport.clock().ignored()},
+                {"emulated_offset_s", clock}};
   j["warnings"] = summary.warnings;
   j["notes"] = summary.notes;
   io::write_file_atomic(files.json, j.dump(2) + "\n");

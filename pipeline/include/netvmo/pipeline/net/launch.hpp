@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -33,6 +34,10 @@ struct NodeKill {
 NodeKill parse_node_kill(const std::string& spec, double restart_after,
                          const io::NetworkConfig& net);
 
+/// Parses --clock-offsets' ID:SECONDS[,ID:SECONDS...] (cameras of `net`, each once, finite
+/// seconds) into offsets by camera id; throws InputError naming the option otherwise.
+std::map<int, double> parse_clock_offsets(const std::string& spec, const io::NetworkConfig& net);
+
 /// What `netvmo launch` starts. Defaults are the command's.
 struct LaunchSettings {
   std::filesystem::path exe;      ///< the netvmo binary the nodes run (net::self_exe())
@@ -49,6 +54,8 @@ struct LaunchSettings {
   /// The node's share of the run options (gains, error model, estimator, ...), as arguments.
   std::vector<std::string> run_arguments;
   std::optional<NodeKill> kill;  ///< async only
+  /// async: camera id -> its host's emulated clock error [s] (node --clock-offset).
+  std::map<int, double> clock_offsets;
   /// Live (async): every node reads its camera's image topic of network.yaml (NodeOptions::live;
   /// the topics there, so image_topic and camera_info_topic are left empty here).
   std::optional<LiveSettings> live;
@@ -94,11 +101,18 @@ nlohmann::json read_node_json(const std::filesystem::path& file);
 struct MergedRun {
   nlohmann::json summary;
   nlohmann::json messages;
+  /// exchange.json: each node's timing (node_<id>.json "timing": setup, discovery, rounds, round
+  /// median and p99) and estimates taken per round, and over the nodes: the slowest discovery,
+  /// the median of the nodes' round medians, the largest p99, the mean taken per round.
+  nlohmann::json exchange;
 };
 MergedRun merge_run_outputs(sources::NetworkSource& provider, const run::ImageRunOptions& options,
                             const std::filesystem::path& nodes_dir,
                             const std::filesystem::path& dir, int frames, bool allow_gaps,
                             const run::OverlaySettings* overlays);
+
+/// One line on a merged run's exchange (MergedRun::exchange), as printed by launch and merge.
+std::string exchange_line(const nlohmann::json& exchange);
 
 /// The per-camera message table of a merged run (sent, received, dropped, late, non-neighbour,
 /// rejected), as printed by launch and merge.

@@ -7,7 +7,8 @@
 // publish -> receive -> step, exactly as NetworkedObserver does in process. It writes
 //   node_<id>.csv   per frame: detection, PnP pose, networked and independent estimates (%.17g)
 //   node_<id>.json  message statistics (sent, received, dropped, late, foreign, refused by
-//                   verdict), rounds, warnings
+//                   verdict), rounds, warnings, timing (setup, discovery, rounds), and each
+//                   neighbour's clock offset as the exchange measured it (ClockSync)
 #pragma once
 
 #include <cstdint>
@@ -106,10 +107,12 @@ NodeSummary run_node(const std::filesystem::path& dataset, const std::filesystem
 /// blind and uninitialised there; otherwise every frame must be present. A provider without
 /// images (a live network, sources::TopicNetwork) is evaluated on the grid of its nodes' rows'
 /// times (`frames` 0: up to the last row). Throws InputError naming the file on a missing or
-/// malformed one.
+/// malformed one. `clock_correction` (by camera; empty: none) is subtracted from each node's
+/// rows' times: its clock's offset to the reference camera's (ClockAlignment::correction_s).
 run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
                                 const run::ImageRunOptions& options,
                                 const std::filesystem::path& nodes_dir, int frames,
-                                bool allow_gaps = false);
+                                bool allow_gaps = false,
+                                const std::vector<double>& clock_correction = {});
 
 }  // namespace netvmo::net
