@@ -131,7 +131,6 @@ void add_launch(CLI::App& app, int& exit_code) {
   cmd->callback([o, &exit_code, cmd] {
     exit_code = guarded("launch", [&] {
       const auto options = to_image_run_options(o->run);
-      require_single_estimator(options);
       if (!o->live && (cmd->count("--duration") || cmd->count("--idle") || cmd->count("--lag")))
         throw InputError("--duration, --idle and --lag need --live");
       if (o->live) {

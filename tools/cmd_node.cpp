@@ -150,7 +150,6 @@ void add_node(CLI::App& app, int& exit_code) {
         throw InputError("--camera-info-topic, --duration, --idle and --lag need --live");
       net::NodeOptions no;
       no.run = to_image_run_options(o->run);
-      require_single_estimator(no.run);
       io::check_output_apart(o->out, o->dataset);
       // Standalone: the node's own locked staging folder, swapped in at the end (with --resume,
       // the killed predecessor's staging folder is taken over). --in-place (launch): OUT lies in

@@ -96,13 +96,6 @@ run::ImageRunOptions to_image_run_options(const RunCliOptions& o) {
   return r;
 }
 
-void require_single_estimator(const run::ImageRunOptions& o) {
-  if (o.runner.estimator != "vmo")
-    throw InputError("--estimator " + o.runner.estimator +
-                     ": cameras as processes run the paper's observer (vmo) only; the DDS "
-                     "Estimate type does not carry the consensus state yet (use netvmo run)");
-}
-
 namespace {
 json run_and_report_in(sources::NetworkSource& provider, const RunCliOptions& o,
                        const fs::path& dir, const fs::path& bag_dir) {

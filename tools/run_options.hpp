@@ -40,11 +40,6 @@ struct RunCliOptions {
 /// (not for node and launch, whose transport is DDS with faults of their own).
 void add_run_options(CLI::App& cmd, RunCliOptions& o, bool in_process_transport = true);
 run::ImageRunOptions to_image_run_options(const RunCliOptions& o);
-// Cameras as processes run the paper's observer alone: refuses another --estimator (the DDS
-// Estimate type carries no consensus state; InputError). node and launch have no
-// --compare-estimator (add_run_options without the in-process transport).
-void require_single_estimator(const run::ImageRunOptions& o);
-
 /// Runs the provider, writes the outputs, overlays and plots into dir; returns the summary.
 /// `shown`: the name dir will have when the command ends (dir is an io::OutputDir's temporary
 /// folder), used instead of dir in the message of an error; empty: dir. `bag`: also write the

@@ -164,11 +164,11 @@ TEST(AlignClocks, ChainsAlongTheLeastBoundAndReportsTheUnknown) {
 
 // Every seed of the estimate message's fuzz corpus but the Cyclone regression decodes in the
 // current wire format (a seed of an older format would only exercise the rejection of short
-// payloads), and the seeds carry echoes.
+// payloads), and the seeds carry echoes and consensus states.
 TEST(EstimateCorpus, SeedsDecodeInTheCurrentFormat) {
   const fs::path dir = fs::path(NETVMO_SOURCE_DIR) / "tests/fuzz/corpus/estimate_message";
   int seeds = 0;
-  std::uint32_t echoes = 0;
+  std::uint32_t echoes = 0, states = 0;
   for (const auto& e : fs::directory_iterator(dir)) {
     if (e.path().filename().string().rfind("cyclone_", 0) == 0) continue;
     std::ifstream in(e.path(), std::ios::binary);
@@ -178,9 +178,13 @@ TEST(EstimateCorpus, SeedsDecodeInTheCurrentFormat) {
     std::string why;
     const bool ok = m.read(bytes.data(), bytes.size(), why);
     EXPECT_TRUE(ok) << e.path().filename() << ": " << why;
-    if (ok) echoes += m->echoes._length;
+    if (ok) {
+      echoes += m->echoes._length;
+      states += m->state._length;
+    }
     ++seeds;
   }
   EXPECT_GE(seeds, 6);
   EXPECT_GE(echoes, 5u);
+  EXPECT_GE(states, 26u * 5);  // (the consensus state)
 }

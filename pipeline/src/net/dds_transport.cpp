@@ -88,9 +88,12 @@ obs::EstimateMessage from_sample(const netvmo_msg_Estimate& s) {
     m.g_w.translation()(r) = s.position[r];
     for (int c = 0; c < 3; ++c) m.g_w.linear()(r, c) = s.rotation[3 * r + c];
   }
+  const std::uint32_t k = std::min<std::uint32_t>(s.state._length, obs::kConsensusStateSize);
+  std::copy(s.state._buffer, s.state._buffer + k, m.state.begin());
   return m;
 }
 
+// The sample of `m`, pointing into it (it must outlive the write).
 netvmo_msg_Estimate to_sample(const obs::EstimateMessage& m) {
   netvmo_msg_Estimate s{};
   s.sender = m.sender;
@@ -102,6 +105,10 @@ netvmo_msg_Estimate to_sample(const obs::EstimateMessage& m) {
     s.position[r] = m.g_w.translation()(r);
     for (int c = 0; c < 3; ++c) s.rotation[3 * r + c] = m.g_w.linear()(r, c);
   }
+  // The consensus state in place (dds_write only reads it, while `m` lives).
+  s.state._buffer = const_cast<double*>(m.state.data());
+  s.state._length = s.state._maximum = static_cast<std::uint32_t>(m.state.size());
+  s.state._release = false;
   return s;
 }
 
