@@ -1,10 +1,12 @@
 // The calibration's first-order propagation into g* (g_star_uncertainty.hpp) against finite
-// differences of g* itself (obs::average_pose, eq:g_ave).
+// differences of g* itself (obs::average_pose, eq:g_ave), and the correlation of corner errors
+// from frame to frame (calib::frame_correlation) against closed forms.
 #include <gtest/gtest.h>
 
 #include <random>
 
 #include "netvmo/observer/metrics.hpp"
+#include "netvmo/pipeline/calib/calibrate.hpp"
 #include "netvmo/pipeline/calib/g_star_uncertainty.hpp"
 
 using namespace netvmo;
@@ -61,4 +63,49 @@ TEST(CalibMath, GStarCovarianceIsTheFiniteDifferenceJacobianSquared) {
   // weights are equal to O(0.05^2), so 1 % of the covariance's size.
   EXPECT_LT((got - expected).norm(), 1e-2 * expected.norm()) << got << "\n\n" << expected;
   EXPECT_TRUE(calib::g_star_covariance({}).isZero());
+}
+
+namespace {
+// Residuals of `groups` (tag, corner) over `frames` frames: b_g + e_gf, b_g ~ N(0, sb^2) fixed
+// per group (the error that repeats), e_gf ~ N(0, se^2) new each frame; seeded.
+std::vector<calib::CameraResult::Residual> residuals(int groups, int frames, double sb, double se,
+                                                     std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::vector<calib::CameraResult::Residual> out;
+  for (int g = 0; g < groups; ++g) {
+    const double bu = sb * n(rng), bv = sb * n(rng);
+    for (int f = 0; f < frames; ++f)
+      out.push_back({f, g / 4, g % 4, bu + se * n(rng), bv + se * n(rng), true});
+  }
+  return out;
+}
+}  // namespace
+
+// Errors that repeat exactly (no noise): rho = 1 and the covariance is one frame's (inflation =
+// frames); errors that never repeat: rho ~ 0, inflation ~ 1; half and half (sb = se): rho ~ 1/2,
+// the intraclass correlation sb^2 / (sb^2 + se^2). Sampling spread of the estimate with G groups
+// of n: about sqrt(2 / (n (n - 1) G)) (1 - rho)(1 + (n - 1) rho) (Fisher), so the bounds below
+// are several of its standard deviations.
+TEST(CalibMath, FrameCorrelationMatchesItsClosedForms) {
+  const auto same = calib::frame_correlation(residuals(12, 6, 0.5, 0.0, 1));
+  EXPECT_DOUBLE_EQ(same.rho, 1.0);
+  EXPECT_DOUBLE_EQ(same.frames, 6.0);
+  EXPECT_DOUBLE_EQ(same.inflation, 6.0);
+
+  const auto fresh = calib::frame_correlation(residuals(200, 10, 0.0, 0.3, 2));
+  EXPECT_LT(fresh.rho, 0.03);  // (spread ~0.01)
+  EXPECT_LT(fresh.inflation, 1.3);
+  EXPECT_GE(fresh.inflation, 1.0);
+
+  const auto half = calib::frame_correlation(residuals(200, 10, 0.3, 0.3, 3));
+  EXPECT_NEAR(half.rho, 0.5, 0.08);  // (spread ~0.025)
+  EXPECT_NEAR(half.inflation, 1.0 + 9 * half.rho, 1e-12);
+
+  // Unused residuals do not count; one frame, or one group, is no evidence.
+  auto some = residuals(12, 6, 0.5, 0.0, 4);
+  for (auto& r : some) r.used = r.frame == 0;
+  EXPECT_EQ(calib::frame_correlation(some).inflation, 1.0);
+  EXPECT_EQ(calib::frame_correlation(residuals(1, 8, 0.5, 0.1, 5)).inflation, 1.0);
+  EXPECT_EQ(calib::frame_correlation({}).rho, 0.0);
 }

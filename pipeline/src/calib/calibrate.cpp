@@ -348,6 +348,49 @@ std::map<std::pair<size_t, int>, std::vector<const TagSeen*>> by_image(const Ba&
   return g;
 }
 
+}  // namespace
+
+FrameCorrelation frame_correlation(const std::vector<CameraResult::Residual>& residuals) {
+  struct Group {
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    int n = 0;
+  };
+  std::map<std::pair<int, int>, Group> groups;  // (tag, corner)
+  Eigen::Vector2d total = Eigen::Vector2d::Zero();
+  int N = 0;
+  for (const auto& r : residuals) {
+    if (!r.used) continue;
+    auto& g = groups[{r.tag, r.corner}];
+    g.sum += Eigen::Vector2d(r.du, r.dv);
+    ++g.n;
+    total += Eigen::Vector2d(r.du, r.dv);
+    ++N;
+  }
+  FrameCorrelation out;
+  const int G = static_cast<int>(groups.size());
+  if (G < 2 || N <= G) return out;
+  const Eigen::Vector2d mean = total / N;
+  double within = 0.0, between = 0.0, sum_n2 = 0.0;
+  for (const auto& r : residuals) {
+    if (!r.used) continue;
+    const auto& g = groups[{r.tag, r.corner}];
+    within += (Eigen::Vector2d(r.du, r.dv) - g.sum / g.n).squaredNorm();
+  }
+  for (const auto& [key, g] : groups) {
+    between += g.n * (g.sum / g.n - mean).squaredNorm();
+    sum_n2 += double(g.n) * g.n;
+  }
+  const double msw = within / (2.0 * (N - G)), msb = between / (2.0 * (G - 1));
+  const double n0 = (N - sum_n2 / N) / (G - 1);
+  const double denominator = msb + (n0 - 1.0) * msw;
+  out.rho = denominator > 0 ? std::clamp((msb - msw) / denominator, 0.0, 1.0) : 0.0;
+  out.frames = double(N) / G;
+  out.inflation = 1.0 + (out.frames - 1.0) * out.rho;
+  return out;
+}
+
+namespace {
+
 void fill_results(Ba& ba, const std::vector<Mat6>& cov, const std::vector<bool>& cov_ok,
                   double sigma2_common, bool per_camera_sigma, sources::Dataset& ds,
                   CalibrationResult& result) {
@@ -387,9 +430,13 @@ void fill_results(Ba& ba, const std::vector<Mat6>& cov, const std::vector<bool>&
       cr.reason = "pose not determined by its observations (rank-deficient covariance)";
       continue;
     }
-    // sigma^2 = sum r^2 / (m - n): m residuals (2 per corner), n = 6 parameters (per camera).
+    // sigma^2 = sum r^2 / (m - n): m residuals (2 per corner), n = 6 parameters (per camera),
+    // times the design effect of errors that repeat from frame to frame.
     const double s2 = per_camera_sigma ? sum[i] / std::max(1, 2 * corners[i] - 6) : sigma2_common;
-    cr.covariance = cov[i] * s2;
+    const FrameCorrelation fc = frame_correlation(cr.residuals);
+    cr.frame_correlation = fc.rho;
+    cr.covariance_inflation = fc.inflation;
+    cr.covariance = cov[i] * s2 * fc.inflation;
     cr.ok = true;
   }
 }
@@ -805,6 +852,8 @@ void write_calibration(const fs::path& dir, sources::Dataset& ds, const Calibrat
         cj["X"] = {{"p", row(c.X.translation())}, {"r", row(obs::log_so3(c.X.linear()))}};
       }
       cj["rms_px"] = c.rms_px;
+      cj["frame_correlation"] = c.frame_correlation;
+      cj["covariance_inflation"] = c.covariance_inflation;
       const obs::Vec6 sd = c.sigmas();
       cj["sigma"] = {{"p_m", row(sd.head<3>())}, {"theta_rad", row(sd.tail<3>())}};
       json cov = json::array();

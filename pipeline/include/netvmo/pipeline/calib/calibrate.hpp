@@ -20,7 +20,8 @@
 // undistorted pixels: normalized coordinates times fx, fy) under a Huber loss; tag observations
 // with a corner beyond the rejection threshold are dropped and the problem solved again. The pose
 // covariance is Ceres' (ceres::Covariance, (J^T J)^-1 at the solution) times the residual
-// variance sigma^2 = sum r^2 / (m - n).
+// variance sigma^2 = sum r^2 / (m - n), times the design effect of errors that repeat from frame
+// to frame (frame_correlation).
 //
 // Pose perturbation (the covariance's coordinates), order [v; w] as everywhere:
 //   X = (R_hat exp(hat(dtheta)), p_hat + dp), dp in the world frame [m], dtheta in the camera
@@ -114,9 +115,32 @@ struct CameraResult {
     bool used = true;
   };
   std::vector<Residual> residuals;
+  /// How much its corner errors repeat from frame to frame (frame_correlation) and the factor
+  /// its covariance was multiplied by for it.
+  double frame_correlation = 0.0;
+  double covariance_inflation = 1.0;
   /// Standard deviations of [dp (m); dtheta (rad)].
   obs::Vec6 sigmas() const { return covariance.diagonal().cwiseMax(0.0).cwiseSqrt(); }
 };
+
+/// Errors that repeat from frame to frame (docs/calibration.md, "Errors that repeat"). A
+/// corner's error has a part that comes back in every frame (the print, the lens, the detector's
+/// bias at that place in the image) and a part that does not (noise). Frames average the
+/// second, not the first, so a covariance that counts every frame as independent shrinks as
+/// 1/F while the error does not. From the used residuals grouped by (tag, corner), one-way
+/// analysis of variance over both coordinates: the mean squares within and between groups
+/// MSW = sum |r - mean_g|^2 / (2 (N - G)), MSB = sum n_g |mean_g - mean|^2 / (2 (G - 1)), and the
+/// intraclass correlation rho = (MSB - MSW) / (MSB + (n0 - 1) MSW), n0 = (N - sum n_g^2 / N) /
+/// (G - 1), clamped to [0, 1] (N residuals in G groups of n_g). For equicorrelated errors the
+/// covariance of a pose fitted to frames of n = N / G observations each grows by the design
+/// effect 1 + (n - 1) rho over that of independent frames: rho = 0 leaves it, rho = 1 makes it
+/// one frame's. Fewer than two groups, or no group seen twice: rho = 0, inflation 1.
+struct FrameCorrelation {
+  double rho = 0.0;        ///< intraclass correlation of the residuals, in [0, 1]
+  double frames = 1.0;     ///< n = N / G: observations of a corner, on average
+  double inflation = 1.0;  ///< 1 + (n - 1) rho
+};
+FrameCorrelation frame_correlation(const std::vector<CameraResult::Residual>& residuals);
 
 struct CalibrationResult {
   bool with_map = false;
