@@ -268,9 +268,10 @@ void add_merge(CLI::App& app, int& exit_code) {
         const fs::path& f = files.json;
         if (!fs::exists(f)) continue;  // checked by the merge (a node killed for good has none)
         const json j = net::read_node_json(f);
-        json run = {{"options", j["options"]},
-                    {"mode", j["mode"]},
-                    {"dataset_frames", j["dataset_frames"]}};
+        // (null where a key is missing: a difference, or the check below)
+        json run = {{"options", j.value("options", json())},
+                    {"mode", j.value("mode", json())},
+                    {"dataset_frames", j.value("dataset_frames", json())}};
         if (ref.is_null()) {
           ref = run;
           ref_file = f;

@@ -315,6 +315,24 @@ TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
   EXPECT_NE(bad.err.find((gathered / "node_2.json").string() + ": options:"), std::string::npos)
       << bad.err;
   EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+  // A gathered node_2.json without its warnings, or with its messages not an object: one line
+  // naming the file and the key.
+  for (const char* key : {"warnings", "messages"}) {
+    auto j = net_test::read_json(launch / "nodes" / "node_2.json");
+    if (std::string(key) == "warnings")
+      j.erase(key);
+    else
+      j[key] = 3;
+    std::ofstream(gathered / "node_2.json") << j.dump();
+    const auto r = net_test::netvmo_bounded("merge " + gathered.string() + " --dataset " +
+                                                ds.string() + " --out " + (*dir_ / "bad").string(),
+                                            *dir_, 60);
+    EXPECT_NE(r.code, 0) << key;
+    EXPECT_NE(r.err.find((gathered / "node_2.json").string() + ": " + key + ": missing or not"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
   fs::copy_file(launch / "nodes" / "node_2.json", gathered / "node_2.json",
                 fs::copy_options::overwrite_existing);
   fs::remove(gathered / "node_3.csv");

@@ -229,6 +229,20 @@ json read_node_json(const fs::path& f) {
   } catch (const std::exception&) {
     throw InputError(f.string() + ": unreadable node statistics");
   }
+  // What the merge reads of every node (node.cpp writes them all; gathered files may not have).
+  if (!j.is_object()) throw InputError(f.string() + ": node statistics are not a JSON object");
+  const auto require = [&](const char* key, bool (json::*is)() const noexcept, const char* what) {
+    if (!j.contains(key) || !(j.at(key).*is)())
+      throw InputError(f.string() + ": " + key + ": missing or not " + what +
+                       " (node statistics as netvmo node writes them)");
+  };
+  require("mode", &json::is_string, "a string");
+  require("messages", &json::is_object, "an object");
+  require("warnings", &json::is_array, "an array");
+  require("seconds", &json::is_number, "a number");
+  for (const auto& w : j.at("warnings"))
+    if (!w.is_string())
+      throw InputError(f.string() + ": warnings: " + w.dump() + " is not a string");
   return j;
 }
 
@@ -271,7 +285,7 @@ json exchange_json(const io::NetworkConfig& net, const std::vector<json>& node_j
     if (j.is_null() || !j.contains("timing")) continue;
     json t = j["timing"];
     const double rounds = t.value("rounds", 0.0);
-    const double received = j["messages"].value("received", 0.0);
+    const double received = j.at("messages").value("received", 0.0);
     t["taken_per_round"] = rounds > 0 ? json(received / rounds) : json(nullptr);
     nodes[std::to_string(net.cameras[i].id)] = t;
     discovery.push_back(t.value("discovery_s", 0.0));
