@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "in_process_vmo.hpp"
+#include "netvmo/observer/exchange.hpp"
 
 namespace netvmo::obs {
 
@@ -20,7 +21,7 @@ NetworkedObserver::NetworkedObserver(Graph graph, ObserverSettings settings)
   cameras_.reserve(static_cast<size_t>(graph_.size()));
   for (int i = 0; i < graph_.size(); ++i)
     cameras_.emplace_back(i, graph_.neighbors(i), settings_, graph_.size());
-  outbox_.resize(cameras_.size());
+  transport_ = std::make_unique<InProcessTransport>(graph_);
   const int cores = settings_.threads > 0
                         ? settings_.threads
                         : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
@@ -80,16 +81,12 @@ std::vector<bool> NetworkedObserver::active() const {
 
 void NetworkedObserver::set_transport(std::unique_ptr<Transport> transport) {
   if (!transport) throw std::invalid_argument("set_transport: no transport");
-  // Direct delivery over the same graph is what the in-process exchange does already.
+  // Direct delivery over the same graph is what the in-process fast path does too.
+  direct_ = false;
   if (const auto* direct = dynamic_cast<const InProcessTransport*>(transport.get())) {
-    bool same = direct->graph().size() == graph_.size();
-    for (int i = 0; same && i < graph_.size(); ++i)
-      same = direct->graph().neighbors(i) == graph_.neighbors(i);
-    if (same) {
-      transport_.reset();
-      stored_known_ = false;
-      return;
-    }
+    direct_ = direct->graph().size() == graph_.size();
+    for (int i = 0; direct_ && i < graph_.size(); ++i)
+      direct_ = direct->graph().neighbors(i) == graph_.neighbors(i);
   }
   transport_ = std::move(transport);
   stored_known_ = false;
@@ -104,42 +101,29 @@ void NetworkedObserver::step(double dt, const std::vector<Measurement>& z) {
   const int N = substeps(dt);
   const double h = dt / N;
   int k = 0;
-  if (transport_ || !fast_)
+  if (!direct_ || !fast_)
     for_each_camera([&](int i) {
       cameras_[static_cast<size_t>(i)].set_measurement(z[static_cast<size_t>(i)]);
     });
   else {  // (the fast path sets the measurements in its first pass)
-    // The same rounds on compact arrays; it hands over to the loop below when a message would be
+    // The same rounds on compact arrays; it hands over to exchange rounds when a message would be
     // refused (then the rest of the frame is exchanged camera by camera).
     const bool known = stored_known_;
     stored_known_ = false;  // until the frame is done (a throw leaves it false)
     k = fast_->run(cameras_, z, N, h, pool_.get(), !known);
     stored_known_ = k == N;
   }
-  for (; k < N; ++k) {
-    // One exchange round: every camera publishes g_wi g_bar_i, then every camera takes in its
-    // neighbours' messages and steps (all on the estimates of the previous sub-step).
-    if (!transport_) {
-      for_each_camera([&](int i) {
-        cameras_[static_cast<size_t>(i)].publish(outbox_[static_cast<size_t>(i)]);
-      });
-      for_each_camera([&](int i) {
-        auto& c = cameras_[static_cast<size_t>(i)];
-        // In neighbour order, as InProcessTransport delivers them.
-        for (int j : graph_.neighbors(i)) c.receive(outbox_[static_cast<size_t>(j)]);
-        c.step(h);  // (eq:EsRRBM) with (eq:input_f-)
-      });
-      continue;
-    }
-    for (auto& c : cameras_) transport_->send(c.publish());
-    for (auto& c : cameras_) {
-      transport_->receive(c.index(), inbox_);
-      for (const auto& m : inbox_) c.receive(m);
-    }
-    for_each_camera([&](int i) {
-      cameras_[static_cast<size_t>(i)].step(h);
-    });  // (eq:EsRRBM) with (eq:input_f-)
-  }
+  for (; k < N; ++k) exchange_round(h);
+}
+
+void NetworkedObserver::exchange_round(double h) {
+  // exchange.hpp: every camera sends, then every camera takes in what reached it (the transport
+  // is called from this thread only), then every camera steps on the estimates of the previous
+  // sub-step, on the pool's threads.
+  for (auto& c : cameras_) send_estimate(c, *transport_);
+  for (auto& c : cameras_) take_estimates(c, *transport_, inbox_);
+  // (eq:EsRRBM) with (eq:input_f-)
+  for_each_camera([&](int i) { cameras_[static_cast<size_t>(i)].step(h); });
 }
 
 std::vector<SE3> NetworkedObserver::estimates() const {

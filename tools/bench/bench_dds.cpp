@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "netvmo/observer/camera_observer.hpp"
+#include "netvmo/observer/exchange.hpp"
 #include "netvmo/pipeline/net/cyclone_config.hpp"
 #include "netvmo/pipeline/net/dds_transport.hpp"
 #include "netvmo/pipeline/net/process.hpp"
@@ -107,9 +108,8 @@ void run_rounds(int self, int domain, int rounds, double poll_us, benchmark::Sta
   obs::CameraObserver cam(self, {1 - self}, obs::ObserverSettings{});
   std::vector<obs::EstimateMessage> inbox;
   auto round = [&] {
-    t.send(cam.publish());
-    t.receive(self, inbox);
-    for (const auto& m : inbox) cam.receive(m);
+    obs::send_estimate(cam, t);  // one exchange round (exchange.hpp)
+    obs::take_estimates(cam, t, inbox);
     cam.step(1e-3);
   };
   timespec c0{}, c1{};

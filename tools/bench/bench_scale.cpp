@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "netvmo/observer/camera_observer.hpp"
+#include "netvmo/observer/exchange.hpp"
 #include "netvmo/pipeline/net/cyclone_config.hpp"
 #include "netvmo/pipeline/net/dds_transport.hpp"
 #include "netvmo/pipeline/net/process.hpp"
@@ -57,9 +58,8 @@ int camera(int i, int n, int domain, const fs::path& out) {
   std::vector<double> us;
   for (int k = 0; k < kRounds; ++k) {
     const auto t0 = std::chrono::steady_clock::now();
-    t.send(cam.publish());
-    t.receive(i, inbox);
-    for (const auto& m : inbox) cam.receive(m);
+    obs::send_estimate(cam, t);  // one exchange round (exchange.hpp)
+    obs::take_estimates(cam, t, inbox);
     cam.step(1e-3);
     us.push_back(
         std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "netvmo/observer/camera_observer.hpp"
+#include "netvmo/observer/exchange.hpp"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
 #include "netvmo/pipeline/net/faulty_transport.hpp"
@@ -333,7 +334,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
     const int N = substeps(len, net), N_ind = substeps(len, ind);
     const double h = len / N, h_ind = len / N_ind;
     for (int r = 0; r < N; ++r) {
-      // One exchange round, as NetworkedObserver::step: publish, take in the neighbours', step.
+      // One exchange round (obs exchange.hpp), as NetworkedObserver runs it in one process.
       const double tr = t + r * h;
       if (hold_measurement && (net.initialized() || tr >= hold_until)) {
         hold_measurement = false;
@@ -341,23 +342,16 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
       }
       if (async) sleep_until_epoch(start + (tr - t0) / o.speed);
       // Lock-step neighbours wait for every round's message; an async node publishes nothing
-      // while it has no estimate.
+      // while it has no estimate. Async: the latest value of each neighbour is forgotten once
+      // older than the staleness bound (its stamp on this node's clock: DdsTransport::receive).
       const auto round_start = Clock::now();
-      if (!async || net.initialized()) transport.send(net.publish(tr + clock));
-      exchange.receive(self, inbox);
+      if (!async || net.initialized()) obs::send_estimate(net, transport, tr + clock);
+      const obs::TakeReport taken = obs::take_estimates(
+          net, exchange, inbox,
+          async ? std::optional<obs::Staleness>({tr + clock, o.stale_s}) : std::nullopt);
       (r == 0 ? first_round_us : round_us)
           .push_back(std::chrono::duration<double, std::micro>(Clock::now() - round_start).count());
-      for (const auto& m : inbox) net.receive(m);
-      if (async) {
-        // The latest value of each neighbour, forgotten once older than the staleness bound
-        // (its stamp on this node's clock: DdsTransport::receive).
-        const auto& latest = net.latest();
-        for (size_t a = 0; a < latest.size(); ++a)
-          if (latest[a] && tr + clock - latest[a]->stamp > o.stale_s) {
-            net.forget(net.neighbours()[a]);
-            ++summary.forgotten;
-          }
-      }
+      summary.forgotten += taken.forgotten;
       net.step(h);
     }
     for (int r = 0; r < N_ind; ++r) ind.step(h_ind);

@@ -18,11 +18,11 @@
 // estimator the rounds run on compact arrays (observer/src/in_process_vmo.hpp): every camera
 // reads its neighbours' estimates of the previous round from a double buffer, steps and writes its
 // next one, the same arithmetic as CameraObserver::step, and the cameras' state is written back at
-// the end of the frame. Otherwise every camera publishes into its slot of an outbox, then every
-// camera reads its neighbours' slots and steps. Either way the rounds run over
-// ObserverSettings::threads threads (contiguous blocks of cameras, each camera writing only its
-// own state), so the results are bit-identical for any thread count. Another transport
-// (set_transport) is called from the calling thread only; the steps still run on the threads.
+// the end of the frame. Otherwise (another estimator, another transport) each sub-step is an
+// exchange round of exchange.hpp, the same one a camera's own process runs: every camera sends
+// through the transport, then takes in what reached it, on the calling thread, then steps. The
+// steps run over ObserverSettings::threads threads (contiguous blocks of cameras, each camera
+// writing only its own state), so the results are bit-identical for any thread count.
 #pragma once
 
 #include <functional>
@@ -68,7 +68,8 @@ class NetworkedObserver {
   /// Cameras that take part (CameraObserver::set_initialized). Default: all.
   void set_active(const std::vector<bool>& active);
   std::vector<bool> active() const;
-  /// Replaces the in-process exchange (an InProcessTransport of the same graph keeps it).
+  /// Replaces the in-process exchange (an InProcessTransport of the same graph keeps the fast
+  /// path).
   void set_transport(std::unique_ptr<Transport> transport);
   /// Threads that run the per-camera steps (1: the calling thread only).
   int threads() const;
@@ -88,16 +89,20 @@ class NetworkedObserver {
 
  private:
   void check_count(size_t count, const char* what) const;
+  /// One exchange round of every camera (exchange.hpp) and a step of h.
+  void exchange_round(double h);
   /// f(i) for every camera i, on the pool's threads when there is one.
   void for_each_camera(const std::function<void(int)>& f);
 
   Graph graph_;
   ObserverSettings settings_;
   std::vector<CameraObserver> cameras_;
-  std::unique_ptr<Transport> transport_;  ///< null: the in-process exchange through outbox_
-  std::vector<EstimateMessage> outbox_;   ///< in process: each camera's message of the round
-  std::vector<EstimateMessage> inbox_;
-  std::unique_ptr<WorkerPool> pool_;  ///< null: every step on the calling thread
+  std::unique_ptr<Transport> transport_;  ///< default: an InProcessTransport of graph_
+  /// transport_ delivers directly over graph_ (an InProcessTransport of it): the fast path may
+  /// run the frame's rounds instead.
+  bool direct_ = true;
+  std::vector<EstimateMessage> inbox_;  ///< scratch of take_estimates
+  std::unique_ptr<WorkerPool> pool_;    ///< null: every step on the calling thread
   /// The in-process exchange of the vmo estimator on compact arrays (null: another estimator).
   std::unique_ptr<InProcessVmo> fast_;
   /// The cameras' stored messages are the fast path's own (none can make a new one out of order).
