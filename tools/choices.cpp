@@ -1,6 +1,8 @@
 #include "choices.hpp"
 
+#include <cstdint>
 #include <cstdio>
+#include <sstream>
 #include <vector>
 
 #include "netvmo/observer/error_model.hpp"
@@ -36,14 +38,29 @@ void add_transport_options(CLI::App& cmd, run::TransportSettings& s) {
   std::vector<std::string> names;
   std::string help = "How estimates travel between the cameras' observers:";
   for (const auto* k : run::transport_kinds()) {
-    names.emplace_back(k->name);
-    help += "\n" + std::string(k->name) + ": " + k->description;
+    names.emplace_back(k->name());
+    help += "\n" + names.back() + ": " + std::string(k->description());
   }
   cmd.add_option("--transport", s.kind, help)->check(CLI::IsMember(names))->capture_default_str();
-  cmd.add_option("--drop", s.drop, "lossy transport: probability that a message is lost")
-      ->check(CLI::Range(0.0, 0.99))
-      ->capture_default_str();
-  cmd.add_option("--seed", s.seed, "lossy transport: seed of the losses")->capture_default_str();
+  // Every kind's own parameters, as --<name> (once for a name two kinds share).
+  for (const auto* k : run::transport_kinds())
+    for (const auto& p : k->parameters()) {
+      if (cmd.get_option_no_throw("--" + p.name)) continue;
+      auto* o = cmd.add_option_function<double>(
+          "--" + p.name, [&s, name = p.name](double v) { s.values[name] = v; }, p.help);
+      const auto text = [&p](double v) {
+        std::ostringstream t;
+        if (p.integer)
+          t << static_cast<std::uint64_t>(v);
+        else
+          t << v;
+        return t.str();
+      };
+      const std::string range = "in [" + text(p.min) + ", " + text(p.max) + "]";
+      o->check(CLI::Range(p.min, p.max).description(range))
+          ->default_str(text(p.default_value))
+          ->type_name(p.integer ? "UINT" : "FLOAT");
+    }
 }
 
 void add_search_options(CLI::App& cmd, frontend::TrackingSettings& t) {

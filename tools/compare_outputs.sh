@@ -92,6 +92,11 @@ produce() {  # produce NETVMO NAME: outputs in $work/NAME, produced under one co
   done
   "$bin" render "$top/datasets/paper5_render.yaml" --out "$out/dataset" --frames "$frames" --quiet >/dev/null
   "$bin" run "$out/dataset" --out "$out/run" --no-overlays --no-plots >/dev/null 2>&1
+  # Every sub-step an exchange round through a transport (not the in-process fast path).
+  "$bin" run "$out/dataset" --out "$out/run_lossy" --transport lossy --drop 0.3 --seed 7 \
+    --no-overlays --no-plots >/dev/null 2>&1
+  "$bin" run "$out/dataset" --out "$out/run_zero_offset" --estimator zero-offset \
+    --no-overlays --no-plots >/dev/null 2>&1
   "$bin" detect "$out/dataset" --out "$out/detect" --quiet >/dev/null
   "$bin" sweep "$out/dataset" --out "$out/sweep" --ks 2,20 --no-plot >/dev/null 2>&1
   "$bin" launch "$out/dataset" --out "$out/launch" --domain "$domain" --no-overlays --no-plots \
@@ -101,7 +106,7 @@ produce() {  # produce NETVMO NAME: outputs in $work/NAME, produced under one co
   rm -f "$out"/launch/nodes/*.log "$out"/launch/nodes/*.json "$out/launch/cyclonedds.xml" \
     "$out/launch/messages.json" "$out/launch/exchange.json"
   # Wall-clock timings differ from run to run; everything else must not.
-  for r in run launch; do
+  for r in run run_lossy run_zero_offset launch; do
     awk '/^  "timing": \{/ {skip = 1} !skip {print} skip && /^  \},?$/ {skip = 0}' \
       "$out/$r/summary.json" > "$out/$r/summary.notiming.json"
     rm "$out/$r/summary.json"

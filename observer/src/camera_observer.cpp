@@ -28,8 +28,8 @@ CameraObserver::CameraObserver(int index, std::vector<int> neighbours, ObserverS
     : index_(index),
       neighbours_(std::move(neighbours)),
       settings_(std::move(settings)),
-      model_(&find_error_model(settings_.error_model)),
-      estimator_(&find_estimator(settings_.estimator)),
+      model_(&error_models().find(settings_.error_model)),
+      estimator_(&estimators().find(settings_.estimator)),
       network_size_(network_size) {
   if (!(settings_.k_e >= 0.0) || !(settings_.k_s >= 0.0))
     throw std::invalid_argument("gains k_e and k_s must be non-negative");

@@ -28,7 +28,7 @@ InProcessVmo::InProcessVmo(const Graph& graph) : n_(graph.size()) {
 }
 
 bool InProcessVmo::supports(const CameraObserver& camera) {
-  return &camera.estimator() == &find_estimator("vmo");
+  return &camera.estimator() == &estimators().find("vmo");
 }
 
 void InProcessVmo::for_each(WorkerPool* pool, const std::function<void(int)>& f) const {

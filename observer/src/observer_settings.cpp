@@ -12,7 +12,7 @@ int frame_substeps(double dt, const ObserverSettings& s, int max_degree) {
 }
 
 int stable_substeps(double dt, const ObserverSettings& s, int max_degree) {
-  const double lambda_max = find_estimator(s.estimator).rate_bound(s, max_degree);
+  const double lambda_max = estimators().find(s.estimator).rate_bound(s, max_degree);
   return std::max(1, static_cast<int>(std::ceil(dt * lambda_max / s.step_factor - 1e-12)));
 }
 

@@ -180,10 +180,10 @@ TEST(Runner, TransportIsChosenByNameFromTheRegistry) {
     for (int k = 0; k < 300; ++k) r.process(k, k / 30.0, 1.0 / 30, s.inputs(rng, 0.0));
     return r.history().back();
   };
-  const auto plain = run_with({"", 0.0, 1});
-  const auto named = run_with({"in-process", 0.0, 1});
-  const auto lossy = run_with({"lossy", 0.3, 7});
-  const auto lossy_again = run_with({"lossy", 0.3, 7});
+  const auto plain = run_with({"", {}});
+  const auto named = run_with({"in-process", {}});
+  const auto lossy = run_with({"lossy", {{"drop", 0.3}, {"seed", 7}}});
+  const auto lossy_again = run_with({"lossy", {{"drop", 0.3}, {"seed", 7}}});
   for (size_t i = 0; i < 5; ++i) {
     EXPECT_TRUE(named.cameras[i].est_w.isApprox(plain.cameras[i].est_w, 0.0)) << i;
     EXPECT_TRUE(lossy.cameras[i].est_w.isApprox(lossy_again.cameras[i].est_w, 0.0)) << i;
@@ -195,9 +195,22 @@ TEST(Runner, TransportIsChosenByNameFromTheRegistry) {
   EXPECT_LT(max_position_error(lossy, *lossy.g_star), 0.01);
   EXPECT_LT(max_orientation_error_deg(lossy, *lossy.g_star), 0.5);
   try {
-    run::make_transport({"carrier-pigeon", 0.0, 1}, s.graph);
+    run::make_transport({"carrier-pigeon", {}}, s.graph);
     FAIL() << "no exception";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("in-process, lossy"), std::string::npos) << e.what();
   }
+  // A parameter the kind declares is checked against its range, and named.
+  for (const auto& [name, v] :
+       std::vector<std::pair<std::string, double>>{{"drop", 1.5}, {"seed", 2.5}})
+    try {
+      run::make_transport({"lossy", {{name, v}}}, s.graph);
+      FAIL() << "no exception for " << name;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("transport lossy: " + name + " = "), std::string::npos)
+          << e.what();
+    }
+  // Unset parameters take the kind's defaults (drop 0: nothing lost).
+  EXPECT_EQ(run::transport_values({"lossy", {}}),
+            (std::map<std::string, double>{{"drop", 0.0}, {"seed", 1.0}}));
 }

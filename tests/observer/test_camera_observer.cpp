@@ -337,13 +337,13 @@ TEST(ErrorModels, OneRegistryByName) {
   std::vector<std::string> names;
   for (const auto* m : error_models()) {
     names.emplace_back(m->name());
-    EXPECT_EQ(&find_error_model(m->name()), m);
+    EXPECT_EQ(&error_models().find(m->name()), m);
     EXPECT_FALSE(m->description().empty());
   }
   EXPECT_EQ(names, (std::vector<std::string>{"exact", "jacobian", "pnp"}));
-  EXPECT_EQ(error_model_names(), "exact, jacobian, pnp");
+  EXPECT_EQ(error_models().names(), "exact, jacobian, pnp");
   try {
-    find_error_model("jacobain");
+    error_models().find("jacobain");
     FAIL() << "no exception";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("exact, jacobian, pnp"), std::string::npos) << e.what();
@@ -360,20 +360,22 @@ TEST(ErrorModels, EachReadsItsOwnMeasurementField) {
   z.g_io_true = g_true;
   z.g_io_pnp = g_pnp;
   z.f = project(g_true, fm);
-  EXPECT_LT((find_error_model("exact").error(g_bar, z, fm) - E_R(g_bar.inverse() * g_true)).norm(),
-            1e-15);
-  EXPECT_LT((find_error_model("pnp").error(g_bar, z, fm) - E_R(g_bar.inverse() * g_pnp)).norm(),
+  EXPECT_LT(
+      (error_models().find("exact").error(g_bar, z, fm) - E_R(g_bar.inverse() * g_true)).norm(),
+      1e-15);
+  EXPECT_LT((error_models().find("pnp").error(g_bar, z, fm) - E_R(g_bar.inverse() * g_pnp)).norm(),
             1e-15);
   EXPECT_LT(
-      (find_error_model("jacobian").error(g_bar, z, fm) - reconstruct_error(g_bar, z.f, fm)).norm(),
+      (error_models().find("jacobian").error(g_bar, z, fm) - reconstruct_error(g_bar, z.f, fm))
+          .norm(),
       1e-15);
   // usable() needs delta and the model's own field.
   Measurement only_f;
   only_f.delta = true;
   only_f.f = z.f;
-  EXPECT_TRUE(find_error_model("jacobian").usable(only_f));
-  EXPECT_FALSE(find_error_model("pnp").usable(only_f));
-  EXPECT_FALSE(find_error_model("exact").usable(only_f));
+  EXPECT_TRUE(error_models().find("jacobian").usable(only_f));
+  EXPECT_FALSE(error_models().find("pnp").usable(only_f));
+  EXPECT_FALSE(error_models().find("exact").usable(only_f));
   z.delta = false;
   for (const auto* m : error_models()) EXPECT_FALSE(m->usable(z)) << m->name();
 }

@@ -108,7 +108,7 @@ TEST(Jacobian, StackedOverATwoTagBundle) {
   z.delta = true;
   z.f = project(g_true, bundle);
   z.points_o = bundle.points_o;
-  const ErrorModel& jac = find_error_model("jacobian");
+  const ErrorModel& jac = error_models().find("jacobian");
   const Vec6 e = jac.error(g_bar, z, FeatureModel::square(0.2));  // (eq:eei) on all 8 points
   EXPECT_LT((e - E_R(g_bar.inverse() * g_true)).norm(), 0.05 * d.norm());
   EXPECT_LT((e - reconstruct_error(g_bar, z.f, bundle)).norm(), 1e-15);

@@ -92,7 +92,7 @@ TEST(Threads, ResultsAreBitIdenticalForAnyThreadCountAndExchange) {
       ObserverSettings s;
       s.estimator = estimator;
       s.error_model = model;
-      if (find_error_model(model).input() == MeasurementInput::features &&
+      if (error_models().find(model).input() == MeasurementInput::features &&
           std::string(estimator) == "zero-offset")
         continue;  // zero-offset averages poses
       SCOPED_TRACE(std::string(estimator) + " / " + model);

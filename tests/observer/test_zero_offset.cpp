@@ -194,7 +194,7 @@ TEST(ZeroOffset, LinearisedSpectrumAndStepRuleMatchTheirClosedForms) {
     ObserverSettings s = zero_offset(ke, ks);
     Eigen::MatrixXd B(10, 10);
     B << -(ke * I + ks * L), -L, ke * ks * L, Eigen::MatrixXd::Zero(5, 5);
-    const double h = 1.0 / find_estimator("zero-offset").rate_bound(s, p.graph.max_degree());
+    const double h = 1.0 / estimators().find("zero-offset").rate_bound(s, p.graph.max_degree());
     const Eigen::VectorXcd mu =
         Eigen::EigenSolver<Eigen::MatrixXd>(Eigen::MatrixXd::Identity(10, 10) + h * B)
             .eigenvalues();
@@ -215,5 +215,5 @@ TEST(ZeroOffset, RefusesAnImageFeatureErrorModelAndAnUnknownNetworkSize) {
   s = zero_offset();
   s.hold_threshold = 0.1;
   EXPECT_NO_THROW(CameraObserver(0, {1}, s));
-  EXPECT_THROW(find_estimator("nope"), std::invalid_argument);
+  EXPECT_THROW(estimators().find("nope"), std::invalid_argument);
 }

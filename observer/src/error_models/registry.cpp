@@ -1,7 +1,5 @@
 // The error-model registry. Adding a model: a new file in this folder that defines a function
 // returning it, and one line in the table below (with its declaration).
-#include <stdexcept>
-
 #include "netvmo/observer/error_model.hpp"
 
 namespace netvmo::obs {
@@ -12,12 +10,13 @@ const ErrorModel& jacobian();  // jacobian.cpp
 const ErrorModel& pnp();       // pnp.cpp
 }  // namespace models
 
-const std::vector<const ErrorModel*>& error_models() {
-  static const std::vector<const ErrorModel*> table{
-      &models::exact(),
-      &models::jacobian(),
-      &models::pnp(),
-  };
+const Registry<ErrorModel>& error_models() {
+  static const Registry<ErrorModel> table{"error model",
+                                          {
+                                              &models::exact(),
+                                              &models::jacobian(),
+                                              &models::pnp(),
+                                          }};
   return table;
 }
 
@@ -32,19 +31,6 @@ bool ErrorModel::usable(const Measurement& z) const {
       return z.g_io_true.has_value();
   }
   return false;
-}
-
-std::string error_model_names() {
-  std::string s;
-  for (const auto* m : error_models()) s += (s.empty() ? "" : ", ") + std::string(m->name());
-  return s;
-}
-
-const ErrorModel& find_error_model(std::string_view name) {
-  for (const auto* m : error_models())
-    if (m->name() == name) return *m;
-  throw std::invalid_argument("unknown error model '" + std::string(name) + "' (" +
-                              error_model_names() + ")");
 }
 
 }  // namespace netvmo::obs

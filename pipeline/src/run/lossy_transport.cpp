@@ -3,7 +3,6 @@
 // neighbour, so a loss means a stale estimate in its mutual term for that round.
 #include <random>
 
-#include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/run/transports.hpp"
 
 namespace netvmo::run {
@@ -32,15 +31,27 @@ class LossyTransport final : public obs::Transport {
 }  // namespace
 
 namespace transports {
+namespace {
+class Lossy final : public TransportKind {
+ public:
+  std::string_view name() const override { return "lossy"; }
+  std::string_view description() const override {
+    return "in process, each message lost with probability --drop (seeded by --seed)";
+  }
+  std::vector<TransportParameter> parameters() const override {
+    return {{"drop", "lossy transport: probability that a message is lost", 0.0, 0.0, 0.99},
+            {"seed", "lossy transport: seed of the losses", 1.0, 0.0, 9007199254740992.0, true}};
+  }
+  std::unique_ptr<obs::Transport> make(const obs::Graph& g,
+                                       const std::map<std::string, double>& v) const override {
+    return std::make_unique<LossyTransport>(g, v.at("drop"),
+                                            static_cast<std::uint64_t>(v.at("seed")));
+  }
+};
+}  // namespace
+
 const TransportKind& lossy() {
-  static const TransportKind kind{
-      "lossy", "in process, each message lost with probability --drop (seeded by --seed)",
-      [](const obs::Graph& g, const TransportSettings& s) -> std::unique_ptr<obs::Transport> {
-        if (!(s.drop >= 0.0 && s.drop < 1.0))
-          throw InputError("transport lossy: drop probability " + std::to_string(s.drop) +
-                           " is outside [0, 1)");
-        return std::make_unique<LossyTransport>(g, s.drop, s.seed);
-      }};
+  static const Lossy kind;
   return kind;
 }
 }  // namespace transports

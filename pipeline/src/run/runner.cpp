@@ -38,7 +38,7 @@ obs::ObserverSettings camera_observer_settings(const RunnerSettings& s, bool ind
 }
 
 double step_factor(const obs::ObserverSettings& s, double dt, int substeps, int max_degree) {
-  return dt / substeps * obs::find_estimator(s.estimator).rate_bound(s, max_degree);
+  return dt / substeps * obs::estimators().find(s.estimator).rate_bound(s, max_degree);
 }
 
 NetworkRunner::NetworkRunner(const obs::Graph& graph, std::vector<SE3> g_wi,

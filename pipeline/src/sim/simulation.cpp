@@ -17,7 +17,7 @@ using obs::Vec3;
 std::string simulation_error_model_problem(const std::string& name) {
   const obs::ErrorModel* model = nullptr;
   try {
-    model = &obs::find_error_model(name);
+    model = &obs::error_models().find(name);
   } catch (const std::invalid_argument& e) {
     return e.what();
   }
@@ -67,7 +67,7 @@ SimScenario load_scenario(const fs::path& file) {
   s.error_model = root.get_or("error", s.error_model);
   s.estimator = root.get_or("estimator", s.estimator);
   try {
-    obs::find_estimator(s.estimator);
+    obs::estimators().find(s.estimator);
   } catch (const std::invalid_argument& e) {
     root.get("estimator").fail(e.what());
   }
@@ -109,7 +109,7 @@ SimScenario load_scenario(const fs::path& file) {
   int visible = 0;
   for (const auto& c : s.cameras) visible += c.g_wo.has_value();
   if (visible == 0) throw InputError(file.string() + ": cameras: no camera has a target");
-  if (obs::find_error_model(s.error_model).input() == obs::MeasurementInput::features) {
+  if (obs::error_models().find(s.error_model).input() == obs::MeasurementInput::features) {
     const auto features = obs::FeatureModel::square(s.square_side);
     for (const auto& c : s.cameras) {
       try {

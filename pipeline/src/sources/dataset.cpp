@@ -328,12 +328,12 @@ Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera, bool k
     // folder, video, ...).
     std::vector<std::pair<const StreamKind*, fs::path>> found;
     for (const auto* kind : stream_kinds())
-      for (const auto& p : kind->find(dir, name)) found.emplace_back(kind, p);
+      for (const auto& p : kind->entries(dir, name)) found.emplace_back(kind, p);
     if (bag) {
       if (!found.empty())
         throw InputError(found[0].second.string() + ": camera " + std::to_string(cc.id) +
-                         " has both this " + found[0].first->name + " and the bag's topic " +
-                         *cc.image_topic + "; keep one");
+                         " has both this " + std::string(found[0].first->name()) +
+                         " and the bag's topic " + *cc.image_topic + "; keep one");
       try {
         cam.source = open_bag_topic(dir, *cc.image_topic, origin);
       } catch (const InputError& e) {
@@ -348,15 +348,16 @@ Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera, bool k
     if (found.empty()) {
       std::string kinds;
       for (const auto* kind : stream_kinds())
-        kinds += std::string(kinds.empty() ? "" : " or ") + kind->description;
+        kinds += std::string(kinds.empty() ? "" : " or ") + std::string(kind->description());
       throw InputError((dir / name).string() + ": no frames for camera " + std::to_string(cc.id) +
                        " of network.yaml (expected " + kinds + ")");
     }
     if (found.size() > 1)
       throw InputError(found[1].second.string() + ": camera " + std::to_string(cc.id) +
                        " has both " + found[0].second.filename().string() + " (" +
-                       found[0].first->name + ") and " + found[1].second.filename().string() +
-                       " (" + found[1].first->name + "); keep one");
+                       std::string(found[0].first->name()) + ") and " +
+                       found[1].second.filename().string() + " (" +
+                       std::string(found[1].first->name()) + "); keep one");
     try {
       cam.source = found[0].first->open(found[0].second);
     } catch (const InputError& e) {

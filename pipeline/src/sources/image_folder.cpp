@@ -96,15 +96,26 @@ std::unique_ptr<CameraStream> open_image_folder(const fs::path& dir) {
 }
 
 namespace kinds {
+namespace {
+class ImageFolder final : public StreamKind {
+ public:
+  std::string_view name() const override { return "image-folder"; }
+  std::string_view description() const override {
+    return "a folder cam_<id>/ of png, jpg, jpeg or pgm images";
+  }
+  std::vector<fs::path> entries(const fs::path& dataset, const std::string& stem) const override {
+    std::vector<fs::path> found;
+    if (fs::is_directory(dataset / stem)) found.push_back(dataset / stem);
+    return found;
+  }
+  std::unique_ptr<CameraStream> open(const fs::path& entry) const override {
+    return open_image_folder(entry);
+  }
+};
+}  // namespace
+
 const StreamKind& image_folder() {
-  static const StreamKind kind{"image-folder", "a folder cam_<id>/ of png, jpg, jpeg or pgm images",
-                               [](const fs::path& dataset, const std::string& stem) {
-                                 std::vector<fs::path> found;
-                                 if (fs::is_directory(dataset / stem))
-                                   found.push_back(dataset / stem);
-                                 return found;
-                               },
-                               open_image_folder};
+  static const ImageFolder kind;
   return kind;
 }
 }  // namespace kinds

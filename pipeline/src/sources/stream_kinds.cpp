@@ -9,11 +9,12 @@ const StreamKind& image_folder();  // image_folder.cpp
 const StreamKind& video();         // video.cpp
 }  // namespace kinds
 
-const std::vector<const StreamKind*>& stream_kinds() {
-  static const std::vector<const StreamKind*> table{
-      &kinds::image_folder(),
-      &kinds::video(),
-  };
+const obs::Registry<StreamKind>& stream_kinds() {
+  static const obs::Registry<StreamKind> table{"camera stream kind",
+                                               {
+                                                   &kinds::image_folder(),
+                                                   &kinds::video(),
+                                               }};
   return table;
 }
 

@@ -111,17 +111,28 @@ std::unique_ptr<CameraStream> open_video(const fs::path& file) {
 }
 
 namespace kinds {
+namespace {
+class Video final : public StreamKind {
+ public:
+  std::string_view name() const override { return "video"; }
+  std::string_view description() const override {
+    return "a video file cam_<id>.<ext> that OpenCV decodes (avi, mp4, mkv, ...)";
+  }
+  std::vector<fs::path> entries(const fs::path& dataset, const std::string& stem) const override {
+    std::vector<fs::path> found;
+    for (const auto& e : fs::directory_iterator(dataset))
+      if (e.is_regular_file() && e.path().stem() == stem) found.push_back(e.path());
+    std::sort(found.begin(), found.end());
+    return found;
+  }
+  std::unique_ptr<CameraStream> open(const fs::path& entry) const override {
+    return open_video(entry);
+  }
+};
+}  // namespace
+
 const StreamKind& video() {
-  static const StreamKind kind{
-      "video", "a video file cam_<id>.<ext> that OpenCV decodes (avi, mp4, mkv, ...)",
-      [](const fs::path& dataset, const std::string& stem) {
-        std::vector<fs::path> found;
-        for (const auto& e : fs::directory_iterator(dataset))
-          if (e.is_regular_file() && e.path().stem() == stem) found.push_back(e.path());
-        std::sort(found.begin(), found.end());
-        return found;
-      },
-      open_video};
+  static const Video kind;
   return kind;
 }
 }  // namespace kinds

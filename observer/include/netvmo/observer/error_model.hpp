@@ -12,6 +12,7 @@
 
 #include "netvmo/observer/jacobian.hpp"
 #include "netvmo/observer/measurement.hpp"
+#include "netvmo/observer/registry.hpp"
 
 namespace netvmo::obs {
 
@@ -39,11 +40,8 @@ class ErrorModel {
   bool usable(const Measurement& z) const;
 };
 
-/// The registry: every error model, in the order help texts list them.
-const std::vector<const ErrorModel*>& error_models();
-/// The model of that name. Throws std::invalid_argument naming the known ones.
-const ErrorModel& find_error_model(std::string_view name);
-/// "exact, jacobian, pnp": the known names, for messages.
-std::string error_model_names();
+/// The registry (registry.hpp): every error model, in the order help texts list them;
+/// error_models().find(name) throws std::invalid_argument naming the known ones.
+const Registry<ErrorModel>& error_models();
 
 }  // namespace netvmo::obs

@@ -76,11 +76,8 @@ class Estimator {
   virtual void step(const CameraView& cv, EstimatorState& st, double h) const = 0;
 };
 
-/// The registry: every estimator, in the order help texts list them (the default first).
-const std::vector<const Estimator*>& estimators();
-/// The estimator of that name. Throws std::invalid_argument naming the known ones.
-const Estimator& find_estimator(std::string_view name);
-/// "vmo, zero-offset": the known names, for messages.
-std::string estimator_names();
+/// The registry (registry.hpp): every estimator, in the order help texts list them (the default
+/// first); estimators().find(name) throws std::invalid_argument naming the known ones.
+const Registry<Estimator>& estimators();
 
 }  // namespace netvmo::obs

@@ -14,7 +14,10 @@
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
+
+#include "netvmo/observer/registry.hpp"
 
 namespace netvmo::sources {
 /// One camera's frames, by frame index.
@@ -60,17 +63,21 @@ std::optional<std::int64_t> bag_topic_first_stamp(const std::filesystem::path& b
                                                   const std::string& topic);
 
 /// A kind of camera stream found in a dataset folder.
-struct StreamKind {
-  const char* name;         ///< e.g. "image-folder", "video"
-  const char* description;  ///< one phrase for messages ("a folder cam_<id>/ of ... images")
+class StreamKind {
+ public:
+  virtual ~StreamKind() = default;
+  /// e.g. "image-folder", "video"
+  virtual std::string_view name() const = 0;
+  /// One phrase for messages ("a folder cam_<id>/ of ... images").
+  virtual std::string_view description() const = 0;
   /// The entries of this kind for camera `stem` (= "cam_<id>") in a dataset folder.
-  std::vector<std::filesystem::path> (*find)(const std::filesystem::path& dataset,
-                                             const std::string& stem);
-  /// Opens one entry that find() returned.
-  std::unique_ptr<CameraStream> (*open)(const std::filesystem::path& entry);
+  virtual std::vector<std::filesystem::path> entries(const std::filesystem::path& dataset,
+                                                     const std::string& stem) const = 0;
+  /// Opens one entry that entries() returned.
+  virtual std::unique_ptr<CameraStream> open(const std::filesystem::path& entry) const = 0;
 };
 
-/// The registry: every stream kind, in the order they are looked for.
-const std::vector<const StreamKind*>& stream_kinds();
+/// The registry (observer/registry.hpp): every stream kind, in the order they are looked for.
+const obs::Registry<StreamKind>& stream_kinds();
 
 }  // namespace netvmo::sources
