@@ -2,10 +2,14 @@
 #include <signal.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 
+#include <dds/dds.h>
+
 #include "../net/dds_peer_setup.hpp"
+#include "NetvmoEstimate.h"
 #include "net_test_util.hpp"
 #include "netvmo/pipeline/net/cyclone_config.hpp"
 #include "test_util.hpp"
@@ -171,4 +175,56 @@ TEST(DdsTransport, RogueParticipantChangesNothingAndIsCounted) {
   // Camera 1 gets camera 0's NaN poses; camera 0 gets camera 1's sheared rotations.
   EXPECT_GE(log1.refused[static_cast<size_t>(obs::MessageVerdict::not_finite)], 1u);
   EXPECT_GE(log0.refused[static_cast<size_t>(obs::MessageVerdict::not_a_rotation)], 1u);
+}
+
+// The Estimate type is keyed by its sender: every camera's estimates are one instance, so a
+// history keeps each sender's own. Two writers on one topic (no security here, so nothing stops
+// the second) each write three rounds; a reader that keeps the last sample holds one per sender.
+TEST(DdsTransport, EstimatesAreKeyedBySender) {
+  ASSERT_EQ(netvmo_msg_Estimate_desc.m_nkeys, 1u);
+  EXPECT_STREQ(netvmo_msg_Estimate_desc.m_keys[0].m_name, "sender");
+  const auto dir = test::scratch_dir("dds_keyed");
+  const int domain = net_test::loopback_domain(dir);
+  const dds_entity_t participant = dds_create_participant(domain, nullptr, nullptr);
+  ASSERT_GT(participant, 0);
+  const dds_entity_t topic = dds_create_topic(participant, &netvmo_msg_Estimate_desc,
+                                              "netvmo_keyed_test", nullptr, nullptr);
+  ASSERT_GT(topic, 0);
+  dds_qos_t* q = dds_create_qos();
+  dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(10));
+  dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);
+  const dds_entity_t reader = dds_create_reader(participant, topic, q, nullptr);
+  const dds_entity_t w1 = dds_create_writer(participant, topic, q, nullptr),
+                     w2 = dds_create_writer(participant, topic, q, nullptr);
+  dds_delete_qos(q);
+  ASSERT_GT(reader, 0);
+  ASSERT_GT(w1, 0);
+  ASSERT_GT(w2, 0);
+  netvmo_msg_Estimate m{};
+  m.rotation[0] = m.rotation[4] = m.rotation[8] = 1.0;
+  for (unsigned long long round = 1; round <= 3; ++round)
+    for (const auto& [writer, sender] : {std::pair{w1, 1}, std::pair{w2, 2}}) {
+      m.sender = sender;
+      m.round = round;
+      ASSERT_EQ(dds_write(writer, &m), DDS_RETCODE_OK);
+    }
+  // Same participant: delivery is synchronous; wait (bounded) all the same.
+  void* samples[8] = {};
+  dds_sample_info_t infos[8];
+  std::vector<std::pair<int, unsigned long long>> held;
+  for (int tries = 0; tries < 200 && held.size() < 2; ++tries) {
+    const dds_return_t n = dds_read(reader, samples, infos, 8, 8);
+    ASSERT_GE(n, 0);
+    held.clear();
+    for (int k = 0; k < n; ++k)
+      if (infos[k].valid_data) {
+        const auto* e = static_cast<const netvmo_msg_Estimate*>(samples[k]);
+        held.emplace_back(e->sender, e->round);
+      }
+    dds_return_loan(reader, samples, n);
+    if (held.size() < 2) dds_sleepfor(DDS_MSECS(10));
+  }
+  std::sort(held.begin(), held.end());
+  EXPECT_EQ(held, (std::vector<std::pair<int, unsigned long long>>{{1, 3}, {2, 3}}));
+  dds_delete(participant);
 }
