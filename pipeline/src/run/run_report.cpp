@@ -65,11 +65,10 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
   s["init"] = run::to_string(options.runner.init);
   if (options.transport.kind != TransportSettings{}.kind) {  // recorded when not the default
     s["transport"] = {{"kind", options.transport.kind}};
-    const auto kind_parameters = transport_kinds().find(options.transport.kind).parameters();
-    for (const auto& [name, v] : transport_values(options.transport)) {
-      const bool integer = std::any_of(kind_parameters.begin(), kind_parameters.end(),
-                                       [&](const auto& p) { return p.name == name && p.integer; });
-      s["transport"][name] = integer ? json(static_cast<std::uint64_t>(v)) : json(v);
+    const auto values = transport_values(options.transport);
+    for (const auto& p : transport_kinds().find(options.transport.kind).parameters()) {
+      const double v = values.at(p.name);
+      s["transport"][p.name] = p.integer ? json(static_cast<std::uint64_t>(v)) : json(v);
     }
   }
   if (provider.cameras_move())  // recorded for moving cameras (cameras.csv) only
