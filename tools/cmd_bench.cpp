@@ -80,13 +80,13 @@ void soak(sources::NetworkSource& source, const std::string& what, int every, co
   out << "# netvmo bench --soak: " << what << ", " << source.network().cameras.size()
       << " cameras, in-process networked observer, " << source.frame_count() << " frames\n"
       << "# frames seconds ms_per_frame vmrss_kb\n";
-  run::ImageRunOptions run;
+  run::ImageRunSettings run;
   run.progress = false;
   run.runner.keep_history = false;
   const auto t0 = std::chrono::steady_clock::now();
   auto last = t0;
   const auto hook = [&](int k, const std::vector<cv::Mat>&,
-                        const std::vector<std::vector<run::CameraFrame>>&,
+                        const std::vector<std::vector<frontend::Observation>>&,
                         const std::vector<const run::FrameRecord*>&) {
     if ((k + 1) % every != 0) return;
     const auto now = std::chrono::steady_clock::now();
@@ -126,7 +126,7 @@ void recording(const fs::path& dir, int frames, int repeat) {
     std::sort(v.begin(), v.end());
     return v[v.size() / 2];
   };
-  const int workers = run::ImageRunOptions{}.workers;
+  const int workers = run::ImageRunSettings{}.workers;
   std::vector<double> reading_only, wall[2];
   std::vector<nlohmann::json> timing[2];
   for (int r = 0; r < repeat; ++r) {
@@ -253,7 +253,7 @@ void add_bench(CLI::App& app, int& exit_code) {
         soak(*live, "live rendering of " + scenario.string(), o->soak_every, o->soak_log);
         return 0;
       }
-      run::ImageRunOptions run;
+      run::ImageRunSettings run;
       run.progress = false;
       run.max_frames = o->frames;
       // Recorded: render a dataset first (not timed), then decode + detect + observe.
@@ -261,7 +261,7 @@ void add_bench(CLI::App& app, int& exit_code) {
           fs::temp_directory_path() / ("netvmo_bench_" + std::to_string(::getpid()));
       const auto render_dataset = [&](const render::SceneDescription& sc, const fs::path& from) {
         render::Renderer renderer(sc);
-        io::DatasetOptions d;
+        io::DatasetSettings d;
         d.frames = o->frames;
         d.progress = false;
         std::printf("rendering %d frames of %s for the recorded measurement...\n", o->frames,

@@ -47,12 +47,12 @@ void add_demo(CLI::App& app, int& exit_code) {
       std::printf("rendering %s into %s\n", scenario.string().c_str(),
                   shown_dataset.string().c_str());
       render::Renderer renderer(io::load_render_scenario(scenario));
-      io::DatasetOptions dopt;
+      io::DatasetSettings dopt;
       dopt.frames = o->frames;
       io::write_dataset(renderer, dataset, dopt);
       std::printf("running the networked observer on %s\n", shown_dataset.string().c_str());
-      auto provider = sources::open_dataset_source(dataset, {}, o->run.keep_going, shown_dataset);
-      const auto summary = run_and_report(*provider, o->run, out, shown);
+      auto source = sources::open_dataset_source(dataset, {}, o->run.keep_going, shown_dataset);
+      const auto summary = run_and_report(*source, o->run, out, shown);
       out_dir.commit();
       print_run_summary(summary, shown);
       std::printf("open %s/overlays/mosaic.png, %s/energies.png and %s/errors.png\n",

@@ -71,7 +71,7 @@ struct TruthTally {
   std::array<int, 5> visible{}, detected{};
   int accepted = 0, off_1px = 0;
   double max_error = 0.0;
-  void add(const TruthRow& t, const TagObservation& o) {
+  void add(const TruthRow& t, const Observation& o) {
     const bool primary = o.delta && o.slots.front() == 0;
     if (primary && t.corners) {
       ++accepted;
@@ -133,7 +133,7 @@ int run_detect(DetectOptions o) {
   double seconds = 0.0;
   std::vector<std::string> unreadable;
   Progress progress("detect", ds.frame_count, !o.quiet);
-  std::vector<run::CameraFrame> cams;
+  std::vector<frontend::Observation> cams;
   for (int f = 0; f < ds.frame_count; ++f) {
     for (size_t c = 0; c < ds.cameras.size(); ++c) {
       CameraStats& st = stats[c];
@@ -158,7 +158,7 @@ int run_detect(DetectOptions o) {
       }
       seconds += seconds_since(t0) - reading;
       if (!img.empty()) ++st.images;
-      const TagObservation& obs = cams.front().obs;
+      const Observation& obs = cams.front();
       if (const auto it = truth.find({f, ds.cameras[c].id}); it != truth.end())
         tally.add(it->second, obs);
       for (const auto& d : all.all)

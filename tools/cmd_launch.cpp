@@ -48,17 +48,17 @@ std::vector<std::string> forwarded(const RunCliOptions& o) {
 
 // The merge of `launch` and `merge` (net::merge_run_outputs), its plots and its message table;
 // returns the summary (for print_run_summary once `dir` is in place).
-json merge_and_report(sources::NetworkSource& provider, const run::ImageRunOptions& options,
+json merge_and_report(sources::NetworkSource& source, const run::ImageRunSettings& options,
                       const RunCliOptions& cli, const fs::path& nodes, const fs::path& dir,
                       int frames, bool allow_gaps) {
   run::OverlaySettings overlays;
   overlays.camera_videos = cli.camera_videos;
-  const auto merged = net::merge_run_outputs(provider, options, nodes, dir, frames, allow_gaps,
+  const auto merged = net::merge_run_outputs(source, options, nodes, dir, frames, allow_gaps,
                                              cli.no_overlays ? nullptr : &overlays);
   if (!cli.no_plots) {
-    plot_run(dir, provider.network());
+    plot_run(dir, source.network());
   }
-  std::printf("%s", net::message_table(merged.messages, provider.network()).c_str());
+  std::printf("%s", net::message_table(merged.messages, source.network()).c_str());
   std::printf("%s", net::exchange_line(merged.exchange).c_str());
   return merged.summary;
 }
@@ -140,32 +140,32 @@ void add_launch(CLI::App& app, int& exit_code) {
         o->mode = "async";
         o->run.no_overlays = true;  // no images are kept
       }
-      std::unique_ptr<sources::NetworkSource> provider;
+      std::unique_ptr<sources::NetworkSource> source;
       if (o->live) {
         auto topics = std::make_unique<sources::TopicNetwork>(o->dataset);
         for (size_t i = 0; i < topics->network().cameras.size(); ++i) topics->image_topic(i);
-        provider = std::move(topics);
+        source = std::move(topics);
       } else {
-        provider = sources::open_dataset_source(o->dataset, {}, options.keep_going);
+        source = sources::open_dataset_source(o->dataset, {}, options.keep_going);
       }
-      sources::require_static_cameras(*provider, "netvmo launch");
-      sources::require_single_target(*provider, "netvmo launch");
-      const auto& netcfg = provider->network();
-      for (const auto& w : provider->warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
+      sources::require_static_cameras(*source, "netvmo launch");
+      sources::require_single_target(*source, "netvmo launch");
+      const auto& netcfg = source->network();
+      for (const auto& w : source->warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
       run::checked_rounds(1.0 / netcfg.fps, options.runner.k_e, options.runner.k_s,
                           run::network_graph(netcfg).max_degree(), options.runner.rounds);
-      int frames = provider->frame_count();  // live: 0 (the nodes' rows decide)
+      int frames = source->frame_count();  // live: 0 (the nodes' rows decide)
       if (options.max_frames)
         frames = o->live ? *options.max_frames : std::min(frames, *options.max_frames);
 
-      for (const auto& note : provider->notes()) std::printf("note: %s\n", note.c_str());
+      for (const auto& note : source->notes()) std::printf("note: %s\n", note.c_str());
       const bool async = o->mode == "async";
       if (!async && (o->drop > 0 || o->delay > 0 || !o->kill.empty() || o->restart_after >= 0 ||
                      !o->clock_offsets.empty()))
         throw InputError(
             "--drop, --delay, --kill, --restart-after and --clock-offsets need --mode async");
       if (!async)
-        if (auto m = sources::clock_mismatch(*provider))
+        if (auto m = sources::clock_mismatch(*source))
           throw InputError(*m + ": lock-step needs one clock for every camera (use --mode async)");
       std::optional<net::NodeKill> kill;
       if (!o->kill.empty())
@@ -212,7 +212,7 @@ void add_launch(CLI::App& app, int& exit_code) {
       net::check_launch(outcome, netcfg, ls, nodes, fs::path(o->out + ".failed") / "nodes",
                         [&] { return out.keep_failed(); });
 
-      const json s = merge_and_report(*provider, options, o->run, nodes, dir, frames, async);
+      const json s = merge_and_report(*source, options, o->run, nodes, dir, frames, async);
       out.commit();
       print_run_summary(s, o->out);
       return 0;
@@ -243,15 +243,15 @@ void add_merge(CLI::App& app, int& exit_code) {
   cmd->callback([o, &exit_code] {
     exit_code = guarded("merge", [&] {
       // A live launch's nodes (node --live) ran on a folder without images.
-      std::unique_ptr<sources::NetworkSource> provider;
+      std::unique_ptr<sources::NetworkSource> source;
       if (sources::is_topic_network(o->dataset))
-        provider = std::make_unique<sources::TopicNetwork>(o->dataset);
+        source = std::make_unique<sources::TopicNetwork>(o->dataset);
       else
-        provider = sources::open_dataset_source(o->dataset);
-      sources::require_static_cameras(*provider, "netvmo merge");
-      sources::require_single_target(*provider, "netvmo merge");
-      const auto& netcfg = provider->network();
-      for (const auto& w : provider->warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
+        source = sources::open_dataset_source(o->dataset);
+      sources::require_static_cameras(*source, "netvmo merge");
+      sources::require_single_target(*source, "netvmo merge");
+      const auto& netcfg = source->network();
+      for (const auto& w : source->warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
       const fs::path nodes = o->nodes;
       io::check_output_apart(o->out, o->dataset);
       io::check_output_apart(o->out, nodes, "--out", "NODES folder");
@@ -298,11 +298,11 @@ void add_merge(CLI::App& app, int& exit_code) {
       } catch (const std::exception& e) {
         throw InputError(ref_file.string() + ": options: " + e.what());
       }
-      cli.no_overlays = o->no_overlays || provider->frame_count() == 0;  // live: no images
+      cli.no_overlays = o->no_overlays || source->frame_count() == 0;  // live: no images
       cli.no_plots = o->no_plots;
       const bool async = ref["mode"] == "async";
       io::OutputDir out(o->out, "merge");
-      const json s = merge_and_report(*provider, to_image_run_options(cli), cli, nodes, out.path(),
+      const json s = merge_and_report(*source, to_image_run_options(cli), cli, nodes, out.path(),
                                       ref["dataset_frames"].get<int>(), async);
       out.commit();
       print_run_summary(s, o->out);

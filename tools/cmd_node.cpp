@@ -148,7 +148,7 @@ void add_node(CLI::App& app, int& exit_code) {
       if (!live && (!o->live_settings.camera_info_topic.empty() || cmd->count("--duration") ||
                     cmd->count("--idle") || cmd->count("--lag")))
         throw InputError("--camera-info-topic, --duration, --idle and --lag need --live");
-      net::NodeOptions no;
+      net::NodeSettings no;
       no.run = to_image_run_options(o->run);
       io::check_output_apart(o->out, o->dataset);
       // Standalone: the node's own locked staging folder, swapped in at the end (with --resume,

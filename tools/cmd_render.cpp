@@ -81,7 +81,7 @@ void add_render(CLI::App& app, int& exit_code) {
       }
       io::check_output_apart(o->out, {});
       io::OutputDir out(o->out, "render");
-      io::DatasetOptions opt;
+      io::DatasetSettings opt;
       opt.progress = !o->quiet;
       const auto summary = io::write_dataset(*renderer, out.path(), opt);
       out.commit();

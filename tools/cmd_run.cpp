@@ -56,9 +56,9 @@ void add_run(CLI::App& app, int& exit_code) {
       }
       io::OutputDir out(o->out, "run");
       if (!o->bag.empty()) bag.emplace(o->bag, "run --bag");
-      auto provider = sources::open_dataset_source(o->dataset, {}, o->run.keep_going);
+      auto source = sources::open_dataset_source(o->dataset, {}, o->run.keep_going);
       const auto summary =
-          run_and_report(*provider, o->run, out.path(), o->out, bag ? bag->path() : fs::path());
+          run_and_report(*source, o->run, out.path(), o->out, bag ? bag->path() : fs::path());
       out.commit();
       if (bag) bag->commit();
       print_run_summary(summary, o->out);

@@ -123,8 +123,8 @@ void add_sweep(CLI::App& app, int& exit_code) {
       // An estimator that cannot run with this error model fails here, before any detection.
       obs::CameraObserver(0, {}, run::camera_observer_settings(o->runner, false), 1);
       io::check_output_apart(o->out, o->dataset);
-      auto provider = sources::open_dataset_source(o->dataset);
-      run::ImageRunOptions options;
+      auto source = sources::open_dataset_source(o->dataset);
+      run::ImageRunSettings options;
       options.runner = o->runner;
       if (o->max_frames > 0) options.max_frames = o->max_frames;
       // Everything is written into the temporary out.path() and put in place at the end, so a
@@ -134,17 +134,17 @@ void add_sweep(CLI::App& app, int& exit_code) {
       const fs::path shown = o->out, dir = out.path();
       using Clock = std::chrono::steady_clock;
       auto t0 = Clock::now();
-      auto inputs = run::read_inputs_cache(shown / "inputs.csv", *provider, options);
+      auto inputs = run::read_inputs_cache(shown / "inputs.csv", *source, options);
       if (inputs) {
         std::printf("front end: reusing %s\n", (shown / "inputs.csv").string().c_str());
       } else {
-        inputs = run::record_inputs(*provider, options);
+        inputs = run::record_inputs(*source, options);
         std::printf("front end: %zu frames detected in %.1f s, cached in %s\n",
                     inputs->frames.size(), std::chrono::duration<double>(Clock::now() - t0).count(),
                     (shown / "inputs.csv").string().c_str());
       }
-      run::write_inputs_cache(dir / "inputs.csv", *provider, options, *inputs);
-      const auto ctx = run::sweep_context(provider->network(), *inputs);
+      run::write_inputs_cache(dir / "inputs.csv", *source, options, *inputs);
+      const auto ctx = run::sweep_context(source->network(), *inputs);
       if (ctx.truth) {
         std::printf("graph: W = %g, diam = %d; last frame: |V_f| = %d, phi_m = %.3g\n", ctx.W,
                     ctx.diameter, ctx.n_visible, ctx.spread.phi_m);

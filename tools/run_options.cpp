@@ -74,10 +74,10 @@ void add_run_options(CLI::App& cmd, RunCliOptions& o, bool in_process_transport)
       ->capture_default_str();
 }
 
-run::ImageRunOptions to_image_run_options(const RunCliOptions& o) {
+run::ImageRunSettings to_image_run_options(const RunCliOptions& o) {
   if (!(o.k_e > 0) || !(o.k_s >= 0) || !std::isfinite(o.k_e) || !std::isfinite(o.k_s))
     throw InputError("--ke must be finite and > 0, --ks finite and >= 0");
-  run::ImageRunOptions r;
+  run::ImageRunSettings r;
   r.runner.estimator = o.estimator;
   r.runner.compare_estimators = o.compare;
   r.runner.k_e = o.k_e;
@@ -97,47 +97,47 @@ run::ImageRunOptions to_image_run_options(const RunCliOptions& o) {
 }
 
 namespace {
-json run_and_report_in(sources::NetworkSource& provider, const RunCliOptions& o,
-                       const fs::path& dir, const fs::path& bag_dir) {
+json run_and_report_in(sources::NetworkSource& source, const RunCliOptions& o, const fs::path& dir,
+                       const fs::path& bag_dir) {
   const auto options = to_image_run_options(o);
   std::map<int, Eigen::Matrix<double, 6, 6>> covariances;  // before the run: fail early
   if (!o.calibration.empty()) covariances = calib::read_calibration_covariances(o.calibration);
-  for (const auto& w : provider.warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  for (const auto& w : source.warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
   std::unique_ptr<run::OverlayWriter> overlays;
   run::FrameHook hook;
   if (!o.no_overlays) {
     run::OverlaySettings os;
     os.camera_videos = o.camera_videos;
-    overlays = std::make_unique<run::OverlayWriter>(dir, provider, os);
+    overlays = std::make_unique<run::OverlayWriter>(dir, source, os);
   }
   std::unique_ptr<run::BagRecorder> bag;
-  if (!bag_dir.empty()) bag = std::make_unique<run::BagRecorder>(bag_dir, provider);
+  if (!bag_dir.empty()) bag = std::make_unique<run::BagRecorder>(bag_dir, source);
   if (overlays || bag)
     hook = [&](int k, const std::vector<cv::Mat>& images,
-               const std::vector<std::vector<run::CameraFrame>>& cams,
+               const std::vector<std::vector<frontend::Observation>>& cams,
                const std::vector<const run::FrameRecord*>& r) {
       if (overlays) (*overlays)(k, images, cams, r);
       if (bag) (*bag)(k, images, cams, r);
     };
-  const auto result = run::run_images(provider, options, hook);
+  const auto result = run::run_images(source, options, hook);
   if (bag) bag->finish();
-  for (size_t k = provider.warnings().size(); k < result.warnings.size(); ++k)
+  for (size_t k = source.warnings().size(); k < result.warnings.size(); ++k)
     std::fprintf(stderr, "warning: %s\n", result.warnings[k].c_str());
   // Where the image times came from (a camera without timestamps.csv rows or video timestamps:
   // frame / fps), once the run has succeeded.
-  for (const auto& note : provider.notes()) std::fprintf(stderr, "note: %s\n", note.c_str());
+  for (const auto& note : source.notes()) std::fprintf(stderr, "note: %s\n", note.c_str());
   std::optional<json> localisation;
   if (!o.calibration.empty())
-    localisation = calib::g_star_localisation_summary(provider, result, covariances, o.calibration);
-  json s = run::write_run_outputs(dir, provider, options, result, localisation);
-  if (!o.no_plots) plot_run(dir, provider.network());
+    localisation = calib::g_star_localisation_summary(source, result, covariances, o.calibration);
+  json s = run::write_run_outputs(dir, source, options, result, localisation);
+  if (!o.no_plots) plot_run(dir, source.network());
   // The overlays' writer thread has drawn on meanwhile.
   if (overlays) overlays->finish();
   return s;
 }
 }  // namespace
 
-json run_and_report(sources::NetworkSource& provider, const RunCliOptions& o, const fs::path& dir,
+json run_and_report(sources::NetworkSource& source, const RunCliOptions& o, const fs::path& dir,
                     const fs::path& shown, const fs::path& bag) {
   // A file of dir named in a message (a plot or an overlay that cannot be written) is named as
   // it would have been under its final folder.
@@ -147,7 +147,7 @@ json run_and_report(sources::NetworkSource& provider, const RunCliOptions& o, co
     return what;
   };
   try {
-    return run_and_report_in(provider, o, dir, bag);
+    return run_and_report_in(source, o, dir, bag);
   } catch (const InputError& e) {
     throw InputError(renamed(e.what()));
   } catch (const std::runtime_error& e) {

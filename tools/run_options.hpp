@@ -11,7 +11,7 @@
 
 namespace netvmo::tools {
 
-/// The command line's view of run::ImageRunOptions: every default is the library's own.
+/// The command line's view of run::ImageRunSettings: every default is the library's own.
 struct RunCliOptions {
   std::string estimator = run::RunnerSettings{}.estimator;
   std::vector<std::string> compare;  ///< --compare-estimator
@@ -20,8 +20,8 @@ struct RunCliOptions {
   std::string error = run::RunnerSettings{}.error_model;
   std::string init = run::to_string(run::RunnerSettings{}.init);
   int rounds = run::RunnerSettings{}.rounds;
-  bool keep_going = run::ImageRunOptions{}.keep_going;
-  bool ignore_camera_velocity = run::ImageRunOptions{}.ignore_camera_velocity;
+  bool keep_going = run::ImageRunSettings{}.keep_going;
+  bool ignore_camera_velocity = run::ImageRunSettings{}.ignore_camera_velocity;
   bool no_overlays = false;
   bool no_plots = false;
   bool camera_videos = false;  ///< --camera-videos (run::OverlaySettings::camera_videos)
@@ -39,12 +39,12 @@ struct RunCliOptions {
 /// Adds the options of `netvmo run`; `in_process_transport`: also --transport, --drop, --seed
 /// (not for node and launch, whose transport is DDS with faults of their own).
 void add_run_options(CLI::App& cmd, RunCliOptions& o, bool in_process_transport = true);
-run::ImageRunOptions to_image_run_options(const RunCliOptions& o);
-/// Runs the provider, writes the outputs, overlays and plots into dir; returns the summary.
+run::ImageRunSettings to_image_run_options(const RunCliOptions& o);
+/// Runs the source, writes the outputs, overlays and plots into dir; returns the summary.
 /// `shown`: the name dir will have when the command ends (dir is an io::OutputDir's temporary
 /// folder), used instead of dir in the message of an error; empty: dir. `bag`: also write the
 /// run as a rosbag2 bag into that (empty) folder (run::BagRecorder); empty: none.
-nlohmann::json run_and_report(sources::NetworkSource& provider, const RunCliOptions& o,
+nlohmann::json run_and_report(sources::NetworkSource& source, const RunCliOptions& o,
                               const std::filesystem::path& dir,
                               const std::filesystem::path& shown = {},
                               const std::filesystem::path& bag = {});

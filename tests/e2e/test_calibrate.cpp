@@ -46,7 +46,7 @@ render::SceneDescription load(const char* name) {
 
 void write(const render::SceneDescription& scene, const fs::path& dir) {
   render::Renderer renderer(scene);
-  io::DatasetOptions o;
+  io::DatasetSettings o;
   o.progress = false;
   io::write_dataset(renderer, dir, o);
 }
@@ -287,13 +287,13 @@ TEST(Calibrate, FullLoopRenderCalibrateRun) {
 
   json localisation;
   const auto final_error = [&](const fs::path& d) {
-    auto provider = sources::open_dataset_source(d);
-    run::ImageRunOptions o;
+    auto source = sources::open_dataset_source(d);
+    run::ImageRunSettings o;
     o.progress = false;
-    const auto r = run::run_images(*provider, o);
+    const auto r = run::run_images(*source, o);
     if (d == calibrated)
       localisation = calib::g_star_localisation_summary(
-          *provider, r, calib::read_calibration_covariances(out / "calibration.json"), "x");
+          *source, r, calib::read_calibration_covariances(out / "calibration.json"), "x");
     const auto& last = r.history.back();
     EXPECT_TRUE(last.g_wo_true.has_value());
     obs::Vec3 worst = obs::Vec3::Zero();  // position [m], orientation [rad]

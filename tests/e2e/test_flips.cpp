@@ -21,11 +21,11 @@ TEST(EndToEnd, RockingTagNetworkFlipsLessThanTheHeadOnCamerasPnp) {
   auto scene =
       io::load_render_scenario(fs::path(NETVMO_SOURCE_DIR) / "datasets" / "rocking_tag.yaml");
   render::Renderer r(scene);
-  io::DatasetOptions o;
+  io::DatasetSettings o;
   o.progress = false;  // the scenario's 90 frames at its imaging settings
   io::write_dataset(r, dir / "rendered", o);
   auto src = sources::open_dataset_source(dir / "rendered");
-  run::ImageRunOptions opt;
+  run::ImageRunSettings opt;
   opt.progress = false;
   const auto result = run::run_images(*src, opt);
   const auto s = run::run_summary(*src, opt, result);

@@ -37,8 +37,8 @@ render::SceneDescription scenario(const char* name) {
   return io::load_render_scenario(kSource / "datasets" / name);
 }
 
-run::ImageRunOptions quiet_options() {
-  run::ImageRunOptions o;
+run::ImageRunSettings quiet_options() {
+  run::ImageRunSettings o;
   o.progress = false;
   return o;
 }
@@ -51,7 +51,7 @@ class SmallDataset : public ::testing::Test {
     auto scene = scenario("paper5_render.yaml");
     scene.imaging.spp = 1;
     render::Renderer r(scene);
-    io::DatasetOptions o;
+    io::DatasetSettings o;
     o.frames = 12;
     o.progress = false;
     io::write_dataset(r, *dir_ / "rendered", o);
@@ -72,8 +72,8 @@ double angle_deg(const obs::SE3& a, const obs::SE3& b) {
 // The paper's setting made visible: cameras 1-3 see the tag, camera 4 looks away and camera 5
 // is blocked by a pillar. Static target, k_e = 1, k_s = 50, five seconds.
 TEST(EndToEnd, StaticTargetEveryCameraConvergesToGStar) {
-  auto provider = sources::make_render_source(scenario("paper5_render.yaml"), 150);
-  const auto r = run::run_images(*provider, quiet_options());
+  auto source = sources::make_render_source(scenario("paper5_render.yaml"), 150);
+  const auto r = run::run_images(*source, quiet_options());
   const auto& last = r.history.back();
   ASSERT_TRUE(last.g_star.has_value());
   for (size_t i = 0; i < 5; ++i) {
@@ -105,12 +105,12 @@ TEST(EndToEnd, MovingTargetDeltaIsDetectionAndEstimatesStayBounded) {
   auto scene = scenario("moving_target.yaml");
   scene.imaging.spp = 1;
   const int frames = scene.frames;
-  auto provider = sources::make_render_source(scene, frames);
+  auto source = sources::make_render_source(scene, frames);
   auto options = quiet_options();
   options.runner.k_e = 10.0;  // faster tracking of a moving target (docs/images.md, "Moving target
                               // and tracking lag")
   options.runner.k_s = 100.0;
-  const auto r = run::run_images(*provider, options);
+  const auto r = run::run_images(*source, options);
   ASSERT_EQ(static_cast<int>(r.history.size()), frames);
 
   // delta_i(t) is a real detection: every tag an independent full-frame detection of the same
@@ -126,7 +126,7 @@ TEST(EndToEnd, MovingTargetDeltaIsDetectionAndEstimatesStayBounded) {
   for (int k = 0; k < frames; ++k) {
     for (size_t i = 0; i < scene.cameras.size(); ++i) {
       const bool d = fe.observe(again->read(i, k), again->calibration(i)).delta;
-      const auto& run_obs = r.frames[static_cast<size_t>(k)][i].obs;
+      const auto& run_obs = r.frames[static_cast<size_t>(k)][i];
       EXPECT_EQ(r.history[static_cast<size_t>(k)].cameras[i].delta, run_obs.delta);
       if (d) {
         EXPECT_TRUE(run_obs.delta) << "frame " << k << " camera " << i + 1;
@@ -253,7 +253,7 @@ TEST_F(SmallDataset, FrontEndThreadsAndSkippedSearchesChangeNothing) {
         const auto &a = r.history[k].cameras[i], &b = ref.history[k].cameras[i];
         EXPECT_EQ(a.delta, b.delta) << "frame " << k << " camera " << i;
         EXPECT_TRUE(a.est_w.matrix() == b.est_w.matrix()) << "frame " << k << " camera " << i;
-        EXPECT_EQ(r.frames[k][i].obs.status, ref.frames[k][i].obs.status);
+        EXPECT_EQ(r.frames[k][i].status, ref.frames[k][i].status);
       }
   }
 }
@@ -267,7 +267,7 @@ TEST_F(SmallDataset, OverlaysWriteTheMosaicAndCameraVideosOnRequest) {
     run::OverlayWriter writer(out, *source, settings);
     run::run_images(*source, quiet_options(),
                     [&](int k, const std::vector<cv::Mat>& images,
-                        const std::vector<std::vector<run::CameraFrame>>& cams,
+                        const std::vector<std::vector<frontend::Observation>>& cams,
                         const std::vector<const run::FrameRecord*>& records) {
                       writer(k, images, cams, records);
                     });
@@ -587,8 +587,8 @@ TEST_F(SmallDataset, ZeroOffsetReachesGStarAsABaselineOfARun) {
   o.runner.k_e = 100;  // 12 frames = 0.4 s: e^-(100 * 0.4) of the spread is below round-off
   o.runner.k_s = 300;
   o.runner.compare_estimators = {"zero-offset"};
-  auto provider = sources::open_dataset_source(*dir_ / "rendered");
-  const auto r = run::run_images(*provider, o);
+  auto source = sources::open_dataset_source(*dir_ / "rendered");
+  const auto r = run::run_images(*source, o);
   const auto& last = r.history.back();
   ASSERT_TRUE(last.g_star.has_value());
   double zero = 0, vmo = 0;
@@ -600,7 +600,7 @@ TEST_F(SmallDataset, ZeroOffsetReachesGStarAsABaselineOfARun) {
   }
   EXPECT_LT(zero, 1e-9);
   EXPECT_GT(vmo, 1e-3);
-  const auto s = run::run_summary(*provider, o, r);
+  const auto s = run::run_summary(*source, o, r);
   EXPECT_TRUE(s["cameras"][4]["compared"]["zero-offset"]["vs_g_star"].is_object());
   EXPECT_LT(s["final"]["U_R_zero-offset"].get<double>(), 1e-15);
 }

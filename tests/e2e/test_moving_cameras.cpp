@@ -48,7 +48,7 @@ TEST(EndToEnd, MovingCamerasConvergeToGStarAndNeedTheirVelocity) {
   scene.imaging.spp = 1;
   {
     render::Renderer renderer(scene);
-    io::DatasetOptions o;
+    io::DatasetSettings o;
     o.progress = false;
     io::write_dataset(renderer, dir, o);
   }
@@ -58,19 +58,18 @@ TEST(EndToEnd, MovingCamerasConvergeToGStarAndNeedTheirVelocity) {
   const auto truth = io::read_camera_truth_csv(dir / "truth_cameras.csv");
   ASSERT_EQ(believed.size(), scene.cameras.size() * size_t(scene.frames));
   ASSERT_EQ(truth.size(), believed.size());
-  auto provider = sources::open_dataset_source(dir);
-  ASSERT_TRUE(provider->cameras_move());
+  auto source = sources::open_dataset_source(dir);
+  ASSERT_TRUE(source->cameras_move());
   for (size_t i = 0; i < scene.cameras.size(); ++i) {
-    EXPECT_TRUE(
-        provider->camera_believed(i, 0).isApprox(provider->network().cameras[i].g_wi, 1e-9));
-    EXPECT_TRUE(provider->camera_truth(i, 60)->isApprox(scene.cameras[i].true_pose(2.0), 1e-9));
+    EXPECT_TRUE(source->camera_believed(i, 0).isApprox(source->network().cameras[i].g_wi, 1e-9));
+    EXPECT_TRUE(source->camera_truth(i, 60)->isApprox(scene.cameras[i].true_pose(2.0), 1e-9));
   }
 
-  run::ImageRunOptions options;
+  run::ImageRunSettings options;
   options.progress = false;
-  const auto with_v = run::run_images(*provider, options);
+  const auto with_v = run::run_images(*source, options);
   options.ignore_camera_velocity = true;
-  const auto without_v = run::run_images(*provider, options);
+  const auto without_v = run::run_images(*source, options);
   ASSERT_EQ(int(with_v.history.size()), scene.frames);
   ASSERT_TRUE(with_v.history.back().g_star.has_value());
 

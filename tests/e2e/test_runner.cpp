@@ -20,9 +20,9 @@ namespace {
 struct PaperNetwork : test::Paper5 {
   PaperNetwork() : test::Paper5(/*turned=*/true) {}
   // Inputs of one frame: cameras 1-3 detect, PnP is the truth perturbed by noise.
-  std::vector<run::CameraInput> inputs(std::mt19937& rng, double pnp_noise) const {
+  std::vector<obs::Measurement> inputs(std::mt19937& rng, double pnp_noise) const {
     std::normal_distribution<double> nd(0.0, pnp_noise);
-    std::vector<run::CameraInput> in(5);
+    std::vector<obs::Measurement> in(5);
     const auto m = obs::FeatureModel::square(0.2);
     for (size_t i = 0; i < 3; ++i) {
       const SE3 g_io = g_wi[i].inverse() * g_wo[i];
@@ -49,11 +49,11 @@ double max_orientation_error_deg(const run::FrameRecord& r, const SE3& ref) {
   return e;
 }
 
-run::NetworkRunner make_runner(const PaperNetwork& s, const char* error_model, double k_s = 50.0) {
+run::Runner make_runner(const PaperNetwork& s, const char* error_model, double k_s = 50.0) {
   run::RunnerSettings rs;
   rs.error_model = error_model;
   rs.k_s = k_s;
-  return run::NetworkRunner(s.graph, s.g_wi, rs);
+  return run::Runner(s.graph, s.g_wi, rs);
 }
 }  // namespace
 
@@ -105,7 +105,7 @@ TEST(Runner, PaperInitialisationStartsEveryCameraAtTheFixedPose) {
   PaperNetwork s;
   run::RunnerSettings rs;
   rs.init = run::InitMode::Paper;
-  run::NetworkRunner r(s.graph, s.g_wi, rs);
+  run::Runner r(s.graph, s.g_wi, rs);
   std::mt19937 rng(4);
   const auto& f0 = r.process(0, 0.0, 1e-9, s.inputs(rng, 0.0));
   for (size_t i = 0; i < 5; ++i)
@@ -125,9 +125,9 @@ TEST(Runner, ExactModelNeedsGroundTruth) {
 TEST(Runner, FewerRoundsRaiseTheStepFactor) {
   PaperNetwork s;
   run::RunnerSettings rs;
-  EXPECT_LE(run::NetworkRunner(s.graph, s.g_wi, rs).step_factor(1.0 / 30), 1.0);
+  EXPECT_LE(run::Runner(s.graph, s.g_wi, rs).step_factor(1.0 / 30), 1.0);
   rs.rounds = 3;
-  run::NetworkRunner r3(s.graph, s.g_wi, rs);
+  run::Runner r3(s.graph, s.g_wi, rs);
   EXPECT_EQ(r3.substeps(1.0 / 30), 3);
   EXPECT_NEAR(r3.step_factor(1.0 / 30), (1.0 / 90) * (1 + 2 * 50 * 3), 1e-12);
 }
@@ -142,12 +142,12 @@ TEST(Runner, MovingCamerasTrackAStaticTarget) {
   for (int with_motion = 0; with_motion < 2; ++with_motion) {
     run::RunnerSettings rs;
     rs.error_model = "exact";
-    run::NetworkRunner r(s.graph, s.g_wi, rs);
+    run::Runner r(s.graph, s.g_wi, rs);
     std::vector<SE3> g_wi = s.g_wi;
     double worst = 0.0;
     for (int k = 0; k < 150; ++k) {
       const double dt = 1.0 / 30;
-      std::vector<run::CameraInput> in(5);
+      std::vector<obs::Measurement> in(5);
       for (size_t i = 0; i < 3; ++i) {
         in[i].delta = true;
         in[i].g_io_true = g_wi[i].inverse() * s.g_wo[i];
@@ -174,7 +174,7 @@ TEST(Runner, TransportIsChosenByNameFromTheRegistry) {
   auto run_with = [&](const run::TransportSettings& t) {
     run::RunnerSettings rs;
     rs.error_model = "exact";
-    run::NetworkRunner r(s.graph, s.g_wi, rs);
+    run::Runner r(s.graph, s.g_wi, rs);
     if (!t.kind.empty()) r.set_transport(run::make_transport(t, s.graph));
     std::mt19937 rng(3);
     for (int k = 0; k < 300; ++k) r.process(k, k / 30.0, 1.0 / 30, s.inputs(rng, 0.0));

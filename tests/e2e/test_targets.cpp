@@ -20,8 +20,8 @@ namespace {
 const fs::path kScenario = fs::path(NETVMO_SOURCE_DIR) / "datasets" / "two_targets.yaml";
 constexpr int kFrames = 60;  // 2 s: both targets have moved and stopped (0.8 s and 0.7 s)
 
-run::ImageRunOptions options() {
-  run::ImageRunOptions o;
+run::ImageRunSettings options() {
+  run::ImageRunSettings o;
   o.progress = false;
   // k_e = 5: the estimates start at each camera's own fictitious target (7-19 cm apart) and
   // follow the motion with a lag; after the targets stop, the error to g* decays about as
@@ -33,8 +33,8 @@ run::ImageRunOptions options() {
 }
 
 run::ImageRunResult run_scene(const render::SceneDescription& scene) {
-  auto provider = sources::make_render_source(scene, kFrames);
-  return run::run_images(*provider, options());
+  auto source = sources::make_render_source(scene, kFrames);
+  return run::run_images(*source, options());
 }
 
 int seen_frames(const run::ImageRunResult& r, size_t camera) {

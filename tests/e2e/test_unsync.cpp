@@ -33,7 +33,7 @@ fs::path render_unsync(const fs::path& dir, bool own_clocks) {
       c.start = 0.0;
     }
   render::Renderer renderer(scene);
-  io::DatasetOptions o;
+  io::DatasetSettings o;
   o.progress = false;
   io::write_dataset(renderer, dir, o);
   return dir;
@@ -74,17 +74,17 @@ TEST(Unsync, ThreeRatesConvergeToGStarAndAgreeWithTheSynchronisedRendering) {
   EXPECT_DOUBLE_EQ(times[3][29], 0.047 + 29 / 15.0);
   EXPECT_EQ(io::read_target_csv(own / "target.csv").size(), 140u);  // every image time
 
-  auto provider = sources::open_dataset_source(own);
+  auto source = sources::open_dataset_source(own);
   auto sync_provider = sources::open_dataset_source(one);
-  EXPECT_EQ(provider->network().camera_fps(1), 25.0);
-  EXPECT_EQ(provider->network().camera_fps(2), 15.0);
-  ASSERT_TRUE(sources::clock_mismatch(*provider));
+  EXPECT_EQ(source->network().camera_fps(1), 25.0);
+  EXPECT_EQ(source->network().camera_fps(2), 15.0);
+  ASSERT_TRUE(sources::clock_mismatch(*source));
   ASSERT_FALSE(sources::clock_mismatch(*sync_provider));
   ASSERT_FALSE(sources::irregular_clock(*sync_provider));
 
-  run::ImageRunOptions options;
+  run::ImageRunSettings options;
   options.progress = false;
-  const auto u = run::run_images(*provider, options);
+  const auto u = run::run_images(*source, options);
   const auto s = run::run_images(*sync_provider, options);
   ASSERT_TRUE(u.union_of_timestamps);
   ASSERT_FALSE(s.union_of_timestamps);
@@ -149,7 +149,7 @@ TEST(Unsync, ThreeRatesConvergeToGStarAndAgreeWithTheSynchronisedRendering) {
   // Outputs: estimates.csv has a row per image with its time, energies.csv the grid, and
   // summary.json says the run was on the union of timestamps.
   const fs::path out = root / "run";
-  const auto summary = run::write_run_outputs(out, *provider, options, u);
+  const auto summary = run::write_run_outputs(out, *source, options, u);
   EXPECT_TRUE(summary.contains("clock"));
   EXPECT_EQ(summary["frames"].get<int>(), 60);
   const std::string est = test::slurp(out / "estimates.csv");

@@ -95,8 +95,8 @@ fs::path* Launch::dir_ = nullptr;
 TEST_F(Launch, PlayPublishesEveryImageAndCameraInfo) {
   const fs::path ds = *dir_ / "ds";
   const int domain = net_test::loopback_domain(*dir_);
-  auto provider = sources::open_dataset_source(ds);
-  const auto& cams = provider->network().cameras;
+  auto source = sources::open_dataset_source(ds);
+  const auto& cams = source->network().cameras;
   const auto readers = [&](bool reliable) {
     std::vector<std::unique_ptr<net::RosTopicReader>> r;
     for (const auto& c : cams) {
@@ -116,10 +116,10 @@ TEST_F(Launch, PlayPublishesEveryImageAndCameraInfo) {
       const auto ns = ros::header_stamp_ns(m.data(), m.size(), why);
       EXPECT_TRUE(ns.has_value()) << why;
       if (!ns) continue;
-      const int f = static_cast<int>(std::llround(*ns * 1e-9 * provider->network().fps));
-      EXPECT_NEAR(*ns * 1e-9, provider->frame_time(i, f), 1e-9);
+      const int f = static_cast<int>(std::llround(*ns * 1e-9 * source->network().fps));
+      EXPECT_NEAR(*ns * 1e-9, source->frame_time(i, f), 1e-9);
       const cv::Mat got = ros::decode_gray(ros::kImageType, m, "image");
-      EXPECT_EQ(cv::norm(got, provider->read(i, f), cv::NORM_INF), 0.0) << "frame " << f;
+      EXPECT_EQ(cv::norm(got, source->read(i, f), cv::NORM_INF), 0.0) << "frame " << f;
       ++n;
     }
     return n;
@@ -137,7 +137,7 @@ TEST_F(Launch, PlayPublishesEveryImageAndCameraInfo) {
       EXPECT_EQ(infos.size(), static_cast<size_t>(kFrames));
       for (const auto& m : infos) {
         const auto calib = ros::decode_camera_info(m, "camera_info");
-        EXPECT_EQ(calib.K, provider->calibration(i).K);
+        EXPECT_EQ(calib.K, source->calibration(i).K);
       }
     }
   }
@@ -215,13 +215,13 @@ TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
     EXPECT_TRUE(fs::exists(launch / f)) << f;
 
   // Full precision: every node's estimates against the in-process run of the same options.
-  auto provider = sources::open_dataset_source(ds);
-  run::ImageRunOptions o;
+  auto source = sources::open_dataset_source(ds);
+  run::ImageRunSettings o;
   o.progress = false;
-  const auto res = run::run_images(*provider, o);
+  const auto res = run::run_images(*source, o);
   ASSERT_EQ(res.history.size(), static_cast<size_t>(kFrames));
   double worst = 0.0;
-  const auto& cams = provider->network().cameras;
+  const auto& cams = source->network().cameras;
   for (size_t i = 0; i < cams.size(); ++i) {
     const auto rows = read_csv(launch / "nodes" / ("node_" + std::to_string(cams[i].id) + ".csv"));
     ASSERT_EQ(rows.size(), static_cast<size_t>(kFrames + 1));
@@ -254,7 +254,7 @@ TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
     while (in >> sec >> nsec >> frame_id >> p[0] >> p[1] >> p[2] >> q[0] >> q[1] >> q[2] >> q[3]) {
       ++count;
       EXPECT_EQ(frame_id, "world");
-      const int k = static_cast<int>(std::lround((sec + nsec * 1e-9) * provider->network().fps));
+      const int k = static_cast<int>(std::lround((sec + nsec * 1e-9) * source->network().fps));
       ASSERT_GE(k, 0);
       ASSERT_LT(k, kFrames);
       const obs::SE3 est = pose_at(rows[static_cast<size_t>(k + 1)], 38);
@@ -359,7 +359,7 @@ TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
       std::istringstream ls(line);
       long long ns = 0;
       ls >> kind >> ns;
-      const int k = static_cast<int>(std::llround(ns * 1e-9 * provider->network().fps));
+      const int k = static_cast<int>(std::llround(ns * 1e-9 * source->network().fps));
       std::string parent, child;
       double p[3], q[4];
       if (kind == "static" || kind == "tf") ls >> parent >> child;

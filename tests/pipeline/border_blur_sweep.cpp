@@ -60,7 +60,7 @@ int main(int argc, char** argv) {
     double worst = 0.0;
     for (size_t p = 0; p < poses.size(); ++p) {
       const auto truth = testing::project_corners(calib, poses[p], 0.2);
-      testing::SynthOptions opt;
+      testing::SynthSettings opt;
       opt.black = black * opt.white;
       opt.noise_sigma = 2.0;
       opt.seed = seed + 100 * p + static_cast<std::uint64_t>(10 * sigma);

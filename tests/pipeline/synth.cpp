@@ -117,7 +117,7 @@ bool printed_white(const cv::Mat& bits, double cx, double cy, double spread) {
 }  // namespace
 
 cv::Mat render_tags(const Calibration& calib, const std::vector<SynthTag>& tags,
-                    const SynthOptions& opt) {
+                    const SynthSettings& opt) {
   const int ss = opt.supersample;
   const auto& rays = subsample_rays(calib, ss);
   struct Prepared {
@@ -190,8 +190,8 @@ cv::Mat render_tags(const Calibration& calib, const std::vector<SynthTag>& tags,
 }
 
 cv::Mat render_camera_picture(const Calibration& calib, const std::vector<SynthTag>& tags,
-                              const SynthOptions& opt, double blur_sigma, double gamma) {
-  SynthOptions linear = opt;
+                              const SynthSettings& opt, double blur_sigma, double gamma) {
+  SynthSettings linear = opt;
   linear.noise_sigma = 0.0;
   cv::Mat v;
   render_tags(calib, tags, linear).convertTo(v, CV_64F, 1.0 / 255.0);
@@ -371,7 +371,7 @@ std::vector<std::vector<std::array<cv::Point2d, 4>>> write_synth_dataset(
     }
     for (size_t f = 0; f < spec.g_wo.size(); ++f) {
       const obs::SE3 g_io = cam.g_wi.inverse() * spec.g_wo[f];
-      SynthOptions opt = spec.options;
+      SynthSettings opt = spec.options;
       opt.seed = spec.options.seed + 1000 * static_cast<std::uint64_t>(cam.id) + f;
       const cv::Mat img = render_tags(cam.calib, {{spec.target_id, spec.tag_size, g_io, {}}}, opt);
       if (spec.video) {

@@ -29,7 +29,7 @@ struct SynthTag {
   std::vector<std::pair<int, int>> flipped_cells;  ///< (row, col) bitmap cells to invert
 };
 
-struct SynthOptions {
+struct SynthSettings {
   std::string family = "tag36h11";
   int supersample = 4;        ///< sub-samples per pixel side
   double background = 128.0;  ///< gray level where no tag is hit
@@ -54,13 +54,13 @@ struct SynthOptions {
 
 /// 8-bit gray image of the tags seen by a camera.
 cv::Mat render_tags(const io::Calibration& calib, const std::vector<SynthTag>& tags,
-                    const SynthOptions& opt = {});
+                    const SynthSettings& opt = {});
 
 /// A camera's picture of the tags: render_tags() without noise, taken as linear light, blurred
 /// by a Gaussian of `blur_sigma` px (0: none), encoded as v^(1/gamma) (2.2 about as sRGB; 1:
 /// linear), then Gaussian noise of opt.noise_sigma (seeded with opt.seed) and 8-bit rounding.
 cv::Mat render_camera_picture(const io::Calibration& calib, const std::vector<SynthTag>& tags,
-                              const SynthOptions& opt, double blur_sigma, double gamma = 2.2);
+                              const SynthSettings& opt, double blur_sigma, double gamma = 2.2);
 
 /// The true corners of a tag (obs::FeatureModel::square order) in OpenCV pixels, with
 /// distortion (cv::projectPoints).
@@ -102,7 +102,7 @@ struct SynthDatasetSpec {
   bool video = false;  ///< write cam_<id><video_ext> instead of cam_<id>/%06d.png
   std::string video_ext = ".avi";
   std::string video_fourcc = "MJPG";  ///< e.g. MJPG (.avi), FFV1 (.avi, lossless), mp4v (.mp4)
-  SynthOptions options;
+  SynthSettings options;
 };
 
 /// `cameras` cameras 0.3 m apart along world x (identity orientation, ids 1..n, the test

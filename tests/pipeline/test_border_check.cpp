@@ -72,9 +72,9 @@ void add_noise(cv::Mat& img, double sigma, unsigned seed) {
 struct OccluderCase {
   double level, roll, edge_cells;
   obs::SE3 pose() const { return testing::facing_pose(1.5, 0.0, 0.0, {0.0, 0.0, roll}); }
-  testing::SynthOptions options(const std::array<cv::Point2d, 4>& truth) const {
+  testing::SynthSettings options(const std::array<cv::Point2d, 4>& truth) const {
     const double left = 0.5 * (truth[0].x + truth[3].x), cell = cv::norm(truth[1] - truth[0]) / 8;
-    testing::SynthOptions opt;
+    testing::SynthSettings opt;
     opt.occluder_level = level;
     opt.occluders = {cv::Rect(0, 0, static_cast<int>(std::lround(left + edge_cells * cell)), 480)};
     return opt;
@@ -94,7 +94,7 @@ TEST(BorderCheck, QuadOnAnOccludersOutlineRejected) {
   for (const OccluderCase& c : kOccluderCases) {
     const obs::SE3 g = c.pose();
     const auto truth = testing::project_corners(calib, g, kSize);
-    testing::SynthOptions opt = c.options(truth);
+    testing::SynthSettings opt = c.options(truth);
     opt.noise_sigma = 2.0;
     const cv::Mat img = testing::render_tags(calib, {{0, kSize, g, {}}}, opt);
     const std::string what = "occluder level " + std::to_string(c.level);
@@ -125,7 +125,7 @@ TEST(BorderCheck, QuadOnTheImageBorderRejected) {
   const auto calib = testing::test_calibration();
   const obs::SE3 g = testing::facing_pose(1.2, 0.5175, 0.0, {0.0, 0.0, 0.05});
   const auto truth = testing::project_corners(calib, g, kSize);
-  testing::SynthOptions opt;
+  testing::SynthSettings opt;
   opt.noise_sigma = 2.0;
   const cv::Mat img = testing::render_tags(calib, {{0, kSize, g, {}}}, opt);
   const auto unchecked = TagDetector(with_check(false)).detect(img, &calib);
@@ -204,7 +204,7 @@ TEST(BorderCheck, PointSampledTagsKept) {
   for (int supersample : {1, 4})
     for (double z : {1.0, 1.5, 2.0, 2.5})
       for (double dx : {0.0, 0.013, 0.027, 0.041}) {
-        testing::SynthOptions opt;
+        testing::SynthSettings opt;
         opt.supersample = supersample;
         opt.noise_sigma = 2.0;
         const cv::Mat img =
@@ -234,7 +234,7 @@ TEST(BorderCheck, PointSampledTagsKept) {
 /// white (12 of 230), blurred by a Gaussian of `sigma` px in linear light, gamma-encoded as
 /// sRGB roughly is (v^(1/2.2)), then sensor noise sigma 2 (seeded).
 cv::Mat camera_picture(const io::Calibration& calib, const obs::SE3& g, double sigma,
-                       testing::SynthOptions opt, unsigned seed) {
+                       testing::SynthSettings opt, unsigned seed) {
   opt.black = 12.0;
   opt.noise_sigma = 2.0;
   opt.seed = seed;
@@ -362,7 +362,7 @@ TEST(BorderCheck, InkSpreadAndMotionBlurKeptWrongSideRejected) {
   for (const PrintCase& pc : cases)
     for (size_t p = 0; p < poses.size(); ++p) {
       const std::string what = std::string(pc.what) + ", pose " + std::to_string(p);
-      testing::SynthOptions opt;
+      testing::SynthSettings opt;
       opt.black = 12.0;
       opt.noise_sigma = 2.0;
       opt.seed = static_cast<unsigned>(500 + p);
@@ -436,7 +436,7 @@ TEST(BorderCheck, BorderThinnerOrThickerThanACellOnEverySideKeptWrongSideRejecte
       for (size_t p = 0; p < poses.size(); ++p) {
         const std::string what = "border " + std::to_string(width) + " cell, gamma " +
                                  std::to_string(gamma) + ", pose " + std::to_string(p);
-        testing::SynthOptions opt;
+        testing::SynthSettings opt;
         opt.black = 12.0;
         opt.noise_sigma = 2.0;
         opt.seed = static_cast<unsigned>(700 + p);
@@ -505,7 +505,7 @@ TEST(BorderCheck, EdgeBiasRemovedCornersAreTheCellGrids) {
     double worst_fitted = 0.0;
     for (size_t p = 0; p < poses.size(); ++p) {
       const std::string what = std::string(c.what) + ", pose " + std::to_string(p);
-      testing::SynthOptions opt;
+      testing::SynthSettings opt;
       opt.black = 12.0;
       opt.noise_sigma = 2.0;
       opt.seed = static_cast<unsigned>(900 + p);

@@ -145,7 +145,7 @@ TEST(Bundle, FrontEndUsesEveryAcceptedTagOfTheBody) {
   const auto w = wedge();
   const obs::SE3 g_io = testing::facing_pose(1.6, -0.1, 0.02, obs::Vec3(0.1, 0.15, 0));
   std::vector<testing::SynthTag> tags{{0, 0.2, g_io, {}}, {1, 0.2, g_io * w.bundle[0].g_ot, {}}};
-  testing::SynthOptions so;
+  testing::SynthSettings so;
   so.noise_sigma = 1.0;
   const cv::Mat img = testing::render_tags(calib, tags, so);
 

@@ -40,7 +40,7 @@ TEST(DatasetWriter, WritesDocumentedLayout) {
   const auto scene = netvmo::io::load_render_scenario(dir / "scenario.yaml");
   netvmo::render::Renderer r(scene);
   const fs::path out = dir / "dataset";
-  netvmo::io::DatasetOptions opt;
+  netvmo::io::DatasetSettings opt;
   opt.progress = false;
   const auto summary = netvmo::io::write_dataset(r, out, opt);
   EXPECT_EQ(summary.frames, 3);
@@ -145,7 +145,7 @@ TEST(DatasetWriter, JpegFramesAtTheSensorsQuality) {
   const auto scene = netvmo::io::load_render_scenario(dir / "scenario.yaml");
   ASSERT_EQ(scene.cameras[0].sensor.jpeg_quality, 60);
   netvmo::render::Renderer r(scene);
-  netvmo::io::DatasetOptions opt;
+  netvmo::io::DatasetSettings opt;
   opt.progress = false;
   netvmo::io::write_dataset(r, dir / "dataset", opt);
   EXPECT_TRUE(fs::exists(dir / "dataset" / "cam_3" / "000001.jpg"));

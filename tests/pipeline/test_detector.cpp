@@ -19,7 +19,7 @@ using namespace frontend;
 using testing::facing_pose;
 using testing::project_corners;
 using testing::render_tags;
-using testing::SynthOptions;
+using testing::SynthSettings;
 
 constexpr double kSize = 0.2;
 
@@ -101,7 +101,7 @@ RmsTable measure(const Calibration& calib) {
   for (int noisy = 0; noisy < 2; ++noisy)
     for (const auto& g : accuracy_poses())
       for (int s = 0; s < (noisy ? 3 : 1); ++s) {
-        SynthOptions opt;
+        SynthSettings opt;
         opt.noise_sigma = noisy ? 2.0 : 0.0;
         opt.seed = seed++;
         const cv::Mat img = render_tags(calib, {{0, kSize, g, {}}}, opt);
@@ -152,7 +152,7 @@ TEST(Detector, EdgeRefinementRobustToBlur) {
   double e_none = 0, e_edges = 0;
   std::uint64_t seed = 11;
   for (const auto& g : accuracy_poses()) {
-    SynthOptions opt;
+    SynthSettings opt;
     opt.noise_sigma = 2.0;
     opt.seed = seed++;
     cv::Mat img = render_tags(calib, {{0, kSize, g, {}}}, opt);
@@ -248,7 +248,7 @@ TEST(Detector, TagOutsideImageOrBehindNotDetected) {
   EXPECT_EQ(det.detect(render_tags(calib, {{0, kSize, facing_pose(1.0, 0.52, 0.0), {}}})).status,
             TargetStatus::not_found);
   // fully occluded
-  SynthOptions occ;
+  SynthSettings occ;
   occ.occluders = {cv::Rect(200, 150, 250, 200)};
   EXPECT_EQ(
       det.detect(render_tags(calib, {{0, kSize, facing_pose(1.5, 0.0, 0.0), {}}}, occ)).status,
@@ -288,7 +288,7 @@ TEST(Detector, HammingAndMarginThresholds) {
 TEST(Detector, LowContrastTagStillDetected) {
   const auto calib = testing::test_calibration();
   TagDetector det;
-  SynthOptions opt;
+  SynthSettings opt;
   opt.black = 110;
   opt.white = 150;
   opt.background = 130;
@@ -467,7 +467,7 @@ TEST(FrontEnd, UnchangedSceneSkipsTheSearchATagComingIntoViewDoesNot) {
         {3, 0.15, facing_pose(1.5, -0.35 + jx, 0.1 + jy, {0.2, 0.3, 0.4}), {}},
         {5, 0.12, facing_pose(1.6, 0.3 + jx, -0.15 + jy, {-0.3, 0.1, 1.0}), {}}};
     if (k >= appears) tags.push_back({0, kSize, facing_pose(1.8, 0.05, 0.1, {0.2, -0.3, 0.5}), {}});
-    SynthOptions o;
+    SynthSettings o;
     o.noise_sigma = 2.0;
     o.seed = static_cast<std::uint64_t>(100 + k);
     return testing::render_tags(calib, tags, o);

@@ -1,5 +1,5 @@
 // The measurement's covariance: the corners' from the edge fits (refine_corners), taken to
-// normalized coordinates (TagObservation::f_covariance), and the PnP pose's through the
+// normalized coordinates (Observation::f_covariance), and the PnP pose's through the
 // projections' Jacobian (pnp_covariance). The Jacobian against finite differences, the sandwich
 // against its closed form, and both covariances against the empirical spread of the corners and
 // poses over seeded sensor noise on synthesized pictures (coverage of the 95 % ellipsoids).
@@ -90,7 +90,7 @@ Spread spread_over_noise(const io::Calibration& calib, const obs::SE3& g, double
   std::vector<obs::SE3> poses;
   std::vector<PoseCovariance> pose_cov;
   for (int k = 0; k < draws; ++k) {
-    testing::SynthOptions opt;
+    testing::SynthSettings opt;
     opt.noise_sigma = noise;
     opt.seed = static_cast<std::uint64_t>(k + 1);
     opt.supersample = 3;

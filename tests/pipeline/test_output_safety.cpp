@@ -270,16 +270,16 @@ TEST(OutputSafety, AbsurdNumbersAreRejectedWithTheirRange) {
 // ---------------------------------------------------------------------------------------------
 // --keep-going and videos that cannot be read.
 
-struct EstimateRow {
+struct OwnClockRecord {
   int frame, camera, delta;
 };
-std::vector<EstimateRow> read_estimates(const fs::path& csv) {
+std::vector<OwnClockRecord> read_estimates(const fs::path& csv) {
   std::ifstream in(csv);
   std::string line;
   std::getline(in, line);
-  std::vector<EstimateRow> v;
+  std::vector<OwnClockRecord> v;
   while (std::getline(in, line)) {
-    EstimateRow r{};
+    OwnClockRecord r{};
     double t;
     if (std::sscanf(line.c_str(), "%d,%lf,%d,%d", &r.frame, &t, &r.camera, &r.delta) == 4)
       v.push_back(r);

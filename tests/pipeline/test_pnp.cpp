@@ -64,7 +64,7 @@ TEST(Pnp, RenderedFramesWithin5mmAndHalfDegree) {
                           facing_pose(2.0, -0.6, -0.4, {0.4, 0.3, -2.2}),
                           facing_pose(2.0, 0.2, -0.5, {0.0, -0.5, 0.7})})
       for (double noise : {0.0, 2.0}) {
-        testing::SynthOptions opt;
+        testing::SynthSettings opt;
         opt.noise_sigma = noise;
         opt.seed = seed++;
         const auto o = fe.observe(testing::render_tags(calib, {{0, 0.2, g, {}}}, opt), calib);

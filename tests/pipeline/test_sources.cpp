@@ -32,9 +32,9 @@ bool any_warning_contains(const Dataset& ds, const std::string& a, const std::st
 }
 
 /// Runs the front end on every frame of every camera: [camera][frame].
-std::vector<std::vector<TagObservation>> run_all(Dataset& ds) {
+std::vector<std::vector<Observation>> run_all(Dataset& ds) {
   FrontEnd fe(DetectorSettings{});
-  std::vector<std::vector<TagObservation>> out(ds.cameras.size());
+  std::vector<std::vector<Observation>> out(ds.cameras.size());
   for (int f = 0; f < ds.frame_count; ++f)
     for (size_t c = 0; c < ds.cameras.size(); ++c)
       out[c].push_back(fe.observe(ds.read(c, f), ds.cameras[c].calib));

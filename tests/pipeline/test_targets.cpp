@@ -95,7 +95,7 @@ TEST(Targets, FrontEndDecidesEveryTargetInOnePass) {
   const obs::SE3 g_b = testing::facing_pose(2.0, 0.5, -0.05, obs::Vec3(-0.05, 0.1, 0));
   std::vector<testing::SynthTag> tags{
       {0, 0.2, g_a, {}}, {1, 0.2, g_a * a.bundle[0].g_ot, {}}, {4, 0.12, g_b, {}}};
-  testing::SynthOptions so;
+  testing::SynthSettings so;
   so.noise_sigma = 1.0;
 
   frontend::DetectorSettings ds;

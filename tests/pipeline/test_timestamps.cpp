@@ -46,15 +46,15 @@ TEST(Timestamps, AVideosOwnTimestampsGiveItsImageTimes) {
     EXPECT_TRUE(any_note_contains(ds.notes, "camera " + std::to_string(i + 1),
                                   "its times are its video's own timestamps"));
   }
-  auto provider = sources::open_dataset_source(dir);
-  EXPECT_FALSE(sources::clock_mismatch(*provider));  // one clock, but not 30 frames/s
-  const auto irregular = sources::irregular_clock(*provider);
+  auto source = sources::open_dataset_source(dir);
+  EXPECT_FALSE(sources::clock_mismatch(*source));  // one clock, but not 30 frames/s
+  const auto irregular = sources::irregular_clock(*source);
   ASSERT_TRUE(irregular);
   EXPECT_NE(irregular->find("frame 1 is at t = 0.08 s"), std::string::npos) << *irregular;
 
-  run::ImageRunOptions options;
+  run::ImageRunSettings options;
   options.progress = false;
-  const auto r = run::run_images(*provider, options);
+  const auto r = run::run_images(*source, options);
   EXPECT_TRUE(r.union_of_timestamps);
   ASSERT_EQ(r.history.size(), 13u);  // t = 0 .. 0.4 s at 1/30 s
   EXPECT_NEAR(r.history.back().t, 0.4, 1e-12);

@@ -75,7 +75,7 @@ TEST(Visibility, DetectionAgreesWithGeometry) {
           any_in = px.x >= -0.5 && px.y >= -0.5 && px.x <= calib.width - 0.5 &&
                    px.y <= calib.height - 0.5;
         }
-      testing::SynthOptions opt;
+      testing::SynthSettings opt;
       opt.noise_sigma = 2.0;
       opt.supersample = 2;  // geometry classification only; keeps the sweep fast
       opt.seed = static_cast<std::uint64_t>(frame);

@@ -98,7 +98,7 @@ void BM_FrontEnd(benchmark::State& state) {
   FrontEnd fe(s);
   int detected = 0, n = 0;
   for (auto _ : state) {
-    const TagObservation o = fe.observe(frame, calib);
+    const Observation o = fe.observe(frame, calib);
     benchmark::DoNotOptimize(o.f_normalized.data());
     detected += o.delta;
     ++n;

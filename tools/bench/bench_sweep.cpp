@@ -14,16 +14,16 @@ using namespace netvmo;
 
 namespace {
 void BM_Sweep20Points(benchmark::State& state) {
-  auto provider = sources::make_render_source(
+  auto source = sources::make_render_source(
       io::load_render_scenario(std::string(NETVMO_SOURCE_DIR) + "/datasets/paper5_render.yaml"),
       150);
-  run::ImageRunOptions o;
+  run::ImageRunSettings o;
   o.progress = false;
   const auto t0 = std::chrono::steady_clock::now();
-  const auto inputs = run::record_inputs(*provider, o);
+  const auto inputs = run::record_inputs(*source, o);
   const double front_end =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const auto ctx = run::sweep_context(provider->network(), inputs);
+  const auto ctx = run::sweep_context(source->network(), inputs);
   int points = 0;
   for (auto _ : state) {
     for (double k_e : {1.0, 10.0})

@@ -29,7 +29,7 @@ class Vmo final : public Estimator {
     return s.k_e + 2.0 * s.k_s * max_degree;  // Gershgorin on k_e Delta + k_s L
   }
 
-  void measured(const CameraView& cv, EstimatorState& st) const override {
+  void measured(const EstimatorContext& cv, EstimatorState& st) const override {
     const auto& s = cv.settings;
     const auto& z = cv.z;
     if (!s.init_from_measurement || !z.delta || !z.g_io_pnp) return;
@@ -42,7 +42,7 @@ class Vmo final : public Estimator {
     }
   }
 
-  void step(const CameraView& cv, EstimatorState& st, double h) const override {
+  void step(const EstimatorContext& cv, EstimatorState& st, double h) const override {
     const auto& s = cv.settings;
     if (!st.initialized && s.init_from_neighbours) {
       std::vector<SE3> nb;

@@ -31,7 +31,7 @@ constexpr int kDim = 13;  // [p (3); R row-major (9); delta]
 using Vec13 = Eigen::Matrix<double, kDim, 1>;
 
 // r_i = delta_i [p_wo,i; vec(R_wo,i); 1] with g_wo,i = g_wi g_io,i.
-Vec13 input(const CameraView& cv) {
+Vec13 input(const EstimatorContext& cv) {
   Vec13 r = Vec13::Zero();
   if (!cv.model.usable(cv.z)) return r;
   const SE3& g_io =
@@ -72,9 +72,9 @@ class ZeroOffset final : public Estimator {
     return std::max(s.k_e + 2.0 * s.k_s * max_degree, 2.0 * s.k_e * max_degree);
   }
 
-  void measured(const CameraView&, EstimatorState&) const override {}
+  void measured(const EstimatorContext&, EstimatorState&) const override {}
 
-  void step(const CameraView& cv, EstimatorState& st, double h) const override {
+  void step(const EstimatorContext& cv, EstimatorState& st, double h) const override {
     const auto& s = cv.settings;
     const Vec13 r = input(cv);
     Eigen::Map<Vec13> x(st.consensus.data()), eta(st.consensus.data() + kDim);

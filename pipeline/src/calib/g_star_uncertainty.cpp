@@ -61,10 +61,9 @@ std::map<int, Mat6> read_calibration_covariances(const std::filesystem::path& fi
   return out;
 }
 
-json g_star_localisation_summary(const sources::NetworkSource& provider,
-                                 const run::ImageRunResult& result, const std::map<int, Mat6>& cov,
-                                 const std::string& source) {
-  const auto& net = provider.network();
+json g_star_localisation_summary(const sources::World& world, const run::ImageRunResult& result,
+                                 const std::map<int, Mat6>& cov, const std::string& source) {
+  const auto& net = world.network();
   for (const auto& c : net.cameras)
     if (!cov.count(c.id))
       throw InputError(source + ": no covariance for camera " + std::to_string(c.id) +
@@ -78,7 +77,7 @@ json g_star_localisation_summary(const sources::NetworkSource& provider,
     for (size_t i = 0; i < r.cameras.size(); ++i) {
       const auto& c = r.cameras[i];
       if (!c.delta || !c.fictitious_w) continue;
-      terms.push_back({provider.camera_believed(i, r.frame), c.fictitious_w->translation(),
+      terms.push_back({world.camera_believed(i, r.frame), c.fictitious_w->translation(),
                        cov.at(net.cameras[i].id)});
     }
     const Mat6 S = g_star_covariance(terms);

@@ -37,7 +37,7 @@ CornerCovariance normalized_covariance(const TagDetection& t, const io::Calibrat
   return T * px * T.transpose();
 }
 
-std::optional<Eigen::MatrixXd> f_covariance_matrix(const TagObservation& obs) {
+std::optional<Eigen::MatrixXd> f_covariance_matrix(const Observation& obs) {
   const Eigen::Index n = obs.f_normalized.size();
   if (n != 8 * static_cast<Eigen::Index>(obs.f_covariance.size())) return std::nullopt;
   Eigen::MatrixXd C = Eigen::MatrixXd::Zero(n, n);
@@ -73,7 +73,7 @@ obs::FeatureModel tag_points(const io::TargetConfig& target, const std::vector<i
   return m;
 }
 
-obs::FeatureModel observation_model(const io::TargetConfig& target, const TagObservation& o) {
+obs::FeatureModel observation_model(const io::TargetConfig& target, const Observation& o) {
   if (target.bundle.empty()) return obs::FeatureModel::square(target.size);
   return tag_points(target, o.slots);
 }
@@ -196,14 +196,14 @@ bool FrontEnd::unchanged(const cv::Mat& gray, const ChangeReference& reference) 
   return true;
 }
 
-TagObservation FrontEnd::observe(const cv::Mat& gray, const io::Calibration& calib,
-                                 FrameDetections* all, TrackState* track) {
+Observation FrontEnd::observe(const cv::Mat& gray, const io::Calibration& calib,
+                              FrameDetections* all, TrackState* track) {
   return std::move(observe_targets(gray, calib, all, track).front());
 }
 
-std::vector<TagObservation> FrontEnd::observe_targets(const cv::Mat& gray,
-                                                      const io::Calibration& calib,
-                                                      FrameDetections* all, TrackState* track) {
+std::vector<Observation> FrontEnd::observe_targets(const cv::Mat& gray,
+                                                   const io::Calibration& calib,
+                                                   FrameDetections* all, TrackState* track) {
   FrameDetections dets;
   unsigned searches = 0, found_by = 0;
   if (gray.empty()) {
@@ -230,7 +230,7 @@ std::vector<TagObservation> FrontEnd::observe_targets(const cv::Mat& gray,
         keep_best(dets, std::move(d));
       merged = true;
     };
-    auto search = [&](unsigned what, const cv::Rect& region, const SearchOptions& opt) {
+    auto search = [&](unsigned what, const cv::Rect& region, const SearchSettings& opt) {
       if (settled(dets)) return;
       searches |= what;
       merge(what, detector_.detect(gray, region, &calib, opt));
@@ -240,7 +240,7 @@ std::vector<TagObservation> FrontEnd::observe_targets(const cv::Mat& gray,
       const cv::Rect w = tracking_window(last, tracking_);
       double side = narrowest_side(last[0]);
       for (const auto& c : last) side = std::min(side, narrowest_side(c));
-      SearchOptions opt;
+      SearchSettings opt;
       if (side < tracking_.full_res_below_px) opt.decimate = 1.0;
       search(kSearchWindow, w, opt);
       if (tracking_.shadow_retry) {
@@ -287,7 +287,7 @@ std::vector<TagObservation> FrontEnd::observe_targets(const cv::Mat& gray,
           unchanged(gray, track->acquisition_image)) {
         searches |= kSkippedAcquisition;
       } else {
-        SearchOptions opt;
+        SearchSettings opt;
         opt.decimate = 1.0;
         search(kSearchAcquisition, whole, opt);
         const bool keep = tracking_.change_pixels > 0 && !all_found(dets);
@@ -313,9 +313,9 @@ std::vector<TagObservation> FrontEnd::observe_targets(const cv::Mat& gray,
       ++track->blind_frames;
     }
   }
-  std::vector<TagObservation> out(target_count());
+  std::vector<Observation> out(target_count());
   for (size_t j = 0; j < out.size(); ++j) {
-    TagObservation& obs = out[j];
+    Observation& obs = out[j];
     const TargetDecision& target = dets.targets[j];
     obs.status = target.status;
     obs.reason = target.reason;

@@ -86,7 +86,7 @@ std::vector<PhotoTagResult> evaluate_photo(const cv::Mat& gray, const io::Calibr
   if (ids.size() > 1) s.tags_per_target.assign(ids.size(), 1);
   FrontEnd fe(s, tracking);
   TrackState track;
-  const std::vector<TagObservation> obs = fe.observe_targets(gray, calib, nullptr, &track);
+  const std::vector<Observation> obs = fe.observe_targets(gray, calib, nullptr, &track);
   for (const auto& r : refs) {
     PhotoTagResult t;
     t.ref = r;
@@ -94,7 +94,7 @@ std::vector<PhotoTagResult> evaluate_photo(const cv::Mat& gray, const io::Calibr
         r.hamming == 0 && r.fully_visible && r.narrowest >= recall.min_side_px && count[r.id] == 1;
     const size_t k =
         static_cast<size_t>(std::lower_bound(ids.begin(), ids.end(), r.id) - ids.begin());
-    const TagObservation& o = obs.at(k);
+    const Observation& o = obs.at(k);
     t.status = o.status;
     t.reason = o.reason;
     if (o.delta) {

@@ -20,7 +20,7 @@ namespace {
 /// libapriltag reports pixel centres at +0.5 (measured, see tests/pipeline/test_detector.cpp).
 constexpr double kApriltagPixelOffset = 0.5;
 
-/// A target found on a normalised copy (SearchOptions::normalized) is rejected when its corners
+/// A target found on a normalised copy (SearchSettings::normalized) is rejected when its corners
 /// refined on the image and on the copy differ by more than this [px] (a shadow boundary along
 /// a border edge; measured on moving_target: 0.01-0.21 px where the corners are right, 0.53 px
 /// where the image fit put a corner 1.4 px off).
@@ -60,7 +60,7 @@ struct TagDetector::Impl {
   render::TagFamilyPtr family{nullptr, nullptr};
   apriltag_detector_t* td = nullptr;
   cv::Mat gray;                   // conversion buffer for non-gray input
-  cv::Mat normalized;             // the image with the searched region normalised (SearchOptions)
+  cv::Mat normalized;             // the image with the searched region normalised (SearchSettings)
   std::vector<cv::Mat> patterns;  // bitmap of each tag of the body, for the border check
   StageSeconds seconds;           // time spent, by stage
 
@@ -114,7 +114,7 @@ cv::Mat normalize_illumination(const cv::Mat& gray, int window) {
 }
 
 FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region,
-                                    const io::Calibration* calib, const SearchOptions& opt) {
+                                    const io::Calibration* calib, const SearchSettings& opt) {
   const cv::Mat* g = &image;
   if (image.type() == CV_8UC3) {
     cv::cvtColor(image, impl_->gray, cv::COLOR_BGR2GRAY);

@@ -52,7 +52,7 @@ RenderClock render_clock(const render::SceneDescription& scene, int frames) {
 
 }  // namespace
 
-DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const DatasetOptions& opt) {
+DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const DatasetSettings& opt) {
   const render::SceneDescription& scene = r.scene();
   const int frames = opt.frames > 0 ? opt.frames : scene.frames;
   // Cameras on their own clocks (scenario `fps`, `start`): render frame u is at the u-th time

@@ -328,10 +328,10 @@ json clocks_json(const ClockAlignment& a, const io::NetworkConfig& net) {
 
 }  // namespace
 
-MergedRun merge_run_outputs(sources::NetworkSource& provider, const run::ImageRunOptions& options,
+MergedRun merge_run_outputs(sources::NetworkSource& source, const run::ImageRunSettings& options,
                             const fs::path& nodes_dir, const fs::path& dir, int frames,
                             bool allow_gaps, const run::OverlaySettings* overlays) {
-  const auto& netcfg = provider.network();
+  const auto& netcfg = source.network();
   MergedRun merged;
   merged.messages = json::object();
   std::vector<json> node_json;  // by camera (null: none)
@@ -351,7 +351,7 @@ MergedRun merge_run_outputs(sources::NetworkSource& provider, const run::ImageRu
   // clock (ClockSync, align_clocks); lock-step runs on one clock by construction.
   std::optional<ClockAlignment> clocks;
   if (async) clocks = node_clocks(netcfg, node_json, nodes_dir);
-  auto result = merge_nodes(provider, options, nodes_dir, frames, allow_gaps,
+  auto result = merge_nodes(source, options, nodes_dir, frames, allow_gaps,
                             clocks ? clocks->correction_s : std::vector<double>{});
   for (const auto& j : node_json) {
     if (j.is_null()) continue;
@@ -373,7 +373,7 @@ MergedRun merge_run_outputs(sources::NetworkSource& provider, const run::ImageRu
             "its own clock");
   }
   if (overlays) {
-    run::OverlayWriter writer(dir, provider, *overlays);
+    run::OverlayWriter writer(dir, source, *overlays);
     const size_t n = netcfg.cameras.size();
     for (int k = 0; k < frames; ++k) {
       std::vector<cv::Mat> images(n);
@@ -382,16 +382,16 @@ MergedRun merge_run_outputs(sources::NetworkSource& provider, const run::ImageRu
         // Cameras on their own clocks: the image each camera held at this grid time.
         const int own =
             result.source_frames.empty() ? k : result.source_frames[static_cast<size_t>(k)][i];
-        if (own >= 0) images[i] = provider.read(i, own);
+        if (own >= 0) images[i] = source.read(i, own);
       }
       writer(k, images, {result.frames[static_cast<size_t>(k)]},
              {&result.history[static_cast<size_t>(k)]});
     }
     writer.finish();
   }
-  for (size_t k = provider.warnings().size(); k < result.warnings.size(); ++k)
+  for (size_t k = source.warnings().size(); k < result.warnings.size(); ++k)
     std::fprintf(stderr, "warning: %s\n", result.warnings[k].c_str());
-  merged.summary = run::write_run_outputs(dir, provider, options, result);
+  merged.summary = run::write_run_outputs(dir, source, options, result);
   return merged;
 }
 

@@ -16,7 +16,7 @@ namespace {
 struct Row {
   int frame = 0;
   double t = 0.0;
-  run::CameraFrame cam;
+  frontend::Observation cam;
   bool initialized = false, indep = false;
   SE3 est_w = SE3::Identity(), indep_w = SE3::Identity();
 };
@@ -80,17 +80,17 @@ std::vector<Row> read_node_csv(fs::path file, bool allow_missing) {
     if (!rows.empty() && r.frame <= rows.back().frame)
       f.fail("frame " + std::to_string(r.frame) + " out of order");
     r.t = f.num();
-    r.cam.obs.delta = f.integer() != 0;
+    r.cam.delta = f.integer() != 0;
     r.cam.read_failed = f.integer() != 0;
-    r.cam.obs.status = static_cast<frontend::TargetStatus>(f.integer());
-    r.cam.obs.tag_id = f.integer();
-    r.cam.obs.hamming = f.integer();
-    r.cam.obs.margin = f.num();
-    for (auto& c : r.cam.obs.corners_px) {
+    r.cam.status = static_cast<frontend::TargetStatus>(f.integer());
+    r.cam.tag_id = f.integer();
+    r.cam.hamming = f.integer();
+    r.cam.margin = f.num();
+    for (auto& c : r.cam.corners_px) {
       c.x = f.num();
       c.y = f.num();
     }
-    for (int a = 0; a < 8; ++a) r.cam.obs.f_normalized(a) = f.num();
+    for (int a = 0; a < 8; ++a) r.cam.f_normalized(a) = f.num();
     const bool pnp = f.integer() != 0;
     const SE3 g_io = f.pose();
     if (pnp) r.cam.g_io_pnp = g_io;
@@ -122,19 +122,19 @@ std::vector<const Row*> by_frame(const std::vector<Row>& rows, const fs::path& f
 
 }  // namespace
 
-run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
-                                const run::ImageRunOptions& options, const fs::path& nodes_dir,
+run::ImageRunResult merge_nodes(const sources::NetworkSource& source,
+                                const run::ImageRunSettings& options, const fs::path& nodes_dir,
                                 int frames, bool allow_gaps,
                                 const std::vector<double>& clock_correction) {
-  const io::NetworkConfig& net = provider.network();
+  const io::NetworkConfig& net = source.network();
   const size_t n = net.cameras.size();
   const obs::Graph graph = run::network_graph(net);
   // Cameras on their own clocks: each node's rows carry its own images' times, and the merge
   // evaluates on a regular grid (below).
   // A live network (sources::TopicNetwork) has no images: its nodes' rows are the only record of
   // them, each on its camera's stamps.
-  const bool live = provider.frame_count() == 0;
-  const bool own_clocks = live || sources::clock_mismatch(provider).has_value();
+  const bool live = source.frame_count() == 0;
+  const bool own_clocks = live || sources::clock_mismatch(source).has_value();
   std::vector<std::vector<Row>> rows;
   std::vector<fs::path> files;
   for (const auto& c : net.cameras) {
@@ -150,7 +150,7 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
   const auto os = run::camera_observer_settings(rs, false);
   const double dt = 1.0 / net.fps;
   run::ImageRunResult result;
-  result.warnings = provider.warnings();
+  result.warnings = source.warnings();
   result.substeps = obs::frame_substeps(dt, os, graph.max_degree());
   result.step_factor = run::step_factor(os, dt, result.substeps, graph.max_degree());
   if (auto w = run::step_factor_warning(result.substeps, result.step_factor))
@@ -173,7 +173,7 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
     grid = run::time_grid(first, last, dt, frames);
     frames = grid.frames;
   } else {
-    grid = run::time_grid(provider, frames);
+    grid = run::time_grid(source, frames);
   }
   const double t0 = own_clocks ? grid.t0 : 0.0;
   if (own_clocks) {
@@ -187,11 +187,10 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
         if (at >= 0) result.source_frames[static_cast<size_t>(k)][i] = rows[i][size_t(at)].frame;
       }
       for (const auto& r : rows[i])
-        result.own_estimates.push_back(
-            {r.frame, r.t - t0, i, r.cam.obs.delta, r.initialized, r.est_w});
+        result.own_estimates.push_back({r.frame, r.t - t0, i, r.cam.delta, r.initialized, r.est_w});
     }
     std::stable_sort(result.own_estimates.begin(), result.own_estimates.end(),
-                     [](const run::EstimateRow& a, const run::EstimateRow& b) {
+                     [](const run::OwnClockRecord& a, const run::OwnClockRecord& b) {
                        return a.t < b.t || (a.t == b.t && a.camera < b.camera);
                      });
   } else {
@@ -204,9 +203,9 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
     r.frame = k;
     r.t = k * dt;  // since t0
     // Own clocks: the truth at the grid time (target.csv holds every image time of any camera).
-    r.g_wo_true = own_clocks ? provider.target_truth_at(grid.time(k)) : provider.target_truth(k);
+    r.g_wo_true = own_clocks ? source.target_truth_at(grid.time(k)) : source.target_truth(k);
     r.cameras.resize(n);
-    std::vector<run::CameraFrame> cams(n);
+    std::vector<frontend::Observation> cams(n);
     for (size_t i = 0; i < n; ++i) {
       const Row* p = held[i][static_cast<size_t>(k)];
       const Row& row = p ? *p : none;
@@ -214,8 +213,8 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
       auto& c = r.cameras[i];
       const SE3& g_wi = net.cameras[i].g_wi;  // static cameras (moving ones: netvmo run)
       const auto true_wi =
-          own_clocks ? provider.camera_truth_at(i, grid.time(k)) : provider.camera_truth(i, k);
-      c.delta = row.cam.obs.delta;
+          own_clocks ? source.camera_truth_at(i, grid.time(k)) : source.camera_truth(i, k);
+      c.delta = row.cam.delta;
       c.initialized = row.initialized;
       c.est_w = row.est_w;
       if (row.indep) c.indep_w = row.indep_w;

@@ -50,19 +50,19 @@ void put(std::string& s, double v) {
   s += b;
 }
 
-std::string frame_row(int k, double t, const run::CameraFrame& cam, const obs::CameraObserver& net,
-                      const obs::CameraObserver& ind) {
+std::string frame_row(int k, double t, const frontend::Observation& cam,
+                      const obs::CameraObserver& net, const obs::CameraObserver& ind) {
   std::string s = std::to_string(k);
   put(s, t);
-  s += "," + std::to_string(cam.obs.delta ? 1 : 0) + "," + std::to_string(cam.read_failed ? 1 : 0) +
-       "," + std::to_string(static_cast<int>(cam.obs.status)) + "," +
-       std::to_string(cam.obs.tag_id) + "," + std::to_string(cam.obs.hamming);
-  put(s, cam.obs.margin);
-  for (const auto& c : cam.obs.corners_px) {
+  s += "," + std::to_string(cam.delta ? 1 : 0) + "," + std::to_string(cam.read_failed ? 1 : 0) +
+       "," + std::to_string(static_cast<int>(cam.status)) + "," + std::to_string(cam.tag_id) + "," +
+       std::to_string(cam.hamming);
+  put(s, cam.margin);
+  for (const auto& c : cam.corners_px) {
     put(s, c.x);
     put(s, c.y);
   }
-  for (int a = 0; a < 8; ++a) put(s, cam.obs.f_normalized(a));
+  for (int a = 0; a < 8; ++a) put(s, cam.f_normalized(a));
   s += cam.g_io_pnp ? ",1" : ",0";
   put_pose(s, cam.g_io_pnp ? *cam.g_io_pnp : SE3::Identity());
   s += net.initialized() ? ",1" : ",0";
@@ -141,22 +141,22 @@ fs::path node_ready_file(const fs::path& start_file, int camera_id) {
   return start_file.parent_path() / ("node_" + std::to_string(camera_id) + ".ready");
 }
 
-NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const NodeOptions& o) {
+NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const NodeSettings& o) {
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
   const bool live = o.live.has_value();
-  std::unique_ptr<sources::NetworkSource> provider;
+  std::unique_ptr<sources::NetworkSource> source;
   sources::TopicNetwork* topics = nullptr;  // live: the network the images are appended to
   if (live) {
     auto t = std::make_unique<sources::TopicNetwork>(dataset, o.camera_id);
     topics = t.get();
-    provider = std::move(t);
+    source = std::move(t);
   } else {
-    provider = sources::open_dataset_source(dataset, o.camera_id, o.run.keep_going);
+    source = sources::open_dataset_source(dataset, o.camera_id, o.run.keep_going);
   }
-  const io::NetworkConfig& netcfg = provider->network();
-  sources::require_static_cameras(*provider, "a camera process (netvmo launch, node)");
-  sources::require_single_target(*provider, "a camera process (netvmo launch, node)");
+  const io::NetworkConfig& netcfg = source->network();
+  sources::require_static_cameras(*source, "a camera process (netvmo launch, node)");
+  sources::require_single_target(*source, "a camera process (netvmo launch, node)");
   const int self = netcfg.index_of(o.camera_id);
   if (self < 0)
     throw InputError(netcfg.source + ": cameras: no camera " + std::to_string(o.camera_id));
@@ -198,8 +198,8 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   const double dt = 1.0 / netcfg.fps, dt_own = 1.0 / netcfg.camera_fps(si);
   run::checked_rounds(dt, o.run.runner.k_e, o.run.runner.k_s, graph.max_degree(),
                       o.run.runner.rounds);
-  const int own_frames = provider->camera_frame_count(si);
-  const auto frame_time = [&](int k) { return async ? provider->frame_time(si, k) : k * dt; };
+  const int own_frames = source->camera_frame_count(si);
+  const auto frame_time = [&](int k) { return async ? source->frame_time(si, k) : k * dt; };
   std::optional<LiveCamera> camera;  // live: the image stream
   const auto frame_length = [&](int k) {
     if (!async) return dt;
@@ -223,7 +223,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
 
   int frames = o.frames ? *o.frames
                : live   ? std::numeric_limits<int>::max()
-                        : provider->frame_count();
+                        : source->frame_count();
   if (o.run.max_frames) frames = std::min(frames, *o.run.max_frames);
   // The run's, on the dataset's clock (live: none; the merge takes the nodes' rows' times).
   const int dataset_frames = live ? 0 : frames;
@@ -231,8 +231,8 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   // first image (t0); this camera runs its own images within that span.
   double t0 = 0.0;
   if (async && !live) {
-    t0 = provider->frame_time(0, 0);
-    for (size_t i = 1; i < n; ++i) t0 = std::min(t0, provider->frame_time(i, 0));
+    t0 = source->frame_time(0, 0);
+    for (size_t i = 1; i < n; ++i) t0 = std::min(t0, source->frame_time(i, 0));
     const double t_end = t0 + frames * dt;
     int own = 0;
     while (own < own_frames && frame_time(own) < t_end - 1e-9) ++own;
@@ -280,7 +280,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   // The camera's ROS 2 topics (RosPublisher): its pose in the rig once, on rt/tf_static.
   if (ros) ros->tf_static({run::camera_transform(o.camera_id, frame_time(0) + clock, g_wi)});
   NodeSummary summary;
-  summary.notes = provider->notes();
+  summary.notes = source->notes();
   summary.substeps = substeps(dt_own, net);
   std::vector<obs::EstimateMessage> inbox;
   const double start = start_epoch ? *start_epoch : epoch_seconds();
@@ -306,11 +306,11 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
                          o.seed * 1000003ULL + static_cast<std::uint64_t>(o.camera_id),
                          epoch_seconds);
   obs::Transport& exchange = async ? static_cast<obs::Transport&>(faulty) : transport;
-  std::vector<run::CameraFrame> cams;
+  std::vector<frontend::Observation> cams;
   int k = first;
   for (; k < frames && (!camera || camera->wait_frame(k, 0.0)); ++k) {
     cv::Mat image;
-    if (const auto error = run::observe_camera(*provider, si, k, front_end, track, targets,
+    if (const auto error = run::observe_camera(*source, si, k, front_end, track, targets,
                                                o.run.keep_going, image, cams)) {
       if (!o.run.keep_going) std::rethrow_exception(error);
       try {
@@ -321,9 +321,9 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
                                    std::to_string(k) + ")");
       }
     }
-    const run::CameraFrame& cam = cams[0];
+    const frontend::Observation& cam = cams[0];
     const obs::Measurement z =
-        run::camera_input(cam, provider->target_truth(k), provider->camera_truth(si, k));
+        run::measurement_of(cam, source->target_truth(k), source->camera_truth(si, k));
     if (net.error_model().input() == obs::MeasurementInput::true_pose && z.delta && !z.g_io_true)
       throw InputError("the " + std::string(net.error_model().name()) +
                        " error model needs ground truth (rendered data)");

@@ -8,13 +8,10 @@
 
 namespace netvmo::run {
 
-BagRecorder::BagRecorder(const std::filesystem::path& dir, const sources::NetworkSource& provider,
+BagRecorder::BagRecorder(const std::filesystem::path& dir, const sources::World& world,
                          BagSettings settings)
-    : provider_(provider),
-      settings_(settings),
-      graph_(network_graph(provider.network())),
-      bag_(dir) {
-  for (const auto& c : provider.network().cameras) {
+    : world_(world), settings_(settings), graph_(network_graph(world.network())), bag_(dir) {
+  for (const auto& c : world.network().cameras) {
     const std::string p = "/netvmo/camera_" + std::to_string(c.id);
     Topics t;
     t.overlay = bag_.add_topic(p + "/overlay/compressed", ros::kCompressedImageType);
@@ -32,21 +29,21 @@ BagRecorder::BagRecorder(const std::filesystem::path& dir, const sources::Networ
 BagRecorder::~BagRecorder() = default;
 
 void BagRecorder::operator()(int frame, const std::vector<cv::Mat>& images,
-                             const std::vector<std::vector<CameraFrame>>& cams,
+                             const std::vector<std::vector<frontend::Observation>>& cams,
                              const std::vector<const run::FrameRecord*>& records) {
-  const auto& net = provider_.network();
+  const auto& net = world_.network();
   const FrameRecord& rec = *records.at(0);
   const double t = rec.t;
   const std::int64_t ns = ros::stamp_ns_of(t);
   std::vector<ros::StampedTransform> tf, statics;
-  const bool moving = provider_.cameras_move();
+  const bool moving = world_.cameras_move();
   for (size_t i = 0; i < net.cameras.size(); ++i) {
     const int id = net.cameras[i].id;
     const Topics& topic = topics_[i];
-    const obs::SE3 g_wi = provider_.camera_believed(i, frame);
+    const obs::SE3 g_wi = world_.camera_believed(i, frame);
     (moving ? tf : statics).push_back(camera_transform(id, t, g_wi));
     // The overlay, as `run` draws it, and the calibration it was taken with.
-    const auto& calib = provider_.calibration(i);
+    const auto& calib = world_.calibration(i);
     const int width = images[i].empty() ? calib.width : images[i].cols;
     const double scale = settings_.overlay_max_width > 0 && width > settings_.overlay_max_width
                              ? static_cast<double>(settings_.overlay_max_width) / width

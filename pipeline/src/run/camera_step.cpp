@@ -10,10 +10,9 @@ std::exception_ptr observe_camera(const std::function<cv::Mat()>& read,
                                   const io::Calibration& calib, frontend::FrontEnd& front_end,
                                   frontend::TrackState& track,
                                   const std::vector<io::TargetConfig>& targets, bool keep_going,
-                                  cv::Mat& image, std::vector<CameraFrame>& out,
+                                  cv::Mat& image, std::vector<frontend::Observation>& out,
                                   double* seconds_reading, frontend::FrameDetections* all,
                                   bool pnp) {
-  out.assign(targets.size(), CameraFrame{});
   std::exception_ptr unreadable;
   const auto t0 = Clock::now();
   try {
@@ -24,21 +23,20 @@ std::exception_ptr observe_camera(const std::function<cv::Mat()>& read,
     unreadable = std::current_exception();
   }
   // An unreadable image is a blind frame for the front end too (its tracking state).
-  auto observations = front_end.observe_targets(image, calib, all, &track);
+  out = front_end.observe_targets(image, calib, all, &track);
   for (size_t j = 0; j < targets.size(); ++j) {
-    CameraFrame& cam = out[j];
-    cam.obs = std::move(observations[j]);
-    cam.read_failed = unreadable && keep_going;
-    if (!cam.obs.delta || !pnp) continue;
+    frontend::Observation& o = out[j];
+    o.read_failed = unreadable && keep_going;
+    if (!o.delta || !pnp) continue;
     // PnP on the corners of every accepted tag (a bundle's object points).
-    const auto m = frontend::observation_model(targets[j], cam.obs);
-    const auto pose = frontend::pnp_pose(cam.obs.f_normalized, m);
+    const auto m = frontend::observation_model(targets[j], o);
+    const auto pose = frontend::pnp_pose(o.f_normalized, m);
     if (pose) {
-      cam.g_io_pnp = pose->g_io;
-      if (const auto f_cov = frontend::f_covariance_matrix(cam.obs))
-        cam.pnp_covariance = frontend::pnp_covariance(pose->g_io, m.points_o, *f_cov);
+      o.g_io_pnp = pose->g_io;
+      if (const auto f_cov = frontend::f_covariance_matrix(o))
+        o.pnp_covariance = frontend::pnp_covariance(pose->g_io, m.points_o, *f_cov);
     }
-    if (!targets[j].bundle.empty()) cam.points_o = m.points_o;
+    if (!targets[j].bundle.empty()) o.points_o = m.points_o;
   }
   return unreadable;
 }
@@ -46,29 +44,30 @@ std::exception_ptr observe_camera(const std::function<cv::Mat()>& read,
 std::exception_ptr observe_camera(sources::NetworkSource& source, size_t i, int frame,
                                   frontend::FrontEnd& front_end, frontend::TrackState& track,
                                   const std::vector<io::TargetConfig>& targets, bool keep_going,
-                                  cv::Mat& image, std::vector<CameraFrame>& out,
+                                  cv::Mat& image, std::vector<frontend::Observation>& out,
                                   double* seconds_reading) {
   return observe_camera([&] { return source.read(i, frame); }, source.calibration(i), front_end,
                         track, targets, keep_going, image, out, seconds_reading);
 }
 
-CameraInput camera_input(const CameraFrame& cam, const std::optional<obs::SE3>& target,
-                         const std::optional<obs::SE3>& true_wi) {
-  CameraInput in;
-  in.delta = cam.obs.delta;
-  in.f = cam.obs.f_normalized;  // (eq:visual_mea) with lambda = 1
-  in.points_o = cam.points_o;   // a bundle's seen corners (empty: the tag's square)
-  in.g_io_pnp = cam.g_io_pnp;
-  if (target && true_wi) in.g_io_true = true_wi->inverse() * *target;  // g_io = g_wi^-1 g_wo
-  return in;
+obs::Measurement measurement_of(const frontend::Observation& o,
+                                const std::optional<obs::SE3>& target,
+                                const std::optional<obs::SE3>& true_wi) {
+  obs::Measurement z;
+  z.delta = o.delta;
+  z.f = o.f_normalized;     // (eq:visual_mea) with lambda = 1
+  z.points_o = o.points_o;  // a bundle's seen corners (empty: the tag's square)
+  z.g_io_pnp = o.g_io_pnp;
+  if (target && true_wi) z.g_io_true = true_wi->inverse() * *target;  // g_io = g_wi^-1 g_wo
+  return z;
 }
 
-std::vector<CameraInput> camera_inputs(const std::vector<CameraFrame>& cams,
-                                       const std::optional<obs::SE3>& target,
-                                       const std::vector<std::optional<obs::SE3>>& true_wi) {
-  std::vector<CameraInput> in(cams.size());
-  for (size_t i = 0; i < cams.size(); ++i) in[i] = camera_input(cams[i], target, true_wi[i]);
-  return in;
+std::vector<obs::Measurement> measurements_of(const std::vector<frontend::Observation>& cams,
+                                              const std::optional<obs::SE3>& target,
+                                              const std::vector<std::optional<obs::SE3>>& true_wi) {
+  std::vector<obs::Measurement> z(cams.size());
+  for (size_t i = 0; i < cams.size(); ++i) z[i] = measurement_of(cams[i], target, true_wi[i]);
+  return z;
 }
 
 }  // namespace netvmo::run

@@ -83,12 +83,12 @@ TimeGrid time_grid(double first, double last, double dt, int frames) {
   return g;
 }
 
-TimeGrid time_grid(const sources::NetworkSource& provider, int frames) {
-  const io::NetworkConfig& net = provider.network();
+TimeGrid time_grid(const sources::NetworkSource& source, int frames) {
+  const io::NetworkConfig& net = source.network();
   double first = std::numeric_limits<double>::infinity();
   double last = -std::numeric_limits<double>::infinity();
   for (size_t i = 0; i < net.cameras.size(); ++i) {
-    const auto images = sources::camera_images(provider, i);
+    const auto images = sources::camera_images(source, i);
     if (images.empty()) continue;
     first = std::min(first, images.front().second);
     last = std::max(last, images.back().second);
@@ -108,18 +108,17 @@ namespace {
 // one front end per worker thread (every target decided in one pass) and each camera's tracking
 // state. Front-end results are stored [target][slot].
 struct Pipeline {
-  Pipeline(sources::NetworkSource& provider, const ImageRunOptions& options,
-           const obs::Graph& graph)
-      : provider(provider),
+  Pipeline(sources::NetworkSource& source, const ImageRunSettings& options, const obs::Graph& graph)
+      : source(source),
         options(options),
-        n(provider.network().cameras.size()),
-        targets(provider.network().targets),
+        n(source.network().cameras.size()),
+        targets(source.network().targets),
         workers(std::max(1, std::min<int>(options.workers, static_cast<int>(n)))),
         tracks(n) {
     for (const auto& target : targets) {
       RunnerSettings rs = options.runner;
       rs.tag_size = target.size;
-      runners.push_back(std::make_unique<NetworkRunner>(graph, believed_at_start(provider), rs));
+      runners.push_back(std::make_unique<Runner>(graph, believed_at_start(source), rs));
       runners.back()->set_transport(make_transport(options.transport, graph));
     }
     frontend::DetectorSettings ds = options.detector;
@@ -135,15 +134,16 @@ struct Pipeline {
     return g;
   }
   // [target][slot] storage for `slots` front-end results.
-  std::vector<std::vector<CameraFrame>> frames_for(size_t slots) const {
-    return std::vector<std::vector<CameraFrame>>(targets.size(), std::vector<CameraFrame>(slots));
+  std::vector<std::vector<frontend::Observation>> frames_for(size_t slots) const {
+    return std::vector<std::vector<frontend::Observation>>(
+        targets.size(), std::vector<frontend::Observation>(slots));
   }
   // Camera i's image `frame` through worker w's front end (observe_camera) into cams[j][slot].
   std::exception_ptr observe(int w, size_t i, int frame, cv::Mat& image,
-                             std::vector<std::vector<CameraFrame>>& cams, size_t slot) {
-    std::vector<CameraFrame> out;
+                             std::vector<std::vector<frontend::Observation>>& cams, size_t slot) {
+    std::vector<frontend::Observation> out;
     auto error =
-        observe_camera(provider, i, frame, front_ends[static_cast<size_t>(w)], tracks[i], targets,
+        observe_camera(source, i, frame, front_ends[static_cast<size_t>(w)], tracks[i], targets,
                        options.keep_going, image, out, &seconds_reading[static_cast<size_t>(w)]);
     for (size_t j = 0; j < targets.size(); ++j) cams[j][slot] = std::move(out[j]);
     return error;
@@ -156,13 +156,13 @@ struct Pipeline {
       std::rethrow_exception(error);
     } catch (const InputError& e) {
       result.warnings.push_back(std::string(e.what()) + " (camera " +
-                                std::to_string(provider.network().cameras[i].id) +
+                                std::to_string(source.network().cameras[i].id) +
                                 " blind at frame " + std::to_string(frame) + ")");
     }
   }
   // After frame k's records: the hook, the front-end results kept for the outputs, progress.
   void frame_done(int k, const std::vector<cv::Mat>& images,
-                  const std::vector<std::vector<CameraFrame>>& cams,
+                  const std::vector<std::vector<frontend::Observation>>& cams,
                   const std::vector<const FrameRecord*>& records, const FrameHook& hook,
                   ImageRunResult& result, Progress& progress) const {
     if (hook) hook(k, images, cams, records);
@@ -186,11 +186,11 @@ struct Pipeline {
     for (auto& t : pool) t.join();
   }
 
-  sources::NetworkSource& provider;
-  const ImageRunOptions& options;
+  sources::NetworkSource& source;
+  const ImageRunSettings& options;
   size_t n;
   const std::vector<io::TargetConfig>& targets;
-  std::vector<std::unique_ptr<NetworkRunner>> runners;  // one per target
+  std::vector<std::unique_ptr<Runner>> runners;  // one per target
   int workers;
   std::vector<frontend::FrontEnd> front_ends;
   std::vector<frontend::TrackState> tracks;  // one worker at a time per camera
@@ -211,7 +211,7 @@ class FrontEndAhead {
   FrontEndAhead(Pipeline& p, int frames)
       : p_(p),
         frames_(frames),
-        ahead_(p.provider.one_frame_at_a_time() ? 1 : kLookAhead),
+        ahead_(p.source.one_frame_at_a_time() ? 1 : kLookAhead),
         next_(p.n, 0),
         busy_(p.n, false),
         cost_(p.n, 0.0),
@@ -240,7 +240,7 @@ class FrontEndAhead {
     if (done_[slot(k)] != p_.n) std::rethrow_exception(failure_);
   }
   std::vector<cv::Mat>& images(int k) { return images_[slot(k)]; }
-  std::vector<std::vector<CameraFrame>>& cams(int k) { return cams_[slot(k)]; }
+  std::vector<std::vector<frontend::Observation>>& cams(int k) { return cams_[slot(k)]; }
   std::vector<std::exception_ptr>& errors(int k) { return errors_[slot(k)]; }
   /// Frame k is used: its slot takes frame k + ahead_.
   void release(int k) {
@@ -319,7 +319,7 @@ class FrontEndAhead {
   bool stop_ = false;
   std::exception_ptr failure_;  ///< a front end's unexpected error: the run stops
   std::vector<std::vector<cv::Mat>> images_;
-  std::vector<std::vector<std::vector<CameraFrame>>> cams_;
+  std::vector<std::vector<std::vector<frontend::Observation>>> cams_;
   std::vector<std::vector<std::exception_ptr>> errors_;
   std::vector<std::thread> threads_;
 };
@@ -334,15 +334,15 @@ struct Event {
 // Cameras on their own clocks: the observer advances on the union of their image times (see
 // run_images in the header).
 void run_union(Pipeline& p, const FrameHook& hook, ImageRunResult& result) {
-  sources::NetworkSource& provider = p.provider;
-  const ImageRunOptions& options = p.options;
+  sources::NetworkSource& source = p.source;
+  const ImageRunSettings& options = p.options;
   const size_t n = p.n, T = p.targets.size();
-  TimeGrid grid = time_grid(provider);
+  TimeGrid grid = time_grid(source);
   if (options.max_frames) grid.frames = std::min(grid.frames, *options.max_frames);
   const double t_end = grid.time(grid.frames - 1);
   std::vector<Event> events;
   for (size_t i = 0; i < n; ++i)
-    for (const auto& [k, t] : sources::camera_images(provider, i))
+    for (const auto& [k, t] : sources::camera_images(source, i))
       if (t <= t_end + 1e-9) events.push_back({t, i, k});
   std::stable_sort(events.begin(), events.end(), [](const Event& a, const Event& b) {
     return a.t < b.t || (a.t == b.t && a.camera < b.camera);
@@ -350,14 +350,14 @@ void run_union(Pipeline& p, const FrameHook& hook, ImageRunResult& result) {
   result.union_of_timestamps = true;
   result.source_frames.assign(static_cast<size_t>(grid.frames), std::vector<int>(n, -1));
 
-  const bool moving = provider.cameras_move();
+  const bool moving = source.cameras_move();
   const auto motion_at = [&](double t, double t_next) {
     std::vector<obs::SE3> g(n);
     std::vector<obs::Vec6> V(n, obs::Vec6::Zero());
     for (size_t i = 0; i < n; ++i) {
-      g[i] = provider.camera_believed_at(i, t);
+      g[i] = source.camera_believed_at(i, t);
       if (!options.ignore_camera_velocity && t_next > t)
-        V[i] = camera_velocity(g[i], provider.camera_believed_at(i, t_next), t_next - t);
+        V[i] = camera_velocity(g[i], source.camera_believed_at(i, t_next), t_next - t);
     }
     for (auto& r : p.runners) r->set_camera_motion(g, V);
   };
@@ -373,7 +373,7 @@ void run_union(Pipeline& p, const FrameHook& hook, ImageRunResult& result) {
       net_start = std::max(net_start, e.t);
     }
   // held[j][i]: camera i's latest measurement of target j, and its front end's result.
-  std::vector<std::vector<CameraInput>> held(T, std::vector<CameraInput>(n));
+  std::vector<std::vector<obs::Measurement>> held(T, std::vector<obs::Measurement>(n));
   auto held_cams = p.frames_for(n);
   // Between two times: pieces of at most one grid step, each with the sub-step rule.
   const auto advance = [&](double from, double to) {
@@ -390,7 +390,7 @@ void run_union(Pipeline& p, const FrameHook& hook, ImageRunResult& result) {
   // cameras' images in time order.
   const size_t batch = std::max<size_t>(2 * n, 8);
   std::vector<cv::Mat> images;
-  std::vector<std::vector<CameraFrame>> cams;
+  std::vector<std::vector<frontend::Observation>> cams;
   std::vector<std::exception_ptr> errors;
   size_t next_event = 0, fe_base = 0, fe_done = 0;
   double now = events.empty() ? grid.t0 : std::min(grid.t0, events.front().t);
@@ -426,8 +426,8 @@ void run_union(Pipeline& p, const FrameHook& hook, ImageRunResult& result) {
       // truth at its image time is for the exact error model.
       for (size_t j = 0; j < T; ++j) {
         held_cams[j][i] = cams[j][b];
-        held[j][i] = camera_input(held_cams[j][i], provider.target_truth_at(ev.t, j),
-                                  provider.camera_truth_at(i, ev.t));
+        held[j][i] = measurement_of(held_cams[j][i], source.target_truth_at(ev.t, j),
+                                    source.camera_truth_at(i, ev.t));
         // estimates.csv: the camera's estimate at its image's time.
         const auto est = p.runners[j]->estimate_world(i);
         result.target(j).own_estimates.push_back({ev.frame, ev.t, i, held[j][i].delta,
@@ -443,12 +443,12 @@ void run_union(Pipeline& p, const FrameHook& hook, ImageRunResult& result) {
     now = std::max(now, tk);
     if (moving) motion_at(now, k + 1 < grid.frames ? grid.time(k + 1) : now);
     std::vector<std::optional<obs::SE3>> true_wi(n);
-    for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth_at(i, tk);
+    for (size_t i = 0; i < n; ++i) true_wi[i] = source.camera_truth_at(i, tk);
     std::vector<const FrameRecord*> records(T);
     for (size_t j = 0; j < T; ++j) {
-      const auto target = provider.target_truth_at(tk, j);
+      const auto target = source.target_truth_at(tk, j);
       records[j] =
-          &p.runners[j]->record(k, tk, camera_inputs(held_cams[j], target, true_wi), target);
+          &p.runners[j]->record(k, tk, measurements_of(held_cams[j], target, true_wi), target);
     }
     result.source_frames[static_cast<size_t>(k)] = held_frame;
     result.seconds_observer += seconds_since(t_obs);
@@ -461,28 +461,28 @@ void run_union(Pipeline& p, const FrameHook& hook, ImageRunResult& result) {
 
 }  // namespace
 
-ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOptions& options,
+ImageRunResult run_images(sources::NetworkSource& source, const ImageRunSettings& options,
                           const FrameHook& hook) {
-  const io::NetworkConfig& net = provider.network();
+  const io::NetworkConfig& net = source.network();
   const size_t n = net.cameras.size();
   const obs::Graph graph = network_graph(net);
   // The synchronised run steps every camera together by 1 / fps; cameras on their own clocks,
   // or a common clock at another rate, run on the union of their image times.
   const bool own_clocks =
-      sources::clock_mismatch(provider).has_value() || sources::irregular_clock(provider);
+      sources::clock_mismatch(source).has_value() || sources::irregular_clock(source);
   checked_rounds(1.0 / net.fps, options.runner.k_e, options.runner.k_s, graph.max_degree(),
                  options.runner.rounds);
 
-  Pipeline p(provider, options, graph);
+  Pipeline p(source, options, graph);
   const size_t T = p.targets.size();
-  const bool moving = provider.cameras_move();
-  std::vector<obs::SE3> g_wi = Pipeline::believed_at_start(provider);
+  const bool moving = source.cameras_move();
+  std::vector<obs::SE3> g_wi = Pipeline::believed_at_start(source);
   std::vector<std::optional<obs::SE3>> true_wi(n);
   std::vector<obs::Vec6> V_wi(n, obs::Vec6::Zero());
 
   ImageRunResult result;
   result.other_targets.resize(T - 1);
-  result.warnings = provider.warnings();
+  result.warnings = source.warnings();
   const double dt = 1.0 / net.fps;
   result.substeps = p.runners[0]->substeps(dt);
   result.step_factor = p.runners[0]->step_factor(dt);
@@ -496,7 +496,7 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
     histories();
     return result;
   }
-  int frames = provider.frame_count();
+  int frames = source.frame_count();
   if (options.max_frames) frames = std::min(frames, *options.max_frames);
 
   Progress progress("run", frames, options.progress);
@@ -513,19 +513,19 @@ ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOption
       result.seconds_front_end += seconds_since(t_fe);
 
       const auto t_obs = Clock::now();
-      for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth(i, k);
+      for (size_t i = 0; i < n; ++i) true_wi[i] = source.camera_truth(i, k);
       if (moving) {
         for (size_t i = 0; i < n; ++i) {
-          g_wi[i] = provider.camera_believed(i, k);
+          g_wi[i] = source.camera_believed(i, k);
           if (!options.ignore_camera_velocity)
-            V_wi[i] = camera_velocity(g_wi[i], provider.camera_believed(i, k + 1), dt);
+            V_wi[i] = camera_velocity(g_wi[i], source.camera_believed(i, k + 1), dt);
         }
         for (auto& r : p.runners) r->set_camera_motion(g_wi, V_wi);
       }
       for (size_t j = 0; j < T; ++j) {
-        const auto target = provider.target_truth(k, j);
-        records[j] =
-            &p.runners[j]->process(k, k * dt, dt, camera_inputs(cams[j], target, true_wi), target);
+        const auto target = source.target_truth(k, j);
+        records[j] = &p.runners[j]->process(k, k * dt, dt,
+                                            measurements_of(cams[j], target, true_wi), target);
       }
       result.seconds_observer += seconds_since(t_obs);
       p.frame_done(k, images, cams, records, hook, result, progress);

@@ -99,9 +99,9 @@ cv::Mat draw_overlay(const cv::Mat& gray, int camera_id, const io::Calibration& 
   return img;
 }
 
-OverlayWriter::OverlayWriter(const fs::path& dir, const sources::NetworkSource& provider,
+OverlayWriter::OverlayWriter(const fs::path& dir, const sources::World& world,
                              OverlaySettings settings)
-    : dir_(dir / "overlays"), provider_(provider), settings_(settings) {
+    : dir_(dir / "overlays"), world_(world), settings_(settings) {
   if (settings_.tile_width < 16 || settings_.mosaic_columns < 1 || settings_.queue_frames < 1)
     throw std::invalid_argument(
         "OverlaySettings: tile_width >= 16, mosaic_columns >= 1 and "
@@ -119,16 +119,17 @@ OverlayWriter::~OverlayWriter() {
   if (thread_.joinable()) thread_.join();
 }
 
-std::vector<OverlayLayer> overlay_layers(const io::NetworkConfig& net, size_t i,
-                                         const std::vector<std::vector<CameraFrame>>& cams,
-                                         const std::vector<const run::FrameRecord*>& records) {
+std::vector<OverlayLayer> overlay_layers(
+    const io::NetworkConfig& net, size_t i,
+    const std::vector<std::vector<frontend::Observation>>& cams,
+    const std::vector<const run::FrameRecord*>& records) {
   std::vector<OverlayLayer> layers;
   for (size_t j = 0; j < records.size(); ++j) {
-    const CameraFrame& cam = cams[j][i];
+    const frontend::Observation& cam = cams[j][i];
     const CameraRecord& rec = records[j]->cameras[i];
     OverlayLayer layer;
-    layer.detected = cam.obs.delta;
-    layer.corners = cam.obs.corners_px;
+    layer.detected = cam.delta;
+    layer.corners = cam.corners_px;
     layer.read_failed = cam.read_failed;
     if (rec.initialized) layer.estimate_w = rec.est_w;
     layer.target = &net.targets[j];
@@ -143,15 +144,15 @@ void OverlayWriter::rethrow_error() {
 }
 
 void OverlayWriter::operator()(int /*frame*/, const std::vector<cv::Mat>& images,
-                               const std::vector<std::vector<CameraFrame>>& cams,
+                               const std::vector<std::vector<frontend::Observation>>& cams,
                                const std::vector<const run::FrameRecord*>& records) {
-  const auto& net = provider_.network();
+  const auto& net = world_.network();
   Job job;
   job.images = images;  // shared pixels: the run reads each frame into a new image
   job.layers.resize(net.cameras.size());
   for (size_t i = 0; i < net.cameras.size(); ++i) {
     job.layers[i] = overlay_layers(net, i, cams, records);
-    job.g_wi.push_back(provider_.camera_believed(i, records[0]->frame));
+    job.g_wi.push_back(world_.camera_believed(i, records[0]->frame));
   }
   std::unique_lock<std::mutex> lock(mu_);
   changed_.wait(
@@ -184,14 +185,14 @@ void OverlayWriter::work() {
 }
 
 void OverlayWriter::draw(const Job& job) {
-  const auto& net = provider_.network();
+  const auto& net = world_.network();
   const size_t n = net.cameras.size();
   const int cols = std::max(1, std::min<int>(settings_.mosaic_columns, static_cast<int>(n)));
   const int rows =
       static_cast<int>((n + static_cast<size_t>(cols) - 1) / static_cast<size_t>(cols));
   cv::Size tile;
   for (size_t i = 0; i < n; ++i) {
-    const auto& calib = provider_.calibration(i);
+    const auto& calib = world_.calibration(i);
     const auto& layers = job.layers[i];
     const int id = net.cameras[i].id;
     if (settings_.video && settings_.camera_videos) {

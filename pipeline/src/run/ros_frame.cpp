@@ -4,12 +4,12 @@
 
 namespace netvmo::run {
 
-RosFrame ros_frame(int camera_id, double t, const CameraFrame& cam,
+RosFrame ros_frame(int camera_id, double t, const frontend::Observation& cam,
                    const std::optional<obs::SE3>& estimate_w,
                    const std::vector<obs::SE3>& neighbours_w) {
   RosFrame out;
   const std::int64_t ns = ros::stamp_ns_of(t);
-  if (cam.obs.delta && cam.g_io_pnp)
+  if (cam.delta && cam.g_io_pnp)
     out.measurement =
         ros::StampedPose{ns, ros::camera_frame(camera_id), *cam.g_io_pnp, cam.pnp_covariance};
   if (estimate_w) {

@@ -48,14 +48,14 @@ json vec3(const obs::Vec3& v) {
 
 }  // namespace
 
-json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& options,
+json run_summary(const sources::NetworkSource& source, const ImageRunSettings& options,
                  const ImageRunResult& result, size_t target) {
-  const io::NetworkConfig& net = provider.network();
+  const io::NetworkConfig& net = source.network();
   const size_t n = net.cameras.size();
   const ImageRunResult& tr = result.target(target);
   const auto& h = tr.history;
   json s;
-  s["dataset"] = provider.name();
+  s["dataset"] = source.name();
   s["frames"] = h.size();
   s["fps"] = net.fps;
   s["estimator"] = options.runner.estimator;
@@ -71,7 +71,7 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
       s["transport"][p.name] = p.integer ? json(static_cast<std::uint64_t>(v)) : json(v);
     }
   }
-  if (provider.cameras_move())  // recorded for moving cameras (cameras.csv) only
+  if (source.cameras_move())  // recorded for moving cameras (cameras.csv) only
     s["camera_velocity"] = options.ignore_camera_velocity
                                ? "ignored (--ignore-camera-velocity: V_wi = 0)"
                                : "V_wi = log(g_wi(t_k)^-1 g_wi(t_k+1)) / dt, held over the frame";
@@ -216,13 +216,13 @@ const char* const kPerTargetKeys[] = {"target",
                                       "eps_R_last_quarter"};
 }  // namespace
 
-json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& options,
+json run_summary(const sources::NetworkSource& source, const ImageRunSettings& options,
                  const ImageRunResult& result) {
-  json s = run_summary(provider, options, result, 0);
+  json s = run_summary(source, options, result, 0);
   if (result.target_count() == 1) return s;
   json targets = json::array();
   for (size_t j = 0; j < result.target_count(); ++j) {
-    const json sj = j == 0 ? s : run_summary(provider, options, result, j);
+    const json sj = j == 0 ? s : run_summary(source, options, result, j);
     json t;
     for (const char* key : kPerTargetKeys) t[key] = sj[key];
     targets.push_back(t);
@@ -232,11 +232,11 @@ json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& 
   return s;
 }
 
-json write_run_outputs(const fs::path& dir, const sources::NetworkSource& provider,
-                       const ImageRunOptions& options, const ImageRunResult& result,
+json write_run_outputs(const fs::path& dir, const sources::NetworkSource& source,
+                       const ImageRunSettings& options, const ImageRunResult& result,
                        const std::optional<json>& g_star_localisation) {
   io::ensure_directory(dir);
-  const io::NetworkConfig& net = provider.network();
+  const io::NetworkConfig& net = source.network();
   const size_t n = net.cameras.size();
   // Several targets: a `target` column (the primary tag's id) after t, rows target by target.
   const bool several = result.target_count() > 1;
@@ -306,7 +306,7 @@ json write_run_outputs(const fs::path& dir, const sources::NetworkSource& provid
       }
     f.commit();
   }
-  json s = run_summary(provider, options, result);
+  json s = run_summary(source, options, result);
   if (g_star_localisation) s["g_star_localisation"] = *g_star_localisation;
   io::write_file_atomic(dir / "summary.json", s.dump(2) + "\n");
   return s;

@@ -41,8 +41,7 @@ double step_factor(const obs::ObserverSettings& s, double dt, int substeps, int 
   return dt / substeps * obs::estimators().find(s.estimator).rate_bound(s, max_degree);
 }
 
-NetworkRunner::NetworkRunner(const obs::Graph& graph, std::vector<SE3> g_wi,
-                             RunnerSettings settings)
+Runner::Runner(const obs::Graph& graph, std::vector<SE3> g_wi, RunnerSettings settings)
     : graph_(graph),
       g_wi_(std::move(g_wi)),
       settings_(settings),
@@ -64,14 +63,13 @@ NetworkRunner::NetworkRunner(const obs::Graph& graph, std::vector<SE3> g_wi,
   }
 }
 
-std::vector<obs::NetworkedObserver*> NetworkRunner::observers() {
+std::vector<obs::NetworkedObserver*> Runner::observers() {
   std::vector<obs::NetworkedObserver*> all{&net_, &indep_};
   for (auto& c : compare_) all.push_back(&c);
   return all;
 }
 
-void NetworkRunner::set_camera_motion(const std::vector<SE3>& g_wi,
-                                      const std::vector<obs::Vec6>& V_wi) {
+void Runner::set_camera_motion(const std::vector<SE3>& g_wi, const std::vector<obs::Vec6>& V_wi) {
   if (g_wi.size() != g_wi_.size() || V_wi.size() != g_wi_.size())
     throw std::invalid_argument("camera motion: one pose and one velocity per camera");
   g_wi_ = g_wi;
@@ -81,13 +79,13 @@ void NetworkRunner::set_camera_motion(const std::vector<SE3>& g_wi,
   }
 }
 
-std::optional<SE3> NetworkRunner::estimate_world(size_t i) const {
+std::optional<SE3> Runner::estimate_world(size_t i) const {
   const auto& c = net_.camera(static_cast<int>(i));
   if (!c.initialized()) return std::nullopt;
   return c.estimate_world();
 }
 
-double NetworkRunner::step_factor(double dt) const {
+double Runner::step_factor(double dt) const {
   return run::step_factor(net_.settings(), dt, net_.substeps(dt), graph_.max_degree());
 }
 
@@ -126,14 +124,14 @@ void evaluate_frame(FrameRecord& r) {
   }
 }
 
-const FrameRecord& NetworkRunner::process(int frame, double t, double dt,
-                                          const std::vector<CameraInput>& in,
-                                          const std::optional<SE3>& g_wo_true) {
+const FrameRecord& Runner::process(int frame, double t, double dt,
+                                   const std::vector<obs::Measurement>& in,
+                                   const std::optional<SE3>& g_wo_true) {
   advance(dt, in);
   return record(frame, t, in, g_wo_true);
 }
 
-void NetworkRunner::advance(double dt, const std::vector<CameraInput>& in) {
+void Runner::advance(double dt, const std::vector<obs::Measurement>& in) {
   const auto n = static_cast<size_t>(graph_.size());
   if (in.size() != n) throw std::invalid_argument("one input per camera is required");
   const auto& model = net_.camera(0).error_model();
@@ -145,8 +143,8 @@ void NetworkRunner::advance(double dt, const std::vector<CameraInput>& in) {
   for (auto* o : observers()) o->step(dt, in);
 }
 
-const FrameRecord& NetworkRunner::record(int frame, double t, const std::vector<CameraInput>& in,
-                                         const std::optional<SE3>& g_wo_true) {
+const FrameRecord& Runner::record(int frame, double t, const std::vector<obs::Measurement>& in,
+                                  const std::optional<SE3>& g_wo_true) {
   const auto n = static_cast<size_t>(graph_.size());
   if (in.size() != n) throw std::invalid_argument("one input per camera is required");
   FrameRecord r;

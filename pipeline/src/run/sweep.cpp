@@ -16,15 +16,15 @@ namespace fs = std::filesystem;
 
 namespace {
 // The sweep replays one input per static camera and frame at 1 / fps.
-void require_sweepable(const sources::NetworkSource& provider) {
-  sources::require_static_cameras(provider, "netvmo sweep");
-  sources::require_single_target(provider, "netvmo sweep");
-  if (!provider.network().target().bundle.empty())
-    throw InputError(provider.network().source +
+void require_sweepable(const sources::NetworkSource& source) {
+  sources::require_static_cameras(source, "netvmo sweep");
+  sources::require_single_target(source, "netvmo sweep");
+  if (!source.network().target().bundle.empty())
+    throw InputError(source.network().source +
                      ": target.bundle: netvmo sweep does not take tag bundles (its inputs cache "
                      "holds one tag's 8 features); use netvmo run");
-  auto m = sources::clock_mismatch(provider);
-  if (!m) m = sources::irregular_clock(provider);
+  auto m = sources::clock_mismatch(source);
+  if (!m) m = sources::irregular_clock(source);
   if (m)
     throw InputError(*m +
                      ": netvmo sweep replays the cameras on one clock at the dataset's fps "
@@ -32,47 +32,47 @@ void require_sweepable(const sources::NetworkSource& provider) {
 }
 }  // namespace
 
-RecordedInputs record_inputs(sources::NetworkSource& provider, const ImageRunOptions& options) {
-  require_sweepable(provider);
-  const auto result = run_images(provider, options);
-  const size_t n = provider.network().cameras.size();
+RecordedInputs record_inputs(sources::NetworkSource& source, const ImageRunSettings& options) {
+  require_sweepable(source);
+  const auto result = run_images(source, options);
+  const size_t n = source.network().cameras.size();
   std::vector<std::optional<SE3>> true_wi(n);
-  for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth(i, 0);
+  for (size_t i = 0; i < n; ++i) true_wi[i] = source.camera_truth(i, 0);
   RecordedInputs in;
-  in.dt = 1.0 / provider.network().fps;
+  in.dt = 1.0 / source.network().fps;
   for (size_t k = 0; k < result.frames.size(); ++k) {
-    in.targets.push_back(provider.target_truth(static_cast<int>(k)));
-    in.frames.push_back(camera_inputs(result.frames[k], in.targets.back(), true_wi));
+    in.targets.push_back(source.target_truth(static_cast<int>(k)));
+    in.frames.push_back(measurements_of(result.frames[k], in.targets.back(), true_wi));
   }
   return in;
 }
 
 namespace {
 
-std::string cache_header(const sources::NetworkSource& provider, const ImageRunOptions& o,
+std::string cache_header(const sources::NetworkSource& source, const ImageRunSettings& o,
                          size_t frames) {
   char b[512];
   std::snprintf(b, sizeof b,
                 "# netvmo inputs v1: dataset %s, %zu frames, %zu cameras, decimate %g, refine %s, "
                 "track %d",
-                provider.name().c_str(), frames, provider.network().cameras.size(),
+                source.name().c_str(), frames, source.network().cameras.size(),
                 o.detector.quad_decimate, frontend::to_string(o.detector.refinement),
                 o.tracking.enabled ? 1 : 0);
   return b;
 }
 
-size_t expected_frames(const sources::NetworkSource& provider, const ImageRunOptions& o) {
-  int frames = provider.frame_count();
+size_t expected_frames(const sources::NetworkSource& source, const ImageRunSettings& o) {
+  int frames = source.frame_count();
   if (o.max_frames) frames = std::min(frames, *o.max_frames);
   return static_cast<size_t>(frames);
 }
 
 }  // namespace
 
-void write_inputs_cache(const fs::path& file, const sources::NetworkSource& provider,
-                        const ImageRunOptions& options, const RecordedInputs& in) {
+void write_inputs_cache(const fs::path& file, const sources::NetworkSource& source,
+                        const ImageRunSettings& options, const RecordedInputs& in) {
   io::AtomicFile f(file);
-  f << cache_header(provider, options, in.frames.size()) << '\n';
+  f << cache_header(source, options, in.frames.size()) << '\n';
   f << "frame,camera_index,delta,f0,f1,f2,f3,f4,f5,f6,f7,pnp,px,py,pz,r00,r01,r02,r10,r11,r12,"
        "r20,r21,r22\n";
   char b[64];
@@ -97,22 +97,21 @@ void write_inputs_cache(const fs::path& file, const sources::NetworkSource& prov
 }
 
 std::optional<RecordedInputs> read_inputs_cache(const fs::path& file,
-                                                const sources::NetworkSource& provider,
-                                                const ImageRunOptions& options) {
+                                                const sources::NetworkSource& source,
+                                                const ImageRunSettings& options) {
   std::ifstream f(file);
   if (!f) return std::nullopt;
-  const size_t frames = expected_frames(provider, options);
-  const size_t n = provider.network().cameras.size();
+  const size_t frames = expected_frames(source, options);
+  const size_t n = source.network().cameras.size();
   std::string line;
-  if (!std::getline(f, line) || line != cache_header(provider, options, frames))
-    return std::nullopt;
+  if (!std::getline(f, line) || line != cache_header(source, options, frames)) return std::nullopt;
   std::getline(f, line);  // column names
   RecordedInputs in;
-  in.dt = 1.0 / provider.network().fps;
-  in.frames.assign(frames, std::vector<CameraInput>(n));
-  require_sweepable(provider);
+  in.dt = 1.0 / source.network().fps;
+  in.frames.assign(frames, std::vector<obs::Measurement>(n));
+  require_sweepable(source);
   std::vector<std::optional<SE3>> true_wi(n);
-  for (size_t i = 0; i < n; ++i) true_wi[i] = provider.camera_truth(i, 0);
+  for (size_t i = 0; i < n; ++i) true_wi[i] = source.camera_truth(i, 0);
   size_t rows = 0;
   for (int lineno = 3; std::getline(f, line); ++lineno) {
     std::vector<double> v;
@@ -144,7 +143,7 @@ std::optional<RecordedInputs> read_inputs_cache(const fs::path& file,
     throw InputError(file.string() + ": " + std::to_string(rows) + " rows for " +
                      std::to_string(frames * n) + " (delete the file to detect again)");
   for (size_t k = 0; k < frames; ++k) {
-    in.targets.push_back(provider.target_truth(static_cast<int>(k)));
+    in.targets.push_back(source.target_truth(static_cast<int>(k)));
     for (size_t i = 0; i < n; ++i)
       if (in.targets.back() && true_wi[i])
         in.frames[k][i].g_io_true = true_wi[i]->inverse() * *in.targets.back();
@@ -187,7 +186,7 @@ void raise_to(const PoseError& e, double& position_m, double& orientation_deg) {
 }  // namespace
 
 SweepPoint sweep_point(const SweepContext& c, RunnerSettings settings, const RecordedInputs& in) {
-  NetworkRunner runner(c.graph, c.g_wi, settings);
+  Runner runner(c.graph, c.g_wi, settings);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   SweepPoint p;
   p.k_e = settings.k_e;

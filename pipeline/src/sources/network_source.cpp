@@ -19,10 +19,10 @@ std::string fmt(double v) {
   return b;
 }
 
-class DatasetProvider final : public NetworkSource {
+class DatasetSource final : public NetworkSource {
  public:
-  DatasetProvider(const fs::path& dir, std::optional<int> only_camera, bool keep_going,
-                  const fs::path& shown_as)
+  DatasetSource(const fs::path& dir, std::optional<int> only_camera, bool keep_going,
+                const fs::path& shown_as)
       : ds_(open_dataset(dir, only_camera, keep_going)),
         name_(shown_as.empty() ? dir.string() : shown_as.string()) {
     const fs::path cams = dir / "truth_cameras.csv";
@@ -213,17 +213,17 @@ void require_static_cameras(const NetworkSource& source, const std::string& what
                      " handles static cameras at their network.yaml poses only (use netvmo run)");
 }
 
-void require_single_target(const NetworkSource& source, const std::string& what) {
-  const auto& targets = source.network().targets;
+void require_single_target(const World& world, const std::string& what) {
+  const auto& targets = world.network().targets;
   if (targets.size() > 1)
-    throw InputError(source.network().source + ": targets: " + std::to_string(targets.size()) +
+    throw InputError(world.network().source + ": targets: " + std::to_string(targets.size()) +
                      " targets, and " + what + " runs one target's observer only (use netvmo run)");
 }
 
 std::unique_ptr<NetworkSource> open_dataset_source(const fs::path& dir,
                                                    std::optional<int> only_camera, bool keep_going,
                                                    const fs::path& shown_as) {
-  return std::make_unique<DatasetProvider>(dir, only_camera, keep_going, shown_as);
+  return std::make_unique<DatasetSource>(dir, only_camera, keep_going, shown_as);
 }
 
 }  // namespace netvmo::sources

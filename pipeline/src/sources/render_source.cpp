@@ -12,9 +12,9 @@ namespace netvmo::sources {
 
 namespace {
 
-class RenderProvider final : public NetworkSource {
+class RenderSource final : public NetworkSource {
  public:
-  RenderProvider(render::SceneDescription scene, int frames)
+  RenderSource(render::SceneDescription scene, int frames)
       : renderer_(std::move(scene)), frames_(frames > 0 ? frames : renderer_.frame_count()) {
     net_ = io::scene_network_config(renderer_.scene(), frames_);
     net_.source = "live rendering";
@@ -74,7 +74,7 @@ std::unique_ptr<NetworkSource> make_render_source(render::SceneDescription scene
       throw InputError("live rendering: camera " + std::to_string(c.id) +
                        " has its own fps or start, but live frames are on the scene's clock "
                        "(render a dataset with `netvmo render` and run that)");
-  return std::make_unique<RenderProvider>(std::move(scene), frames);
+  return std::make_unique<RenderSource>(std::move(scene), frames);
 }
 
 }  // namespace netvmo::sources

@@ -127,7 +127,9 @@ class CameraObserver {
   /// NetworkedObserver's in-process fast path reads and writes back this state directly.
   friend class InProcessVmo;
 
-  CameraView view() const { return {settings_, *model_, g_wi_, V_wi_, z_, latest_, network_size_}; }
+  EstimatorContext view() const {
+    return {settings_, *model_, g_wi_, V_wi_, z_, latest_, network_size_};
+  }
 };
 
 }  // namespace netvmo::obs

@@ -43,7 +43,7 @@ struct EstimatorState {
 };
 
 /// What an estimator reads of its camera in a step (read-only).
-struct CameraView {
+struct EstimatorContext {
   const ObserverSettings& settings;
   const ErrorModel& model;
   const SE3& g_wi;       ///< believed camera pose
@@ -70,10 +70,10 @@ class Estimator {
   /// forward-Euler discretisation (docs/observer.md, "Discretisation and stability").
   virtual double rate_bound(const ObserverSettings& s, int max_degree) const = 0;
   /// A new measurement (cv.z) arrived; it is held until the next one.
-  virtual void measured(const CameraView& cv, EstimatorState& st) const = 0;
+  virtual void measured(const EstimatorContext& cv, EstimatorState& st) const = 0;
   /// Advances the state by h with the held measurement and the neighbours' latest messages.
   /// Throws std::domain_error from the error model.
-  virtual void step(const CameraView& cv, EstimatorState& st, double h) const = 0;
+  virtual void step(const EstimatorContext& cv, EstimatorState& st, double h) const = 0;
 };
 
 /// The registry (registry.hpp): every estimator, in the order help texts list them (the default

@@ -45,7 +45,7 @@ std::map<int, Eigen::Matrix<double, 6, 6>> read_calibration_covariances(
 /// the angle of R_true^T R*, measured, next to the predicted RMS of both from localisation alone;
 /// the final frame's and the means over frames. Every camera of the run needs a covariance
 /// (InputError naming the file and the camera otherwise). Target 0 (network.yaml's first).
-nlohmann::json g_star_localisation_summary(const sources::NetworkSource& provider,
+nlohmann::json g_star_localisation_summary(const sources::World& world,
                                            const run::ImageRunResult& result,
                                            const std::map<int, Eigen::Matrix<double, 6, 6>>& cov,
                                            const std::string& source);

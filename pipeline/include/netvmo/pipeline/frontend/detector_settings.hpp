@@ -20,7 +20,7 @@ struct DetectorSettings {
   /// from an array that workerpool_add_task is reallocating, and call through a stale pointer
   /// (AprilRobotics/apriltag pull request 339, merged after 3.3.0). Seen once here as a SEGV in
   /// a libapriltag thread under AddressSanitizer. netvmo runs cameras in parallel itself (one
-  /// detector per worker, ImageRunOptions::workers), so 1 costs `netvmo run` nothing; > 1 only
+  /// detector per worker, ImageRunSettings::workers), so 1 costs `netvmo run` nothing; > 1 only
   /// speeds up a single camera's detection, with that risk.
   int nthreads = 1;
   bool refine_edges = true;         ///< libapriltag's edge refinement of the quads
@@ -47,7 +47,7 @@ struct DetectorSettings {
   Refinement refinement = Refinement::edge_lines;
   /// The corners' standard deviation [px] where the refinement gives no covariance of its own
   /// (none, subpix, or an edge fit refused): a stated prior for the measurement's covariance
-  /// (TagObservation::f_covariance), each coordinate independent. 0.3 px is about what
+  /// (Observation::f_covariance), each coordinate independent. 0.3 px is about what
   /// libapriltag's own edge refinement reaches on sharp, well-lit tags; the edge fits' covariance
   /// replaces it wherever they are used (the default).
   double corner_sigma_px = 0.3;

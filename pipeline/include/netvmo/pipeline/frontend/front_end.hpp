@@ -9,17 +9,20 @@
 #include <vector>
 
 #include "netvmo/observer/jacobian.hpp"
+#include "netvmo/pipeline/frontend/pnp.hpp"
 #include "netvmo/pipeline/frontend/tag_detector.hpp"
 #include "netvmo/pipeline/io/calibration.hpp"
 #include "netvmo/pipeline/io/network_config.hpp"
 
 namespace netvmo::frontend {
 
-/// One camera's measurement of the target in one frame. A target with a bundle (several tags
-/// on one body) is measured by every tag of it that is accepted, in slot order (0 the primary,
-/// k >= 1 network.yaml's target.bundle[k - 1]); the first accepted tag's fields are also those
-/// of the single-tag members (tag_id, hamming, margin, corners_px).
-struct TagObservation {
+/// One camera's observation of one target in one frame: the front end's output (the stage after
+/// the detector's FrameDetections, before the observer's obs::Measurement). A target with a
+/// bundle (several tags on one body) is observed by every tag of it that is accepted, in slot
+/// order (0 the primary, k >= 1 network.yaml's target.bundle[k - 1]); the first accepted tag's
+/// fields are also those of the single-tag members (tag_id, hamming, margin, corners_px). The
+/// per-camera step (run/camera_step.hpp) adds the PnP pose.
+struct Observation {
   bool delta = false;  ///< delta_i(t): at least one tag of the target decoded and accepted
   TargetStatus status = TargetStatus::not_found;
   std::string reason;  ///< why the target was rejected (empty when detected)
@@ -41,19 +44,29 @@ struct TagObservation {
   /// by the inverse of K's upper 2x2 (first order; lens distortion's own Jacobian is left out,
   /// which at the corners of a typical lens changes it by a few per cent). Tags are independent.
   std::vector<CornerCovariance> f_covariance;
+
+  // Set by the per-camera step (run::observe_camera), not by FrontEnd:
+  std::optional<obs::SE3> g_io_pnp;  ///< the PnP pose of the target in the camera when detected
+  /// g_io_pnp's first-order covariance from the corners' (pnp_covariance: the tag's position and
+  /// rotation in the camera frame, ROS's PoseWithCovariance order).
+  std::optional<PoseCovariance> pnp_covariance;
+  /// The object points of f_normalized when the target has a bundle (tag_points of the accepted
+  /// tags; empty for a single tag, whose points are the error model's fixed square).
+  std::vector<obs::Vec3> points_o;
+  bool read_failed = false;  ///< the image could not be read (only with keep_going)
 };
 
 /// Corners (OpenCV pixels) to the observer's feature vector f (undistorted normalized).
 Eigen::Matrix<double, 8, 1> normalized_features(const std::array<cv::Point2d, 4>& corners_px,
                                                 const io::Calibration& calib);
 
-/// A detection's corner covariance in normalized coordinates (TagObservation::f_covariance).
+/// A detection's corner covariance in normalized coordinates (Observation::f_covariance).
 CornerCovariance normalized_covariance(const TagDetection& t, const io::Calibration& calib,
                                        const DetectorSettings& s);
 
 /// The covariance of an observation's whole f_normalized: its tags' f_covariance blocks on the
 /// diagonal; nullopt when it has not one per tag (an observation read back from a file).
-std::optional<Eigen::MatrixXd> f_covariance_matrix(const TagObservation& obs);
+std::optional<Eigen::MatrixXd> f_covariance_matrix(const Observation& obs);
 
 /// The detector settings' tag ids for a target: family, primary id and bundle ids.
 void set_target(DetectorSettings& s, const io::TargetConfig& target);
@@ -67,7 +80,7 @@ void set_targets(DetectorSettings& s, const std::vector<io::TargetConfig>& targe
 obs::FeatureModel tag_points(const io::TargetConfig& target, const std::vector<int>& slots);
 /// The object points of a detected observation's f_normalized: the primary tag's square for a
 /// single-tag target, else tag_points(target, o.slots).
-obs::FeatureModel observation_model(const io::TargetConfig& target, const TagObservation& o);
+obs::FeatureModel observation_model(const io::TargetConfig& target, const Observation& o);
 
 /// Length of the shortest side of a quad [px] (the "narrowest side" of a projected tag).
 double narrowest_side(const std::array<cv::Point2d, 4>& corners);
@@ -165,13 +178,13 @@ class FrontEnd {
   /// detected = false. If `all` is given it receives every decoded tag of the frame (of the
   /// searched window when tracking). With `track`, the search is windowed and the acquisition
   /// pass runs as described at TrackingSettings; without it, one full-frame search.
-  TagObservation observe(const cv::Mat& gray, const io::Calibration& calib,
-                         FrameDetections* all = nullptr, TrackState* track = nullptr);
+  Observation observe(const cv::Mat& gray, const io::Calibration& calib,
+                      FrameDetections* all = nullptr, TrackState* track = nullptr);
   /// The same for every target of the settings (DetectorSettings::tags_per_target), decided in
   /// one pass per search: one observation per target, in order (observe() returns the first).
-  std::vector<TagObservation> observe_targets(const cv::Mat& gray, const io::Calibration& calib,
-                                              FrameDetections* all = nullptr,
-                                              TrackState* track = nullptr);
+  std::vector<Observation> observe_targets(const cv::Mat& gray, const io::Calibration& calib,
+                                           FrameDetections* all = nullptr,
+                                           TrackState* track = nullptr);
   /// The number of targets observe_targets() reports.
   size_t target_count() const;
   const TrackingSettings& tracking() const { return tracking_; }

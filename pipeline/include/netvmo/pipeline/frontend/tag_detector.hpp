@@ -40,7 +40,7 @@ apriltag_detector* create_apriltag_detector(apriltag_family* family, const Detec
 TagDetection to_tag_detection(const apriltag_detection& det, cv::Point origin = {});
 
 /// How one search is done (the front end's tracking window and acquisition pass use these).
-struct SearchOptions {
+struct SearchSettings {
   /// libapriltag quad_decimate for this search; 0: the settings' quad_decimate. 1 finds tags
   /// down to ~15 px that decimate 2 misses, at about twice the cost per searched pixel.
   double decimate = 0.0;
@@ -90,7 +90,7 @@ class TagDetector {
   /// The same, searching only `region` of the image (tags must lie wholly inside it); corners
   /// are reported and refined in whole-image pixels.
   FrameDetections detect(const cv::Mat& image, const cv::Rect& region,
-                         const io::Calibration* calib = nullptr, const SearchOptions& opt = {});
+                         const io::Calibration* calib = nullptr, const SearchSettings& opt = {});
 
   const DetectorSettings& settings() const;
   /// Cells across the black border square (8 for tag36h11): corners are at this square.

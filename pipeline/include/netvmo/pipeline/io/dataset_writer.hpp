@@ -27,7 +27,7 @@ namespace netvmo::io {
 /// ~1 MB a frame, so 100,000 frames (55 minutes at 30 frames/s) are ~100 GB.
 inline constexpr int kMaxDatasetFrames = 100000;
 
-struct DatasetOptions {
+struct DatasetSettings {
   int frames = 0;        ///< frames to write; 0 = the scene's frame count
   bool progress = true;  ///< progress bar on stderr
 };
@@ -48,6 +48,6 @@ struct DatasetSummary {
 /// 0..N-1 at the scene's fps, or its own fps and start) and writes the dataset folder `out`
 /// (created if needed; existing files of the same names are replaced).
 DatasetSummary write_dataset(render::Renderer& renderer, const std::filesystem::path& out,
-                             const DatasetOptions& options = {});
+                             const DatasetSettings& options = {});
 
 }  // namespace netvmo::io

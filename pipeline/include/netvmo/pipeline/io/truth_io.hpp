@@ -57,7 +57,7 @@ struct DetectionRow {
       frontend::TargetStatus::not_found;  ///< detected exactly when `detected`
   double margin = 0.0;
   std::optional<std::array<cv::Point2d, 4>> corners;
-  /// Why the target was not used (TagObservation::reason; empty when detected). Written with
+  /// Why the target was not used (Observation::reason; empty when detected). Written with
   /// every comma replaced by ';' and line breaks by spaces, so it stays one CSV field.
   std::string reason;
 };

@@ -56,7 +56,7 @@ struct LaunchSettings {
   std::optional<NodeKill> kill;  ///< async only
   /// async: camera id -> its host's emulated clock error [s] (node --clock-offset).
   std::map<int, double> clock_offsets;
-  /// Live (async): every node reads its camera's image topic of network.yaml (NodeOptions::live;
+  /// Live (async): every node reads its camera's image topic of network.yaml (NodeSettings::live;
   /// the topics there, so image_topic and camera_info_topic are left empty here).
   std::optional<LiveSettings> live;
   /// DDS Security: the security folder every node takes its cam_<id> identity from; empty: none.
@@ -106,7 +106,7 @@ struct MergedRun {
   /// the median of the nodes' round medians, the largest p99, the mean taken per round.
   nlohmann::json exchange;
 };
-MergedRun merge_run_outputs(sources::NetworkSource& provider, const run::ImageRunOptions& options,
+MergedRun merge_run_outputs(sources::NetworkSource& source, const run::ImageRunSettings& options,
                             const std::filesystem::path& nodes_dir,
                             const std::filesystem::path& dir, int frames, bool allow_gaps,
                             const run::OverlaySettings* overlays);

@@ -23,9 +23,9 @@
 
 namespace netvmo::net {
 
-struct NodeOptions {
-  run::ImageRunOptions run;  ///< gains, error model, initialisation, rounds, front end
-  int camera_id = 0;         ///< this node's camera (network.yaml id)
+struct NodeSettings {
+  run::ImageRunSettings run;  ///< gains, error model, initialisation, rounds, front end
+  int camera_id = 0;          ///< this node's camera (network.yaml id)
   DdsSettings dds;
   /// The dataset's frame count (launch passes the whole dataset's; a node alone knows only its
   /// own camera's, or network.yaml's `frames`).
@@ -99,18 +99,18 @@ inline std::filesystem::path partial_path(const std::filesystem::path& file) {
 /// Runs camera `options.camera_id` of the dataset; writes node_<id>.csv and node_<id>.json into
 /// out_dir. Throws InputError on bad input, DdsTimeout when a neighbour stays silent.
 NodeSummary run_node(const std::filesystem::path& dataset, const std::filesystem::path& out_dir,
-                     const NodeOptions& options);
+                     const NodeSettings& options);
 
 /// Reads every camera's node_<id>.csv from nodes_dir and rebuilds the in-process run's result
 /// (history with the same evaluation, front-end frames, substeps, step factor) for `frames`
 /// frames. With `allow_gaps` (async runs with restarts) a frame a node has no row for counts as
-/// blind and uninitialised there; otherwise every frame must be present. A provider without
+/// blind and uninitialised there; otherwise every frame must be present. A source without
 /// images (a live network, sources::TopicNetwork) is evaluated on the grid of its nodes' rows'
 /// times (`frames` 0: up to the last row). Throws InputError naming the file on a missing or
 /// malformed one. `clock_correction` (by camera; empty: none) is subtracted from each node's
 /// rows' times: its clock's offset to the reference camera's (ClockAlignment::correction_s).
-run::ImageRunResult merge_nodes(const sources::NetworkSource& provider,
-                                const run::ImageRunOptions& options,
+run::ImageRunResult merge_nodes(const sources::NetworkSource& source,
+                                const run::ImageRunSettings& options,
                                 const std::filesystem::path& nodes_dir, int frames,
                                 bool allow_gaps = false,
                                 const std::vector<double>& clock_correction = {});

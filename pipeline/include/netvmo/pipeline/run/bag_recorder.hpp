@@ -31,14 +31,14 @@ struct BagSettings {
 class BagRecorder {
  public:
   /// Writes into `dir`, which must not exist or be empty (RosBagWriter).
-  BagRecorder(const std::filesystem::path& dir, const sources::NetworkSource& provider,
+  BagRecorder(const std::filesystem::path& dir, const sources::World& world,
               BagSettings settings = {});
   ~BagRecorder();
   BagRecorder(const BagRecorder&) = delete;
   BagRecorder& operator=(const BagRecorder&) = delete;
   /// A FrameHook: cams [target][camera], one record per target.
   void operator()(int frame, const std::vector<cv::Mat>& images,
-                  const std::vector<std::vector<CameraFrame>>& cams,
+                  const std::vector<std::vector<frontend::Observation>>& cams,
                   const std::vector<const run::FrameRecord*>& records);
   /// Commits the bag and writes metadata.yaml.
   void finish();
@@ -47,7 +47,7 @@ class BagRecorder {
   struct Topics {
     int overlay = 0, info = 0, measurement = 0, pose = 0, pose_cov = 0;
   };
-  const sources::NetworkSource& provider_;
+  const sources::World& world_;
   BagSettings settings_;
   obs::Graph graph_;
   ros::RosBagWriter bag_;

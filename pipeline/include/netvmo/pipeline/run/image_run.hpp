@@ -1,5 +1,5 @@
 // Images -> front end -> networked observer, frame by frame. delta_i(t) is the front end's
-// detection success; ground truth, when the provider has it, is used only for evaluation and
+// detection success; ground truth, when the source has it, is used only for evaluation and
 // for the `exact` error model.
 #pragma once
 
@@ -17,7 +17,7 @@
 
 namespace netvmo::run {
 
-struct ImageRunOptions {
+struct ImageRunSettings {
   run::RunnerSettings runner;  ///< gains, error model, initialisation, rounds (tag size: dataset)
   frontend::DetectorSettings
       detector;  ///< detector settings (family and target id: from the dataset)
@@ -38,12 +38,12 @@ struct ImageRunOptions {
 /// Called after each frame with the frame's images, the front-end results [target][camera] and
 /// each target's record (one target unless network.yaml lists several).
 using FrameHook = std::function<void(int frame, const std::vector<cv::Mat>& images,
-                                     const std::vector<std::vector<CameraFrame>>& cams,
+                                     const std::vector<std::vector<frontend::Observation>>& cams,
                                      const std::vector<const run::FrameRecord*>& records)>;
 
 /// One camera's estimate after one of its own images: a row of estimates.csv when the cameras
 /// run on their own clocks.
-struct EstimateRow {
+struct OwnClockRecord {
   int frame = 0;      ///< the camera's own frame index
   double t = 0.0;     ///< the image's time [s]
   size_t camera = 0;  ///< index in network.yaml
@@ -58,7 +58,7 @@ struct ImageRunResult {
   /// Every frame's record and front-end results; only the last record when
   /// runner.keep_history is false (then `frames` stays empty).
   std::vector<run::FrameRecord> history;
-  std::vector<std::vector<CameraFrame>> frames;  ///< [frame][camera]
+  std::vector<std::vector<frontend::Observation>> frames;  ///< [frame][camera]
   std::vector<std::string> warnings;
   int substeps = 0;
   double step_factor = 0.0;
@@ -74,7 +74,7 @@ struct ImageRunResult {
   /// these rows (each camera's own images and times, by t, then camera), while history and
   /// frames are a regular grid at the dataset's fps holding each camera's latest estimate at or
   /// before each grid time. Empty: estimates.csv is written from history.
-  std::vector<EstimateRow> own_estimates;
+  std::vector<OwnClockRecord> own_estimates;
   /// With own_estimates: [grid frame][camera] the camera's own frame held there (-1: none yet).
   std::vector<std::vector<int>> source_frames;
   /// `netvmo run` on cameras on their own clocks: the observer advanced on the union of their
@@ -100,7 +100,7 @@ struct TimeGrid {
 };
 /// The grid of a source: `frames` grid times, or when 0 every grid time up to the last image of
 /// any camera (1e-9 s slack).
-TimeGrid time_grid(const sources::NetworkSource& provider, int frames = 0);
+TimeGrid time_grid(const sources::NetworkSource& source, int frames = 0);
 /// The grid from `first` to `last` (the earliest and latest image times) at `dt`: `frames` grid
 /// times, or when 0 every one up to `last` (1e-9 s slack).
 TimeGrid time_grid(double first, double last, double dt, int frames = 0);
@@ -135,9 +135,9 @@ int checked_rounds(double dt, double k_e, double k_s, int max_degree, int rounds
 /// V = log(g_k^-1 g_k1) / dt, so g_k exp(dt hat(V)) = g_k1 (zero when the poses are equal).
 obs::Vec6 camera_velocity(const obs::SE3& g_k, const obs::SE3& g_k1, double dt);
 
-/// Runs the whole network over the provider's frames. Several targets (network.yaml
+/// Runs the whole network over the source's frames. Several targets (network.yaml
 /// `targets:`): the front end decides every target in one pass over each image (FrontEnd::
-/// observe_targets) and each target has its own networked observer (its own NetworkRunner with
+/// observe_targets) and each target has its own networked observer (its own Runner with
 /// its tag size), delta_i, g* and metrics, all stepped on the same times.
 ///
 /// Cameras on their own clocks (sources::clock_mismatch: their own fps, or different times for
@@ -149,7 +149,7 @@ obs::Vec6 camera_velocity(const obs::SE3& g_k, const obs::SE3& g_k1, double dt);
 /// grid times) every camera's estimate is integrated over the real elapsed time, in pieces of at
 /// most 1 / fps, each with the run's sub-step rule (so h <= the step checked_rounds allows); a
 /// camera's image updates only its own delta_i and measurement, which it holds until its next
-/// image. history and frames are on time_grid(provider) (max_frames grid times at most), each
+/// image. history and frames are on time_grid(source) (max_frames grid times at most), each
 /// record holding the estimates at that time, the held detections and g*(t) from the truth at
 /// t (target_truth_at, camera_truth_at); own_estimates hold every camera image's row (its
 /// frame, time and its camera's estimate at that time). The front end still runs on `workers`
@@ -159,10 +159,10 @@ obs::Vec6 camera_velocity(const obs::SE3& g_k, const obs::SE3& g_k1, double dt);
 /// Moving cameras: before frame k the
 /// runner gets every camera's believed pose g_wi(t_k) and the body velocity
 /// camera_velocity(g_wi(t_k), g_wi(t_k+1), dt), held over the frame's sub-steps
-/// (NetworkRunner::set_camera_motion); the ground truth is each frame's. Throws InputError for
+/// (Runner::set_camera_motion); the ground truth is each frame's. Throws InputError for
 /// bad input (an unreadable image without keep_going, a disconnected graph, an unknown camera
 /// id).
-ImageRunResult run_images(sources::NetworkSource& provider, const ImageRunOptions& options,
+ImageRunResult run_images(sources::NetworkSource& source, const ImageRunSettings& options,
                           const FrameHook& hook = {});
 
 }  // namespace netvmo::run

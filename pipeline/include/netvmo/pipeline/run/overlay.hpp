@@ -59,9 +59,10 @@ cv::Mat draw_overlay(const cv::Mat& gray, int camera_id, const io::Calibration& 
 
 /// Camera i's overlay layers of a frame, one per target: its detection and estimate (cams
 /// [target][camera], one record per target).
-std::vector<OverlayLayer> overlay_layers(const io::NetworkConfig& net, size_t i,
-                                         const std::vector<std::vector<CameraFrame>>& cams,
-                                         const std::vector<const run::FrameRecord*>& records);
+std::vector<OverlayLayer> overlay_layers(
+    const io::NetworkConfig& net, size_t i,
+    const std::vector<std::vector<frontend::Observation>>& cams,
+    const std::vector<const run::FrameRecord*>& records);
 
 /// A FrameHook that writes DIR/overlays/mosaic.mp4, on finish() DIR/overlays/mosaic.png of the
 /// last frame, and with camera_videos DIR/overlays/cam_<id>.mp4. The hook copies what a frame's
@@ -70,14 +71,14 @@ std::vector<OverlayLayer> overlay_layers(const io::NetworkConfig& net, size_t i,
 /// the next call or by finish().
 class OverlayWriter {
  public:
-  OverlayWriter(const std::filesystem::path& dir, const sources::NetworkSource& provider,
+  OverlayWriter(const std::filesystem::path& dir, const sources::World& world,
                 OverlaySettings settings = {});
   ~OverlayWriter();
   OverlayWriter(const OverlayWriter&) = delete;
   OverlayWriter& operator=(const OverlayWriter&) = delete;
   /// A FrameHook: cams [target][camera], one record per target.
   void operator()(int frame, const std::vector<cv::Mat>& images,
-                  const std::vector<std::vector<CameraFrame>>& cams,
+                  const std::vector<std::vector<frontend::Observation>>& cams,
                   const std::vector<const run::FrameRecord*>& records);
   /// Waits for the writer thread, closes the videos and writes the last mosaic as PNG.
   void finish();
@@ -94,7 +95,7 @@ class OverlayWriter {
   void rethrow_error();
 
   std::filesystem::path dir_;
-  const sources::NetworkSource& provider_;
+  const sources::World& world_;
   OverlaySettings settings_;
   std::vector<cv::VideoWriter> videos_;
   cv::VideoWriter mosaic_video_;

@@ -21,7 +21,7 @@ struct RosFrame {
 /// Camera `camera_id`'s messages at time t [s]: `cam` its front end's output, `estimate_w` its
 /// estimate of the average pose (world frame) when it has one, `neighbours_w` its neighbours'
 /// latest estimates (for the covariance).
-RosFrame ros_frame(int camera_id, double t, const CameraFrame& cam,
+RosFrame ros_frame(int camera_id, double t, const frontend::Observation& cam,
                    const std::optional<obs::SE3>& estimate_w,
                    const std::vector<obs::SE3>& neighbours_w);
 

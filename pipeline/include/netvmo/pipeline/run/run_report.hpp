@@ -22,12 +22,12 @@ PoseError pose_error(const obs::SE3& estimate, const obs::SE3& reference);
 /// of each baseline against g*(t) (the average of the detecting cameras' fictitious target
 /// poses) and against the true target pose, the epsilon-levels and the fraction of frames each
 /// camera saw the target.
-nlohmann::json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& options,
+nlohmann::json run_summary(const sources::NetworkSource& source, const ImageRunSettings& options,
                            const ImageRunResult& result, size_t target);
 /// The summary written to summary.json: run_summary(..., 0) for a single target; with several,
 /// the run's keys once and `targets`, a list holding each target's own keys (target, cameras,
 /// final, eps_*_last_quarter, centralized_pnp_average, target_max_step_deg).
-nlohmann::json run_summary(const sources::NetworkSource& provider, const ImageRunOptions& options,
+nlohmann::json run_summary(const sources::NetworkSource& source, const ImageRunSettings& options,
                            const ImageRunResult& result);
 
 /// Writes estimates.csv (frame,t,camera,delta,px,py,pz,rx,ry,rz), energies.csv
@@ -38,8 +38,8 @@ nlohmann::json run_summary(const sources::NetworkSource& provider, const ImageRu
 /// block, calib::g_star_localisation_summary()), when given, is the summary's key of that name.
 /// Returns the summary.
 nlohmann::json write_run_outputs(
-    const std::filesystem::path& dir, const sources::NetworkSource& provider,
-    const ImageRunOptions& options, const ImageRunResult& result,
+    const std::filesystem::path& dir, const sources::NetworkSource& source,
+    const ImageRunSettings& options, const ImageRunResult& result,
     const std::optional<nlohmann::json>& g_star_localisation = std::nullopt);
 
 }  // namespace netvmo::run

@@ -1,6 +1,6 @@
 // The frame-by-frame runner: front-end measurements in, the networked observer and its
 // baselines stepped, the paper's metrics evaluated against ground truth when it is known.
-// Images never reach this file: it consumes one CameraInput per camera and frame.
+// Images never reach this file: it consumes one obs::Measurement per camera and frame.
 #pragma once
 
 #include <memory>
@@ -50,11 +50,6 @@ struct RunnerSettings {
 /// (R = diag(1,-1,-1), the camera-frame form of the printed identity orientation).
 SE3 paper_initial_estimate();
 
-/// One camera's input for one frame: delta_i(t) (the target tag was decoded), the normalized
-/// corners f, the camera's PnP pose of the tag (when delta) and, on rendered data, the true
-/// relative pose.
-using CameraInput = obs::Measurement;
-
 /// One camera's state after a frame.
 struct CameraRecord {
   bool delta = false;
@@ -95,23 +90,24 @@ obs::ObserverSettings camera_observer_settings(const RunnerSettings& s, bool ind
 /// frame of dt: < 2 stable, <= 1 non-oscillating.
 double step_factor(const obs::ObserverSettings& s, double dt, int substeps, int max_degree);
 
-class NetworkRunner {
+class Runner {
  public:
   /// g_wi: believed camera poses (the source of g_ij). Throws std::invalid_argument on a
   /// disconnected graph.
-  NetworkRunner(const obs::Graph& graph, std::vector<SE3> g_wi, RunnerSettings settings);
+  Runner(const obs::Graph& graph, std::vector<SE3> g_wi, RunnerSettings settings);
 
   /// Processes frame `frame` (time t): initialises cameras, advances the networked observer and
   /// the independent observers by dt with this frame's measurements, evaluates, and returns the
   /// record of the estimates after the frame.
-  const FrameRecord& process(int frame, double t, double dt, const std::vector<CameraInput>& in,
+  const FrameRecord& process(int frame, double t, double dt,
+                             const std::vector<obs::Measurement>& in,
                              const std::optional<SE3>& g_wo_true = std::nullopt);
   /// process() in two halves, for cameras on their own clocks: advance() initialises cameras
   /// and steps every observer by dt with these (held) measurements; record() evaluates the
   /// current estimates as frame `frame` at time t (in: delta, PnP and true g_io at that time)
   /// and appends the record to history().
-  void advance(double dt, const std::vector<CameraInput>& in);
-  const FrameRecord& record(int frame, double t, const std::vector<CameraInput>& in,
+  void advance(double dt, const std::vector<obs::Measurement>& in);
+  const FrameRecord& record(int frame, double t, const std::vector<obs::Measurement>& in,
                             const std::optional<SE3>& g_wo_true = std::nullopt);
 
   const std::vector<FrameRecord>& history() const { return history_; }

@@ -16,24 +16,24 @@ namespace netvmo::run {
 /// The observer's inputs of a whole dataset, from one front-end pass.
 struct RecordedInputs {
   double dt = 0.0;
-  std::vector<std::vector<CameraInput>> frames;  ///< [frame][camera]
-  std::vector<std::optional<SE3>> targets;       ///< true target pose per frame, when known
+  std::vector<std::vector<obs::Measurement>> frames;  ///< [frame][camera]
+  std::vector<std::optional<SE3>> targets;            ///< true target pose per frame, when known
 };
 
-/// One front-end pass over the provider (run_images with its detector and tracking settings).
-RecordedInputs record_inputs(sources::NetworkSource& provider, const ImageRunOptions& options);
+/// One front-end pass over the source (run_images with its detector and tracking settings).
+RecordedInputs record_inputs(sources::NetworkSource& source, const ImageRunSettings& options);
 
 /// The cache of the front end's outputs: per frame and camera delta, the normalized corners and
 /// the PnP pose (%.17g), after a first line naming the dataset, its frame and camera counts and
 /// the detector settings. Ground truth is not stored (it is read from the dataset).
-void write_inputs_cache(const std::filesystem::path& file, const sources::NetworkSource& provider,
-                        const ImageRunOptions& options, const RecordedInputs& in);
+void write_inputs_cache(const std::filesystem::path& file, const sources::NetworkSource& source,
+                        const ImageRunSettings& options, const RecordedInputs& in);
 /// The cached inputs when `file` exists and its first line matches this dataset and these
-/// settings (nullopt otherwise), with the truth taken from the provider. Throws InputError
+/// settings (nullopt otherwise), with the truth taken from the source. Throws InputError
 /// naming the file and line on a malformed row.
 std::optional<RecordedInputs> read_inputs_cache(const std::filesystem::path& file,
-                                                const sources::NetworkSource& provider,
-                                                const ImageRunOptions& options);
+                                                const sources::NetworkSource& source,
+                                                const ImageRunSettings& options);
 
 /// One grid point's results over the recorded frames (NaN where the data has no truth, or where
 /// a quantity is undefined, e.g. a frame in which no camera has an estimate).

@@ -1,4 +1,4 @@
-// The registry of transports a run can choose by name (ImageRunOptions::transport, the command
+// The registry of transports a run can choose by name (ImageRunSettings::transport, the command
 // line's --transport): how the cameras' estimates travel between the per-camera observers.
 //
 // Adding a transport: a class implementing obs::Transport (observer/transport.hpp) and a

@@ -1,6 +1,8 @@
-// Where a run's images come from: a dataset folder (rendered or recorded) or the live
-// renderer. Both give the camera network, every camera's calibration and frames, and ground
-// truth when it is known.
+// Where a run's images come from and what is known of the world they show, as two interfaces:
+// ImageStreams (every camera's frames) and World (the camera network, calibrations, believed
+// poses, the images' clocks, ground truth when it is known). A NetworkSource is both: a dataset
+// folder (rendered or recorded), the live renderer, or live camera topics. A stage takes the
+// part it reads.
 #pragma once
 
 #include <filesystem>
@@ -16,12 +18,16 @@
 
 namespace netvmo::sources {
 
-class NetworkSource {
+/// Every camera's images, by frame index.
+class ImageStreams {
  public:
-  virtual ~NetworkSource() = default;
-  virtual const io::NetworkConfig& network() const = 0;
-  virtual const io::Calibration& calibration(size_t camera_index) const = 0;
+  virtual ~ImageStreams() = default;
   virtual int frame_count() const = 0;
+  /// The frames of one camera: frame_count(), or its own count when it runs at its own fps.
+  virtual int camera_frame_count(size_t camera_index) const {
+    (void)camera_index;
+    return frame_count();
+  }
   /// 8-bit gray image of a camera at a frame; empty when the camera has none there. Throws
   /// InputError naming the file when an image exists but cannot be read. Thread-safe for
   /// different cameras, at any frames (one_frame_at_a_time: of the same frame).
@@ -29,6 +35,16 @@ class NetworkSource {
   /// Whether reads of different frames at once would only queue (a renderer that holds one
   /// frame's scene at a time): the front end then reads one frame at a time.
   virtual bool one_frame_at_a_time() const { return false; }
+};
+
+/// What is known of the world the images show: the camera network (network.yaml: cameras,
+/// graph, targets), every camera's calibration and believed pose, the images' clocks, and the
+/// ground truth when it is known.
+class World {
+ public:
+  virtual ~World() = default;
+  virtual const io::NetworkConfig& network() const = 0;
+  virtual const io::Calibration& calibration(size_t camera_index) const = 0;
   /// True pose in the world of target `target` (index in network().targets) at a frame, when
   /// known.
   virtual std::optional<obs::SE3> target_truth(int frame, size_t target = 0) const = 0;
@@ -43,15 +59,6 @@ class NetworkSource {
   /// Whether some camera's believed pose differs from network()'s at some frame (moving
   /// cameras, or a cameras.csv that overrides network.yaml).
   virtual bool cameras_move() const { return false; }
-  /// Warnings found when opening (missing frames, short cameras, ...), one line each.
-  virtual std::vector<std::string> warnings() const { return {}; }
-  /// Information for the log (e.g. where the image times come from), one line each.
-  virtual std::vector<std::string> notes() const { return {}; }
-  /// The frames of one camera: frame_count(), or its own count when it runs at its own fps.
-  virtual int camera_frame_count(size_t camera_index) const {
-    (void)camera_index;
-    return frame_count();
-  }
   /// The time [s] of a camera's image (timestamps.csv for dataset folders), by default
   /// frame / the camera's fps.
   virtual double frame_time(size_t camera_index, int frame) const {
@@ -63,8 +70,6 @@ class NetworkSource {
     (void)frame;
     return std::nullopt;
   }
-  /// A name for messages and summaries.
-  virtual std::string name() const = 0;
 
   // Ground truth and believed poses at any time t [s] (cameras on their own clocks: the run's
   // regular grid falls between images), interpolated on the geodesic between the nearest
@@ -89,6 +94,18 @@ class NetworkSource {
     (void)t;
     return network().cameras.at(camera_index).g_wi;
   }
+};
+
+/// A run's source: its images and their world, from a dataset folder (rendered or recorded),
+/// the live renderer, or live camera topics.
+class NetworkSource : public ImageStreams, public World {
+ public:
+  /// A name for messages and summaries.
+  virtual std::string name() const = 0;
+  /// Warnings found when opening (missing frames, short cameras, ...), one line each.
+  virtual std::vector<std::string> warnings() const { return {}; }
+  /// Information for the log (e.g. where the image times come from), one line each.
+  virtual std::vector<std::string> notes() const { return {}; }
 };
 
 /// The pose at time t of a sequence of poses at strictly increasing times: poses[k] where
@@ -120,7 +137,7 @@ void require_static_cameras(const NetworkSource& source, const std::string& what
 
 /// Refuses (InputError, one line naming network.yaml's targets and `what`) a source with several
 /// targets: `what` runs one target's observer only.
-void require_single_target(const NetworkSource& source, const std::string& what);
+void require_single_target(const World& world, const std::string& what);
 
 /// A dataset folder (sources/dataset.hpp documents the layout). Ground truth is read from
 /// target.csv (true poses of the first target; target_<id>.csv for each later target of

@@ -10,7 +10,7 @@
 
 namespace netvmo::sources {
 
-/// A provider that renders the scene frame by frame. Ground truth (target and camera poses)
+/// A source that renders the scene frame by frame. Ground truth (target and camera poses)
 /// comes from the scene. `frames` overrides the scene's frame count when > 0.
 std::unique_ptr<NetworkSource> make_render_source(render::SceneDescription scene, int frames = 0);
 
