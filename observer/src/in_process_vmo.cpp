@@ -6,12 +6,48 @@
 
 namespace netvmo::obs {
 
-InProcessVmo::InProcessVmo(const Graph& graph) : n_(graph.size()) {
+namespace {
+// The cameras in breadth-first order from a pseudo-peripheral camera (George and Liu's heuristic:
+// the camera a breadth-first search from camera 0 reaches last starts a second one). Cameras
+// that are neighbours get nearby positions, so each thread's contiguous block of positions reads
+// mostly estimates its own block wrote (few cache lines cross between cores in a round) and a
+// camera's neighbours share cache lines. (A camera no search reaches, in a disconnected graph
+// NetworkedObserver refuses anyway, is appended.)
+std::vector<int> breadth_first_order(const Graph& g) {
+  const auto n = static_cast<size_t>(g.size());
+  const auto search = [&](int start) {
+    std::vector<int> order;
+    std::vector<unsigned char> seen(n, 0);
+    order.reserve(n);
+    for (int s = start; order.size() < n;
+         s = static_cast<int>(std::find(seen.begin(), seen.end(), 0) - seen.begin())) {
+      seen[static_cast<size_t>(s)] = 1;
+      order.push_back(s);
+      for (size_t head = order.size() - 1; head < order.size(); ++head)
+        for (int j : g.neighbors(order[head]))
+          if (!seen[static_cast<size_t>(j)]) {
+            seen[static_cast<size_t>(j)] = 1;
+            order.push_back(j);
+          }
+    }
+    return order;
+  };
+  if (n == 0) return {};
+  return search(search(0).back());
+}
+}  // namespace
+
+InProcessVmo::InProcessVmo(const Graph& graph)
+    : n_(graph.size()), order_(breadth_first_order(graph)) {
   const auto n = static_cast<size_t>(n_);
+  position_.resize(n);
+  for (size_t p = 0; p < n; ++p) position_[static_cast<size_t>(order_[p])] = static_cast<int>(p);
+  // CSR adjacency by position, each camera's neighbours in its own order (the order of the sum
+  // of the mutual term, so the arithmetic is the per-camera exchange's).
   offset_.reserve(n + 1);
   offset_.push_back(0);
-  for (int i = 0; i < n_; ++i) {
-    for (int j : graph.neighbors(i)) nbr_.push_back(j);
+  for (size_t p = 0; p < n; ++p) {
+    for (int j : graph.neighbors(order_[p])) nbr_.push_back(position_[static_cast<size_t>(j)]);
     offset_.push_back(static_cast<int>(nbr_.size()));
   }
   g_bar_.resize(n);
@@ -25,6 +61,7 @@ InProcessVmo::InProcessVmo(const Graph& graph) : n_(graph.size()) {
   u_.resize(n);
   round0_.resize(n);
   incarnation_.resize(n);
+  z_.resize(n);
 }
 
 bool InProcessVmo::supports(const CameraObserver& camera) {
@@ -38,8 +75,8 @@ void InProcessVmo::for_each(WorkerPool* pool, const std::function<void(int)>& f)
     for (int i = 0; i < n_; ++i) f(i);
 }
 
-bool InProcessVmo::gather(const CameraObserver& c, int i) {
-  const auto k = static_cast<size_t>(i);
+bool InProcessVmo::gather(const CameraObserver& c, int p) {
+  const auto k = static_cast<size_t>(p);
   g_bar_[k] = kernel::pose_of(c.st_.g_bar);
   g_wi_[k] = kernel::pose_of(c.g_wi_);
   wi_room_[k] = kernel::check_has_room(g_wi_[k]);
@@ -55,8 +92,8 @@ bool InProcessVmo::gather(const CameraObserver& c, int i) {
   return kernel::check_pose(pub_[0][k]) == MessageVerdict::accepted;
 }
 
-bool InProcessVmo::step(int i, int cur, const Measurement& z, double h, bool publish) {
-  const auto k = static_cast<size_t>(i);
+bool InProcessVmo::step(int p, int cur, const Measurement& z, double h, bool publish) {
+  const auto k = static_cast<size_t>(p);
   const auto& P = pub_[cur];
   const auto& P_init = pub_init_[cur];
   const int* first = nbr_.data() + offset_[k];
@@ -96,9 +133,9 @@ bool InProcessVmo::step(int i, int cur, const Measurement& z, double h, bool pub
   return kernel::check_pose(next) == MessageVerdict::accepted;
 }
 
-void InProcessVmo::write_back(std::vector<CameraObserver>& cams, int i, int done, int cur) const {
-  const auto k = static_cast<size_t>(i);
-  auto& c = cams[k];
+void InProcessVmo::write_back(std::vector<CameraObserver>& cams, int p, int done, int cur) const {
+  const auto k = static_cast<size_t>(p);
+  auto& c = cams[static_cast<size_t>(order_[k])];
   c.st_.g_bar = kernel::to_se3(g_bar_[k]);
   c.st_.u = u_[k];
   c.st_.initialized = init_[k];
@@ -108,7 +145,7 @@ void InProcessVmo::write_back(std::vector<CameraObserver>& cams, int i, int done
     const auto j = static_cast<size_t>(nbr_[static_cast<size_t>(a)]);
     auto& slot = c.latest_[static_cast<size_t>(a - offset_[k])];
     auto& kept = slot.has_value() ? *slot : slot.emplace();
-    kept.sender = static_cast<int>(j);
+    kept.sender = order_[j];
     kept.round = round0_[j] + static_cast<std::uint64_t>(done);
     kept.stamp = 0.0;
     kept.initialized = pub_init_[cur][j];
@@ -122,17 +159,27 @@ int InProcessVmo::run(std::vector<CameraObserver>& cams, const std::vector<Measu
   s_ = &cams.front().settings();
   model_ = &cams.front().error_model();
   std::atomic<bool> refused{false};
+  int done = 0, cur = 0;
+  // The rounds run over positions p (breadth_first_order); the passes that touch the cameras
+  // themselves (gather, write_back) over cameras i, which are large: in memory order.
   for_each(pool, [&](int i) {
+    const auto p = position_[static_cast<size_t>(i)];
     auto& c = cams[static_cast<size_t>(i)];
     c.set_measurement(z[static_cast<size_t>(i)]);
-    if (!gather(c, i)) refused.store(true, std::memory_order_relaxed);
+    z_[static_cast<size_t>(p)] = z[static_cast<size_t>(i)];  // by position, as the rounds read it
+    if (!gather(c, p)) refused.store(true, std::memory_order_relaxed);
   });
+  const auto write_back_all = [&](int done_rounds) {
+    for_each(pool,
+             [&](int i) { write_back(cams, position_[static_cast<size_t>(i)], done_rounds, cur); });
+  };
   if (check_stored)  // CameraObserver::receive's out-of-order test on the first round's messages
-    for_each(pool, [&](int i) {
-      const auto& latest = cams[static_cast<size_t>(i)].latest_;
-      for (int a = offset_[static_cast<size_t>(i)]; a < offset_[static_cast<size_t>(i) + 1]; ++a) {
+    for_each(pool, [&](int p) {
+      const auto k = static_cast<size_t>(p);
+      const auto& latest = cams[static_cast<size_t>(order_[k])].latest_;
+      for (int a = offset_[k]; a < offset_[k + 1]; ++a) {
         const auto j = static_cast<size_t>(nbr_[static_cast<size_t>(a)]);
-        const auto& slot = latest[static_cast<size_t>(a - offset_[static_cast<size_t>(i)])];
+        const auto& slot = latest[static_cast<size_t>(a - offset_[k])];
         if (slot && (incarnation_[j] < slot->incarnation ||
                      (incarnation_[j] == slot->incarnation && round0_[j] + 1 <= slot->round)))
           refused.store(true, std::memory_order_relaxed);
@@ -143,35 +190,31 @@ int InProcessVmo::run(std::vector<CameraObserver>& cams, const std::vector<Measu
   // frames take the camera-by-camera loop.
   if (std::any_of(moving_.begin(), moving_.end(), [](unsigned char m) { return m != 0; })) return 0;
 
-  int done = 0, cur = 0;
   if (rounds <= 0) {
-    for_each(pool, [&](int i) { write_back(cams, i, done, cur); });
+    write_back_all(done);
     return 0;
   }
   try {
     while (done + 1 < rounds) {
-      for_each(pool, [&](int i) {
-        if (!step(i, cur, z[static_cast<size_t>(i)], h, true))
+      for_each(pool, [&](int p) {
+        if (!step(p, cur, z_[static_cast<size_t>(p)], h, true))
           refused.store(true, std::memory_order_relaxed);
       });
       ++done;
       if (refused) {  // the next round runs the per-camera way
-        for_each(pool, [&](int i) { write_back(cams, i, done, cur); });
+        write_back_all(done);
         return done;
       }
       cur = 1 - cur;
     }
     // The last round publishes nothing, so the neighbours' messages it reads (buffer cur) stay
-    // as they are while it runs: each camera writes its state back right after its step.
-    for_each(pool, [&](int i) {
-      step(i, cur, z[static_cast<size_t>(i)], h, false);
-      write_back(cams, i, done + 1, cur);
-    });
-    return ++done;
+    // as they are for the write-back after it.
+    for_each(pool, [&](int p) { step(p, cur, z_[static_cast<size_t>(p)], h, false); });
+    write_back_all(++done);
+    return done;
   } catch (...) {
     const auto error = std::current_exception();
-    ++done;
-    for_each(pool, [&](int i) { write_back(cams, i, done, cur); });
+    write_back_all(++done);
     std::rethrow_exception(error);
   }
 }

@@ -51,24 +51,32 @@ class InProcessVmo {
 
  private:
   void for_each(WorkerPool* pool, const std::function<void(int)>& f) const;
-  /// Loads camera i and publishes its first estimate; false when the pose would be refused.
-  bool gather(const CameraObserver& c, int i);
-  /// One round of camera i: reads buffer `cur`, writes buffer 1 - cur (when `publish`); false
-  /// when the published pose would be refused.
-  bool step(int i, int cur, const Measurement& z, double h, bool publish);
-  /// Writes camera i's state back after `done` rounds (the neighbours' messages of buffer cur).
-  void write_back(std::vector<CameraObserver>& cams, int i, int done, int cur) const;
+  /// Loads camera c into position p and publishes its first estimate; false when the pose would
+  /// be refused.
+  bool gather(const CameraObserver& c, int p);
+  /// One round of the camera at position p: reads buffer `cur`, writes buffer 1 - cur (when
+  /// `publish`); false when the published pose would be refused.
+  bool step(int p, int cur, const Measurement& z, double h, bool publish);
+  /// Writes the camera at position p back after `done` rounds (the neighbours' messages of
+  /// buffer cur).
+  void write_back(std::vector<CameraObserver>& cams, int p, int done, int cur) const;
 
   int n_;
+  /// order_[p]: the camera at position p of every array below (breadth-first: neighbours near
+  /// each other, each thread a contiguous block of positions).
+  std::vector<int> order_;
+  std::vector<int> position_;            ///< position_[i]: camera i's position
   const ObserverSettings* s_ = nullptr;  ///< the cameras' settings (the network's: all alike)
   const ErrorModel* model_ = nullptr;
-  std::vector<int> offset_, nbr_;  ///< CSR: N_i = nbr_[offset_[i], offset_[i + 1])
+  /// CSR by position: the positions of N_order_[p] = nbr_[offset_[p], offset_[p + 1]).
+  std::vector<int> offset_, nbr_;
   std::vector<kernel::Pose> g_bar_, g_wi_;
   std::vector<kernel::Pose> pub_[2];        ///< g_wi g_bar_i of the round, double-buffered
   std::vector<unsigned char> pub_init_[2];  ///< the published `initialized` flag
   std::vector<unsigned char> init_, moving_, sees_, refused_;
   std::vector<unsigned char> wi_room_;  ///< kernel::check_has_room(g_wi)
   std::vector<Vec6> u_;
+  std::vector<Measurement> z_;  ///< the frame's measurements by position
   std::vector<std::uint64_t> round0_, incarnation_;
 };
 
