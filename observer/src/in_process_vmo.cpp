@@ -61,7 +61,6 @@ InProcessVmo::InProcessVmo(const Graph& graph)
   u_.resize(n);
   round0_.resize(n);
   incarnation_.resize(n);
-  z_.resize(n);
 }
 
 bool InProcessVmo::supports(const CameraObserver& camera) {
@@ -166,7 +165,6 @@ int InProcessVmo::run(std::vector<CameraObserver>& cams, const std::vector<Measu
     const auto p = position_[static_cast<size_t>(i)];
     auto& c = cams[static_cast<size_t>(i)];
     c.set_measurement(z[static_cast<size_t>(i)]);
-    z_[static_cast<size_t>(p)] = z[static_cast<size_t>(i)];  // by position, as the rounds read it
     if (!gather(c, p)) refused.store(true, std::memory_order_relaxed);
   });
   const auto write_back_all = [&](int done_rounds) {
@@ -197,7 +195,7 @@ int InProcessVmo::run(std::vector<CameraObserver>& cams, const std::vector<Measu
   try {
     while (done + 1 < rounds) {
       for_each(pool, [&](int p) {
-        if (!step(p, cur, z_[static_cast<size_t>(p)], h, true))
+        if (!step(p, cur, z[static_cast<size_t>(order_[static_cast<size_t>(p)])], h, true))
           refused.store(true, std::memory_order_relaxed);
       });
       ++done;
@@ -209,7 +207,9 @@ int InProcessVmo::run(std::vector<CameraObserver>& cams, const std::vector<Measu
     }
     // The last round publishes nothing, so the neighbours' messages it reads (buffer cur) stay
     // as they are for the write-back after it.
-    for_each(pool, [&](int p) { step(p, cur, z_[static_cast<size_t>(p)], h, false); });
+    for_each(pool, [&](int p) {
+      step(p, cur, z[static_cast<size_t>(order_[static_cast<size_t>(p)])], h, false);
+    });
     write_back_all(++done);
     return done;
   } catch (...) {

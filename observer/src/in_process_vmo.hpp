@@ -76,7 +76,6 @@ class InProcessVmo {
   std::vector<unsigned char> init_, moving_, sees_, refused_;
   std::vector<unsigned char> wi_room_;  ///< kernel::check_has_room(g_wi)
   std::vector<Vec6> u_;
-  std::vector<Measurement> z_;  ///< the frame's measurements by position
   std::vector<std::uint64_t> round0_, incarnation_;
 };
 
