@@ -102,11 +102,11 @@ void CameraObserver::forget(int j) {
 
 void CameraObserver::set_measurement(const Measurement& z) {
   z_ = z;
-  estimator_->measured(view(), st_);
+  estimator_->measured(context(), st_);
 }
 
 void CameraObserver::step(double h) {
-  estimator_->step(view(), st_, h);
+  estimator_->step(context(), st_, h);
   // The camera moves on with its body velocity over the sub-step, d/dt g_wi = g_wi hat(V_wi):
   // the next message g_wi g_bar_i pairs the estimate with the pose it now refers to.
   if (!V_wi_.isZero(0.0)) {

@@ -29,12 +29,12 @@ class Vmo final : public Estimator {
     return s.k_e + 2.0 * s.k_s * max_degree;  // Gershgorin on k_e Delta + k_s L
   }
 
-  void measured(const EstimatorContext& cv, EstimatorState& st) const override {
-    const auto& s = cv.settings;
-    const auto& z = cv.z;
+  void measured(const EstimatorContext& cx, EstimatorState& st) const override {
+    const auto& s = cx.settings;
+    const auto& z = cx.z;
     if (!s.init_from_measurement || !z.delta || !z.g_io_pnp) return;
     // An estimate of the image-feature model must keep the tag in front of the camera.
-    const bool unusable = st.initialized && cv.model.input() == MeasurementInput::features &&
+    const bool unusable = st.initialized && cx.model.input() == MeasurementInput::features &&
                           min_depth(st.g_bar, s.features) < s.min_feature_depth;
     if (!st.initialized || unusable) {
       st.g_bar = *z.g_io_pnp;
@@ -42,29 +42,29 @@ class Vmo final : public Estimator {
     }
   }
 
-  void step(const EstimatorContext& cv, EstimatorState& st, double h) const override {
-    const auto& s = cv.settings;
+  void step(const EstimatorContext& cx, EstimatorState& st, double h) const override {
+    const auto& s = cx.settings;
     if (!st.initialized && s.init_from_neighbours) {
       std::vector<SE3> nb;
-      for (const auto& m : cv.latest)
+      for (const auto& m : cx.latest)
         if (m && m->initialized) nb.push_back(m->g_w);
       if (!nb.empty()) {
-        st.g_bar = kernel::start_from_neighbours(cv.g_wi, nb);
+        st.g_bar = kernel::start_from_neighbours(cx.g_wi, nb);
         st.initialized = true;
       }
     }
     if (!st.initialized) return;
     // The same arithmetic as NetworkedObserver's in-process fast path (pose_kernel.hpp).
-    const kernel::Pose own_w = kernel::compose(kernel::pose_of(cv.g_wi), kernel::pose_of(st.g_bar));
+    const kernel::Pose own_w = kernel::compose(kernel::pose_of(cx.g_wi), kernel::pose_of(st.g_bar));
     kernel::PoseSum nb;
-    for (const auto& m : cv.latest)
+    for (const auto& m : cx.latest)
       if (m && m->initialized) nb.add(kernel::pose_of(m->g_w));
     const Vec6 mutual = kernel::mutual_sum(own_w, nb);  // sum_j E_R(g_bar_i^-1 g_ij g_bar_j)
     Vec6 visual;
-    const bool sees = cv.model.usable(cv.z);
-    if (sees) visual = cv.model.error(st.g_bar, cv.z, s.features);
+    const bool sees = cx.model.usable(cx.z);
+    if (sees) visual = cx.model.error(st.g_bar, cx.z, s.features);
     st.u = kernel::vmo_input(s, mutual, sees ? &visual : nullptr);  // (eq:input_f-)
-    st.g_bar = kernel::to_se3(kernel::integrate(kernel::pose_of(st.g_bar), cv.V_wi, st.u, h));
+    st.g_bar = kernel::to_se3(kernel::integrate(kernel::pose_of(st.g_bar), cx.V_wi, st.u, h));
   }
 };
 

@@ -31,12 +31,12 @@ constexpr int kDim = 13;  // [p (3); R row-major (9); delta]
 using Vec13 = Eigen::Matrix<double, kDim, 1>;
 
 // r_i = delta_i [p_wo,i; vec(R_wo,i); 1] with g_wo,i = g_wi g_io,i.
-Vec13 input(const EstimatorContext& cv) {
+Vec13 input(const EstimatorContext& cx) {
   Vec13 r = Vec13::Zero();
-  if (!cv.model.usable(cv.z)) return r;
+  if (!cx.model.usable(cx.z)) return r;
   const SE3& g_io =
-      cv.model.input() == MeasurementInput::true_pose ? *cv.z.g_io_true : *cv.z.g_io_pnp;
-  const SE3 g_wo = cv.g_wi * g_io;
+      cx.model.input() == MeasurementInput::true_pose ? *cx.z.g_io_true : *cx.z.g_io_pnp;
+  const SE3 g_wo = cx.g_wi * g_io;
   r.head<3>() = g_wo.translation();
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b) r(3 + 3 * a + b) = g_wo.linear()(a, b);
@@ -74,18 +74,18 @@ class ZeroOffset final : public Estimator {
 
   void measured(const EstimatorContext&, EstimatorState&) const override {}
 
-  void step(const EstimatorContext& cv, EstimatorState& st, double h) const override {
-    const auto& s = cv.settings;
-    const Vec13 r = input(cv);
+  void step(const EstimatorContext& cx, EstimatorState& st, double h) const override {
+    const auto& s = cx.settings;
+    const Vec13 r = input(cx);
     Eigen::Map<Vec13> x(st.consensus.data()), eta(st.consensus.data() + kDim);
     if (!st.consensus_started) {  // x_i(0) = r_i(0), eta_i(0) = 0: any start converges
       x = r;
       eta.setZero();
-      st.held_w = cv.g_wi * st.g_bar;
+      st.held_w = cx.g_wi * st.g_bar;
       st.consensus_started = true;
     }
     Vec13 dx = Vec13::Zero(), deta = Vec13::Zero();
-    for (const auto& m : cv.latest) {
+    for (const auto& m : cx.latest) {
       if (!m) continue;
       dx += x - Eigen::Map<const Vec13>(m->state.data());
       deta += eta - Eigen::Map<const Vec13>(m->state.data() + kDim);
@@ -96,7 +96,7 @@ class ZeroOffset final : public Estimator {
     x += h * x_dot;
 
     const double threshold =
-        s.hold_threshold > 0.0 ? s.hold_threshold : 0.5 / static_cast<double>(cv.network_size);
+        s.hold_threshold > 0.0 ? s.hold_threshold : 0.5 / static_cast<double>(cx.network_size);
     st.holding = !(x(12) >= threshold);
     if (!st.holding) {
       Mat3 M;
@@ -106,7 +106,7 @@ class ZeroOffset final : public Estimator {
       st.held_w.linear() = project_to_so3(M);  // R* of (eq:g_ave), up to the factor x_delta
       st.initialized = true;
     }
-    if (st.initialized) st.g_bar = cv.g_wi.inverse() * st.held_w;
+    if (st.initialized) st.g_bar = cx.g_wi.inverse() * st.held_w;
   }
 };
 

@@ -127,7 +127,7 @@ class CameraObserver {
   /// NetworkedObserver's in-process fast path reads and writes back this state directly.
   friend class InProcessVmo;
 
-  EstimatorContext view() const {
+  EstimatorContext context() const {
     return {settings_, *model_, g_wi_, V_wi_, z_, latest_, network_size_};
   }
 };

@@ -69,11 +69,11 @@ class Estimator {
   /// degree d_max: sub-steps h with h * rate_bound <= 1 are stable and non-oscillating for the
   /// forward-Euler discretisation (docs/observer.md, "Discretisation and stability").
   virtual double rate_bound(const ObserverSettings& s, int max_degree) const = 0;
-  /// A new measurement (cv.z) arrived; it is held until the next one.
-  virtual void measured(const EstimatorContext& cv, EstimatorState& st) const = 0;
+  /// A new measurement (cx.z) arrived; it is held until the next one.
+  virtual void measured(const EstimatorContext& cx, EstimatorState& st) const = 0;
   /// Advances the state by h with the held measurement and the neighbours' latest messages.
   /// Throws std::domain_error from the error model.
-  virtual void step(const EstimatorContext& cv, EstimatorState& st, double h) const = 0;
+  virtual void step(const EstimatorContext& cx, EstimatorState& st, double h) const = 0;
 };
 
 /// The registry (registry.hpp): every estimator, in the order help texts list them (the default
