@@ -56,19 +56,26 @@ TEST(Exchange, CamerasRunByHandEqualTheNetworkedObserverBitForBit) {
     ref.set_camera_poses(p.g_wi);
     ref.reset(std::vector<SE3>(5, start));
 
-    std::vector<CameraObserver> cams;
-    for (int i = 0; i < 5; ++i) {
-      cams.emplace_back(i, p.graph.neighbors(i), s, 5);
-      cams.back().set_camera_pose(p.g_wi[size_t(i)]);
-      cams.back().reset(start);
-    }
-    Mailbox net(p.graph);
+    // Two sets of cameras run by hand: one through exchange.hpp as a camera's process runs it,
+    // one with the transport and CameraObserver's publish / receive spelt out here (independent
+    // of exchange.hpp, which the networked observer also uses).
+    std::vector<CameraObserver> cams, raw;
+    for (auto* set : {&cams, &raw})
+      for (int i = 0; i < 5; ++i) {
+        set->emplace_back(i, p.graph.neighbors(i), s, 5);
+        set->back().set_camera_pose(p.g_wi[size_t(i)]);
+        set->back().reset(start);
+      }
+    Mailbox net(p.graph), raw_net(p.graph);
     std::vector<EstimateMessage> inbox;
     const double dt = 1.0 / 30.0;
     const int N = ref.substeps(dt);
     for (int k = 0; k < 60; ++k) {
       ref.step(dt, z);
-      for (int i = 0; i < 5; ++i) cams[size_t(i)].set_measurement(z[size_t(i)]);
+      for (int i = 0; i < 5; ++i) {
+        cams[size_t(i)].set_measurement(z[size_t(i)]);
+        raw[size_t(i)].set_measurement(z[size_t(i)]);
+      }
       for (int r = 0; r < N; ++r) {
         for (auto& c : cams) send_estimate(c, net);
         for (auto& c : cams) {
@@ -77,15 +84,22 @@ TEST(Exchange, CamerasRunByHandEqualTheNetworkedObserverBitForBit) {
           EXPECT_EQ(t.forgotten, 0);
         }
         for (auto& c : cams) c.step(dt / N);
+        for (auto& c : raw) raw_net.send(c.publish());
+        for (auto& c : raw) {
+          raw_net.receive(c.index(), inbox);
+          for (const auto& m : inbox) EXPECT_EQ(c.receive(m), MessageVerdict::accepted);
+        }
+        for (auto& c : raw) c.step(dt / N);
       }
     }
     // The estimates moved, and every camera is where the networked observer's is, exactly.
     EXPECT_GT((ref.camera(4).estimate_world().translation() - start.translation()).norm(), 1e-2);
     for (int i = 0; i < 5; ++i)
-      EXPECT_TRUE((cams[size_t(i)].estimate_world().matrix().array() ==
-                   ref.camera(i).estimate_world().matrix().array())
-                      .all())
-          << "camera " << i + 1;
+      for (const auto* set : {&cams, &raw})
+        EXPECT_TRUE(((*set)[size_t(i)].estimate_world().matrix().array() ==
+                     ref.camera(i).estimate_world().matrix().array())
+                        .all())
+            << "camera " << i + 1 << (set == &raw ? ", spelt out" : ", exchange.hpp");
   }
 }
 
