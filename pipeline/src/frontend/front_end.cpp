@@ -213,6 +213,8 @@ std::vector<Observation> FrontEnd::observe_targets(const cv::Mat& gray,
       dets.targets.push_back({TargetStatus::no_image, dets.reason, 0, 0});
   } else {
     const bool tracked = track && tracking_.enabled && !track->last_all.empty();
+    // Not tracked, but the last frame decoded a target's tag that the frame check rejected.
+    const bool seen = track && tracking_.enabled && !tracked && !track->last_seen.empty();
     // This frame's ChangeReference, made once (the whole-image search and the acquisition pass
     // may both keep it; cv::Mat shares the pixels).
     std::optional<ChangeReference> reference;
@@ -236,7 +238,7 @@ std::vector<Observation> FrontEnd::observe_targets(const cv::Mat& gray,
       merge(what, detector_.detect(gray, region, &calib, opt));
     };
     auto window = [&] {
-      const auto& last = track->last_all;
+      const auto& last = tracked ? track->last_all : track->last_seen;
       const cv::Rect w = tracking_window(last, tracking_);
       double side = narrowest_side(last[0]);
       for (const auto& c : last) side = std::min(side, narrowest_side(c));
@@ -255,7 +257,7 @@ std::vector<Observation> FrontEnd::observe_targets(const cv::Mat& gray,
     const cv::Rect whole(0, 0, gray.cols, gray.rows);
     const bool periodic_full =
         tracked && track->frames_since_full + 1 >= tracking_.full_frame_every;
-    if (tracked && !periodic_full) window();
+    if ((tracked && !periodic_full) || seen) window();
     // A camera without its target whose image is still that of its last whole-image search
     // takes that search's result (TrackingSettings::change_pixels), up to the periodic search.
     const bool skip_whole = track && tracking_.enabled && !tracked &&
@@ -302,6 +304,14 @@ std::vector<Observation> FrontEnd::observe_targets(const cv::Mat& gray,
     track->last_all.clear();
     for (const auto& t : dets.tags)
       if (t.index >= 0) track->last_all.push_back(dets.all[static_cast<size_t>(t.index)].corners);
+    // No tag accepted, but a tag of a target decoded and rejected by the frame check alone: the
+    // tag is there, so the next frame's window is searched around it (TrackState::last_seen).
+    track->last_seen.clear();
+    if (track->last_all.empty())
+      for (const auto& t : dets.tags)
+        if (t.status == TargetStatus::border_mismatch)
+          for (const auto& d : dets.all)
+            if (d.id == t.id) track->last_seen.push_back(d.corners);
     if (!track->last_all.empty()) {
       track->blind_frames = 0;
       // As after a whole-image search: the periodic one is full_frame_every frames away.

@@ -149,6 +149,11 @@ struct TrackState {
   /// Corners of every tag accepted in the last frame (every tag of a bundle, of every target):
   /// the window covers them all. Empty: the camera had no target in the last frame.
   std::vector<std::array<cv::Point2d, 4>> last_all;
+  /// When no tag was accepted in the last frame: the corners of the targets' tags it decoded
+  /// that the frame check rejected (border_mismatch). The tag is there (a side of it failed the
+  /// check, or it is leaving the image), so the next frame searches the window around it first,
+  /// as while tracking, before the whole image; it counts as a frame without the target.
+  std::vector<std::array<cv::Point2d, 4>> last_seen;
   int frames_since_full = 0;
   int blind_frames = 0;  ///< consecutive frames without the target (acquisition period)
   /// The image of the last whole-image search that found no target, and that search's result
