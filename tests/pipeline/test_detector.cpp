@@ -389,6 +389,41 @@ TEST(FrontEnd, DuplicateOnThePeriodicFullFrameIsFinal) {
   EXPECT_EQ(track.searches, kSearchFullFrame);
 }
 
+// A frame whose target tag is decoded but rejected by the frame check (here a dark occluder
+// over its left side, which libapriltag's quad follows) leaves its corners in
+// TrackState::last_seen, and the next frame searches the window around them first: the tag is
+// found there once the occluder is gone. After a frame that decoded nothing there is no window.
+TEST(FrontEnd, ARejectedTagIsSearchedAroundInTheNextFrame) {
+  const auto calib = testing::test_calibration();
+  const obs::SE3 g = facing_pose(1.5, 0.0, 0.0, {0.0, 0.0, 0.03});
+  const auto truth = project_corners(calib, g, kSize);
+  SynthSettings occluded;
+  occluded.occluder_level = 20;
+  const double left = 0.5 * (truth[0].x + truth[3].x), cell = cv::norm(truth[1] - truth[0]) / 8;
+  occluded.occluders = {cv::Rect(0, 0, static_cast<int>(std::lround(left - 0.4 * cell)), 480)};
+  const cv::Mat hidden = render_tags(calib, {{0, kSize, g, {}}}, occluded);
+  const cv::Mat clear = render_tags(calib, {{0, kSize, g, {}}});
+  const cv::Mat empty(480, 640, CV_8UC1, cv::Scalar(128));
+  FrontEnd fe;
+  TrackState track;
+  const auto first = fe.observe(hidden, calib, nullptr, &track);
+  ASSERT_EQ(first.status, TargetStatus::border_mismatch) << first.reason;
+  EXPECT_TRUE(track.last_all.empty());
+  ASSERT_EQ(track.last_seen.size(), 1u);
+  EXPECT_EQ(track.blind_frames, 1);  // a frame without the target
+  const auto second = fe.observe(clear, calib, nullptr, &track);
+  EXPECT_TRUE(second.delta) << second.reason;
+  EXPECT_TRUE(track.searches & kSearchWindow);
+  EXPECT_EQ(track.found_by, kSearchWindow);
+  EXPECT_TRUE(track.last_seen.empty());
+
+  TrackState fresh;
+  EXPECT_FALSE(fe.observe(empty, calib, nullptr, &fresh).delta);
+  EXPECT_TRUE(fresh.last_seen.empty());
+  EXPECT_TRUE(fe.observe(clear, calib, nullptr, &fresh).delta);
+  EXPECT_FALSE(fresh.searches & kSearchWindow);
+}
+
 TEST(FrontEnd, InvalidTrackingSettingsRejected) {
   TrackingSettings t;
   t.acquire_every = -1;
