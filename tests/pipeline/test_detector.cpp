@@ -178,8 +178,8 @@ TEST(Detector, EdgeRefinementRobustToBlur) {
 // edge and pulls the side inward. Tilts of 66 and 72 degrees about axes 20-70 degrees off the
 // tag's edges, at two distances, blurred and gamma-encoded as by a camera: every tag the front
 // end keeps has its corners within 1 px of the truth (before, up to 1.38 px on these and 3.9
-// px at 76 degrees), and it keeps most of them. (At 76 degrees about the diagonal the corners'
-// angle is ~15 degrees and the kept corners are 1.06 px off: docs/frontend.md.)
+// px at 76 degrees), and it keeps most of them. (At 76 degrees about the diagonal the kept
+// corners are 1.06 px off: docs/frontend.md.)
 TEST(Detector, GrazingViewCornersWithinAPixel) {
   const auto calib = testing::test_calibration();
   DetectorSettings s;

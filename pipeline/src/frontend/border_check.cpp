@@ -12,6 +12,7 @@
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/render/tag_family.hpp"
 #include "sampling.hpp"
+#include "tag_square.hpp"
 
 namespace netvmo::frontend {
 
@@ -23,6 +24,7 @@ using detail::inside;
 using detail::intersect_lines;
 using detail::median;
 using detail::sample_bilinear;
+using detail::SquareToImage;
 
 /// Where the inner edge is located along a white data cell next to the border [cells].
 constexpr double kThicknessT[] = {0.2, 0.35, 0.5, 0.65, 0.8};
@@ -89,56 +91,6 @@ double end_offset(const std::vector<double>& t, const std::vector<double>& r,
   const double r0 = a + b * *tmin, r1 = a + b * *tmax;
   return std::abs(r0) >= std::abs(r1) ? r0 : r1;
 }
-
-/// Object square in cell units -> image pixels: the homography of the corners, in undistorted
-/// (ideal) pixels when the calibration has distortion, then re-distorted.
-class SquareToImage {
- public:
-  SquareToImage(const std::array<cv::Point2d, 4>& corners, int n, const io::Calibration* calib)
-      : calib_(calib && calib->has_distortion() ? calib : nullptr) {
-    std::vector<cv::Point2d> ideal(corners.begin(), corners.end());
-    if (calib_) ideal = io::ideal_pixels(ideal, *calib_);
-    // Corner k of the object square in cell coordinates (X right, Y down the printed tag,
-    // the black square is [0, n]^2): c0 bottom-left, c1 bottom-right, c2 top-right, c3 top-left.
-    const double N = n;
-    const double src[4][2] = {{0, N}, {N, N}, {N, 0}, {0, 0}};
-    // H with h33 = 1 from the four correspondences (8 x 8 linear system, in double).
-    cv::Matx<double, 8, 8> A;
-    cv::Matx<double, 8, 1> b;
-    for (int k = 0; k < 4; ++k) {
-      const double x = src[k][0], y = src[k][1];
-      const double u = ideal[static_cast<size_t>(k)].x, v = ideal[static_cast<size_t>(k)].y;
-      const double r0[8] = {x, y, 1, 0, 0, 0, -x * u, -y * u};
-      const double r1[8] = {0, 0, 0, x, y, 1, -x * v, -y * v};
-      for (int j = 0; j < 8; ++j) {
-        A(2 * k, j) = r0[j];
-        A(2 * k + 1, j) = r1[j];
-      }
-      b(2 * k) = u;
-      b(2 * k + 1) = v;
-    }
-    cv::Matx<double, 8, 1> h;
-    ok_ = cv::solve(A, b, h, cv::DECOMP_LU);
-    for (int j = 0; j < 8; ++j) H_(j / 3, j % 3) = h(j);
-    H_(2, 2) = 1.0;
-  }
-  bool ok() const { return ok_; }
-  std::vector<cv::Point2d> map(const std::vector<cv::Point2d>& obj) const {
-    std::vector<cv::Point2d> out;
-    out.reserve(obj.size());
-    for (const auto& p : obj) {
-      const cv::Vec3d q = H_ * cv::Vec3d(p.x, p.y, 1.0);
-      out.emplace_back(q[0] / q[2], q[1] / q[2]);
-    }
-    if (calib_) out = io::distorted_pixels(out, *calib_);
-    return out;
-  }
-
- private:
-  const io::Calibration* calib_;
-  cv::Matx33d H_ = cv::Matx33d::zeros();
-  bool ok_ = false;
-};
 
 /// The pair estimates of the print's edge bias, per axis, and its local value.
 struct EdgeBias {
@@ -341,9 +293,10 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
 
   // Side k runs from corner k to corner k+1: start S, direction D, outward normal O (cells).
   const double N = n;
-  const cv::Point2d S[4] = {{0, N}, {N, N}, {N, 0}, {0, 0}};
-  const cv::Point2d D[4] = {{1, 0}, {0, -1}, {-1, 0}, {0, 1}};
-  const cv::Point2d O[4] = {{0, 1}, {1, 0}, {0, -1}, {-1, 0}};
+  const detail::SquareSides sides(n);
+  const cv::Point2d* S = sides.start;
+  const cv::Point2d* D = sides.along;
+  const cv::Point2d* O = sides.outward;
   constexpr int kPerCell = 4;  // contrast samples per cell along a side
   const int m = kPerCell * n;  // contrast samples per side
 
