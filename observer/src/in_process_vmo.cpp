@@ -58,6 +58,8 @@ InProcessVmo::InProcessVmo(const Graph& graph)
   moving_.resize(n);
   wi_room_.resize(n);
   sees_.resize(n);
+  pose_visual_.resize(n);
+  g_io_.resize(n);
   u_.resize(n);
   round0_.resize(n);
   incarnation_.resize(n);
@@ -83,6 +85,10 @@ bool InProcessVmo::gather(const CameraObserver& c, int p) {
   init_[k] = c.st_.initialized;
   u_[k] = c.st_.u;
   sees_[k] = c.model_->usable(c.z_);
+  // The pose models' measured pose, for their error on compact poses (ErrorModel::measured_pose).
+  const SE3* g = sees_[k] ? c.model_->measured_pose(c.z_) : nullptr;
+  pose_visual_[k] = g != nullptr;
+  if (g) g_io_[k] = kernel::pose_of(*g);
   round0_[k] = c.round_;
   incarnation_[k] = c.incarnation_;
   // The first round's message (CameraObserver::publish).
@@ -116,7 +122,9 @@ bool InProcessVmo::step(int p, int cur, const Measurement& z, double h, bool pub
       if (P_init[static_cast<size_t>(*j)]) nb.add(P[static_cast<size_t>(*j)]);
     const Vec6 mutual = kernel::mutual_sum(own_w, nb);
     Vec6 visual;
-    if (sees_[k]) visual = model_->error(kernel::to_se3(g_bar_[k]), z, s_->features);
+    if (sees_[k])
+      visual = pose_visual_[k] ? kernel::pose_error(g_bar_[k], g_io_[k])
+                               : model_->error(kernel::to_se3(g_bar_[k]), z, s_->features);
     u_[k] = kernel::vmo_input(*s_, mutual, sees_[k] ? &visual : nullptr);
     // Static camera (V_wi = 0): frames with a moving camera never reach this loop (run()).
     static const Vec6 still = Vec6::Zero();

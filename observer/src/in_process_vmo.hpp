@@ -75,6 +75,10 @@ class InProcessVmo {
   std::vector<unsigned char> pub_init_[2];  ///< the published `initialized` flag
   std::vector<unsigned char> init_, moving_, sees_, refused_;
   std::vector<unsigned char> wi_room_;  ///< kernel::check_has_room(g_wi)
+  /// The camera sees and its error model's error is kernel::pose_error(g_bar, g_io_): the
+  /// pose models (ErrorModel::measured_pose), whose error() gives the same bits.
+  std::vector<unsigned char> pose_visual_;
+  std::vector<kernel::Pose> g_io_;
   std::vector<Vec6> u_;
   std::vector<std::uint64_t> round0_, incarnation_;
 };

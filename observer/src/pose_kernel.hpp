@@ -41,36 +41,54 @@ inline Pose compose(const Pose& a, const Pose& b) {
   return {a.R * b.R, a.R * b.p + a.p};
 }
 
-/// E_R(g_i^-1 g_j) for two world-frame estimates (eq:input_f-), without forming the product:
-/// [R_i^T (p_j - p_i); e_R(R_i^T R_j)], e_R = sk(.)^vee (eq:ER). Only the six off-diagonal
-/// entries of R_i^T R_j are formed, each summed in the order in which Eigen's 3x3 products
-/// (Mat3 * Mat3, Mat3 * Vec3) sum it: ((x0 + x1) + x2) in rows 0 and 1, (x0 + (x1 + x2)) in row
-/// 2, so that the result is that of the Eigen expression to the last bit (a test checks it).
-inline Vec6 mutual_error(const Pose& i, const Pose& j) {
-  const Mat3& A = i.R;  // R_i^T(r, k) = A(k, r)
-  const Mat3& B = j.R;
-  const double d0 = j.p(0) - i.p(0), d1 = j.p(1) - i.p(1), d2 = j.p(2) - i.p(2);
-  // (R_i^T M)(r, c) = sum_k A(k, r) M(k, c); rows 0, 1 and row 2 of the product.
-  const auto top = [&A](int r, double m0, double m1, double m2) {
+// R_i^T M for 3x3 rotations and vectors, each entry summed in the order in which Eigen's 3x3
+// products (Mat3 * Mat3, Mat3 * Vec3, also on the blocks of an Isometry's 4x4 matrix) sum it:
+// ((x0 + x1) + x2) in rows 0 and 1, (x0 + (x1 + x2)) in row 2, so that the errors below are those
+// of the Eigen expressions to the last bit (tests check it). A(k, r) = R_i^T(r, k).
+struct TransposedProduct {
+  const Mat3& A;
+  double top(int r, double m0, double m1, double m2) const {  // rows 0 and 1
     return (A(0, r) * m0 + A(1, r) * m1) + A(2, r) * m2;
-  };
-  const auto bottom = [&A](double m0, double m1, double m2) {
+  }
+  double bottom(double m0, double m1, double m2) const {  // row 2
     return A(0, 2) * m0 + (A(1, 2) * m1 + A(2, 2) * m2);
-  };
+  }
+  double row(int r, const Vec3& m) const {
+    return r < 2 ? top(r, m(0), m(1), m(2)) : bottom(m(0), m(1), m(2));
+  }
+  /// e_R(R_i^T B) = vee(sk(R_i^T B)) (eq:ER): only the six off-diagonal entries of the product.
+  Vec3 rotation_error(const Mat3& B) const {
+    const double s01 = top(0, B(0, 1), B(1, 1), B(2, 1));
+    const double s02 = top(0, B(0, 2), B(1, 2), B(2, 2));
+    const double s10 = top(1, B(0, 0), B(1, 0), B(2, 0));
+    const double s12 = top(1, B(0, 2), B(1, 2), B(2, 2));
+    const double s20 = bottom(B(0, 0), B(1, 0), B(2, 0));
+    const double s21 = bottom(B(0, 1), B(1, 1), B(2, 1));
+    // vee(S) = [S(2,1) - S(1,2), S(0,2) - S(2,0), S(1,0) - S(0,1)] / 2 (lie.hpp)
+    return {(s21 - s12) * 0.5, (s02 - s20) * 0.5, (s10 - s01) * 0.5};
+  }
+};
+
+/// E_R(g_i^-1 g_j) for two world-frame estimates (eq:input_f-), without forming the product:
+/// [R_i^T (p_j - p_i); e_R(R_i^T R_j)], e_R = sk(.)^vee (eq:ER); the bits of that Eigen
+/// expression (Mat3 R_i^T times R_j and times p_j - p_i).
+inline Vec6 mutual_error(const Pose& i, const Pose& j) {
+  const TransposedProduct Rt{i.R};
+  const Vec3 d(j.p(0) - i.p(0), j.p(1) - i.p(1), j.p(2) - i.p(2));
   Vec6 e;
-  e(0) = top(0, d0, d1, d2);
-  e(1) = top(1, d0, d1, d2);
-  e(2) = bottom(d0, d1, d2);
-  const double s01 = top(0, B(0, 1), B(1, 1), B(2, 1));
-  const double s02 = top(0, B(0, 2), B(1, 2), B(2, 2));
-  const double s10 = top(1, B(0, 0), B(1, 0), B(2, 0));
-  const double s12 = top(1, B(0, 2), B(1, 2), B(2, 2));
-  const double s20 = bottom(B(0, 0), B(1, 0), B(2, 0));
-  const double s21 = bottom(B(0, 1), B(1, 1), B(2, 1));
-  // vee(S) = [S(2,1) - S(1,2), S(0,2) - S(2,0), S(1,0) - S(0,1)] / 2 (lie.hpp)
-  e(3) = (s21 - s12) * 0.5;
-  e(4) = (s02 - s20) * 0.5;
-  e(5) = (s10 - s01) * 0.5;
+  for (int r = 0; r < 3; ++r) e(r) = Rt.row(r, d);
+  e.tail<3>() = Rt.rotation_error(j.R);
+  return e;
+}
+
+/// The visual error of the pose error models, E_R(g_bar^-1 g) (eq:ER) for a measured relative
+/// pose g (exact: g_io_i, pnp: g_io,PnP), without forming the product: the bits of the Isometry
+/// expression E_R(g_bar.inverse(Eigen::Isometry) * g), whose translation is R^T p_g + (-R^T p).
+inline Vec6 pose_error(const Pose& g_bar, const Pose& g) {
+  const TransposedProduct Rt{g_bar.R};
+  Vec6 e;
+  for (int r = 0; r < 3; ++r) e(r) = Rt.row(r, g.p) - Rt.row(r, g_bar.p);
+  e.tail<3>() = Rt.rotation_error(g.R);
   return e;
 }
 

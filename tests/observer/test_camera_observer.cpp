@@ -379,3 +379,35 @@ TEST(ErrorModels, EachReadsItsOwnMeasurementField) {
   z.delta = false;
   for (const auto* m : error_models()) EXPECT_FALSE(m->usable(z)) << m->name();
 }
+
+// The pose models (exact, pnp) compute E_R(g_bar^-1 g) on 3x3 rotations and translations
+// (kernel::pose_error, also the in-process fast path's); the result must be the bits of the plain
+// Isometry expression, for estimates near the measured pose (the usual case: small errors, many
+// cancelling digits) and far from it. Their measured_pose() is the field they read.
+TEST(ErrorModels, PoseModelsGiveTheBitsOfTheIsometryExpression) {
+  std::mt19937 rng(21);  // fixed seed
+  std::uniform_real_distribution<double> U(-2.0, 2.0);
+  const auto vec3 = [&](double scale) -> Vec3 { return Vec3(U(rng), U(rng), U(rng)) * scale; };
+  const FeatureModel fm = FeatureModel::square(0.2);
+  int differs = 0, compared = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const double scale = k % 2 ? 1e-4 : 1.0;
+    const SE3 g_bar = make_pose(vec3(1.0), vec3(1.0));
+    const SE3 g = g_bar * make_pose(vec3(scale), vec3(scale));
+    Measurement z;
+    z.delta = true;
+    (k % 3 ? z.g_io_true : z.g_io_pnp) = g;
+    const ErrorModel& m = error_models().find(k % 3 ? "exact" : "pnp");
+    ASSERT_EQ(m.measured_pose(z), k % 3 ? &*z.g_io_true : &*z.g_io_pnp);
+    const Vec6 plain = E_R(g_bar.inverse(Eigen::Isometry) * g), e = m.error(g_bar, z, fm);
+    differs += std::memcmp(plain.data(), e.data(), sizeof(double) * 6) != 0;
+    ++compared;
+  }
+  EXPECT_EQ(differs, 0) << "of " << compared;
+  Measurement none;
+  none.delta = true;
+  for (const auto* m : error_models()) EXPECT_EQ(m->measured_pose(none), nullptr) << m->name();
+  none.g_io_true = none.g_io_pnp = SE3::Identity();
+  none.f = Eigen::VectorXd::Zero(8);
+  EXPECT_EQ(error_models().find("jacobian").measured_pose(none), nullptr);
+}

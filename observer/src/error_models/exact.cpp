@@ -1,5 +1,6 @@
 // exact: e_ei = E_R(g_bar_i^-1 g_io_i) (eq:ER) with the true (fictitious) relative pose, the
 // quantity the paper's analysis uses. Simulation and rendered data only.
+#include "../pose_kernel.hpp"
 #include "netvmo/observer/error_model.hpp"
 
 namespace netvmo::obs::models {
@@ -12,7 +13,11 @@ class Exact final : public ErrorModel {
   }
   MeasurementInput input() const override { return MeasurementInput::true_pose; }
   Vec6 error(const SE3& g_bar, const Measurement& z, const FeatureModel&) const override {
-    return E_R(g_bar.inverse(Eigen::Isometry) * *z.g_io_true);  // e_ei = E_R(g_ei), (eq:ER)
+    // e_ei = E_R(g_bar^-1 g_io) (eq:ER), the bits of the Isometry expression (pose_kernel.hpp)
+    return kernel::pose_error(kernel::pose_of(g_bar), kernel::pose_of(*z.g_io_true));
+  }
+  const SE3* measured_pose(const Measurement& z) const override {
+    return z.g_io_true ? &*z.g_io_true : nullptr;
   }
 };
 }  // namespace

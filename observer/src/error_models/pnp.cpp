@@ -1,5 +1,6 @@
 // pnp: e_ei = E_R(g_bar_i^-1 g_io,PnP) (eq:ER) with the camera's own pose measurement. Its
 // equilibrium is the exact model's, applied to measured poses.
+#include "../pose_kernel.hpp"
 #include "netvmo/observer/error_model.hpp"
 
 namespace netvmo::obs::models {
@@ -12,7 +13,11 @@ class Pnp final : public ErrorModel {
   }
   MeasurementInput input() const override { return MeasurementInput::pnp_pose; }
   Vec6 error(const SE3& g_bar, const Measurement& z, const FeatureModel&) const override {
-    return E_R(g_bar.inverse(Eigen::Isometry) * *z.g_io_pnp);  // (eq:ER)
+    // E_R(g_bar^-1 g_io,PnP) (eq:ER), the bits of the Isometry expression (pose_kernel.hpp)
+    return kernel::pose_error(kernel::pose_of(g_bar), kernel::pose_of(*z.g_io_pnp));
+  }
+  const SE3* measured_pose(const Measurement& z) const override {
+    return z.g_io_pnp ? &*z.g_io_pnp : nullptr;
   }
 };
 }  // namespace

@@ -35,6 +35,13 @@ class ErrorModel {
   /// e_ei for the estimate g_bar_i; z must be usable(). Throws std::domain_error when the error
   /// is undefined there (a feature point behind the camera for the image-feature model).
   virtual Vec6 error(const SE3& g_bar, const Measurement& z, const FeatureModel& model) const = 0;
+  /// For the models whose error is E_R(g_bar^-1 g) (eq:ER) of a measured relative pose g (exact,
+  /// pnp): that pose in z, null when z has none. Null for every other model (default). The
+  /// in-process fast path computes those errors on compact poses, to the bits of error().
+  virtual const SE3* measured_pose(const Measurement& z) const {
+    (void)z;
+    return nullptr;
+  }
 
   /// delta_i(t) = 1 and the field input() names is present.
   bool usable(const Measurement& z) const;
