@@ -4,7 +4,9 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
+#include "in_process_vmo.hpp"
 #include "pose_kernel.hpp"
 
 namespace netvmo::obs {
@@ -44,7 +46,7 @@ CameraObserver::CameraObserver(int index, std::vector<int> neighbours, ObserverS
                                   std::to_string(neighbours_[a]) + " twice");
   }
   estimator_->check(settings_, *model_, network_size_);
-  latest_.resize(neighbours_.size());
+  latest_.get().resize(neighbours_.size());
   refused_.assign(5, 0);
 }
 
@@ -72,7 +74,7 @@ MessageVerdict CameraObserver::receive(const EstimateMessage& m) {
       !Eigen::Map<const Eigen::Matrix<double, kConsensusStateSize, 1>>(m.state.data()).allFinite())
     v = MessageVerdict::not_finite;
   auto* slot = v == MessageVerdict::accepted
-                   ? &latest_[static_cast<size_t>(it - neighbours_.begin())]
+                   ? &latest_.get()[static_cast<size_t>(it - neighbours_.begin())]
                    : nullptr;
   if (slot && *slot &&
       (m.incarnation < (*slot)->incarnation ||
@@ -97,12 +99,12 @@ MessageVerdict CameraObserver::receive(const EstimateMessage& m) {
 
 void CameraObserver::forget(int j) {
   const auto it = std::find(neighbours_.begin(), neighbours_.end(), j);
-  if (it != neighbours_.end()) latest_[static_cast<size_t>(it - neighbours_.begin())].reset();
+  if (it != neighbours_.end()) latest_.get()[static_cast<size_t>(it - neighbours_.begin())].reset();
 }
 
 void CameraObserver::set_measurement(const Measurement& z) {
   z_ = z;
-  estimator_->measured(context(), st_);
+  estimator_->measured({settings_, *model_, z_}, st_);
 }
 
 void CameraObserver::step(double h) {
@@ -113,6 +115,41 @@ void CameraObserver::step(double h) {
     g_wi_ = g_wi_ * exp_se3(h * V_wi_);
     g_wi_.linear() = Eigen::Quaterniond(g_wi_.linear()).normalized().toRotationMatrix();
   }
+}
+
+CameraObserver::NeighbourMessages& CameraObserver::NeighbourMessages::operator=(
+    const NeighbourMessages& o) {
+  if (this != &o) {
+    slots_ = o.get();
+    state_.store(kWritten, std::memory_order_release);
+  }
+  return *this;
+}
+
+CameraObserver::NeighbourMessages& CameraObserver::NeighbourMessages::operator=(
+    NeighbourMessages&& o) noexcept {
+  if (this != &o) {
+    slots_ = std::move(o.get());
+    state_.store(kWritten, std::memory_order_release);
+  }
+  return *this;
+}
+
+void CameraObserver::NeighbourMessages::defer(const InProcessVmo* source, int position) {
+  source_ = source;
+  position_ = position;
+  state_.store(kDeferred, std::memory_order_release);
+}
+
+void CameraObserver::NeighbourMessages::write() const {
+  // One reader writes the slots; any other waits until they are written.
+  int expected = kDeferred;
+  if (state_.compare_exchange_strong(expected, kWriting, std::memory_order_acquire)) {
+    source_->fill(position_, slots_);
+    state_.store(kWritten, std::memory_order_release);
+    return;
+  }
+  while (state_.load(std::memory_order_acquire) != kWritten) std::this_thread::yield();
 }
 
 }  // namespace netvmo::obs

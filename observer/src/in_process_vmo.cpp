@@ -63,6 +63,10 @@ InProcessVmo::InProcessVmo(const Graph& graph)
   u_.resize(n);
   round0_.resize(n);
   incarnation_.resize(n);
+  kept_.resize(n);
+  kept_init_.resize(n);
+  kept_round_.resize(n);
+  kept_incarnation_.resize(n);
 }
 
 bool InProcessVmo::supports(const CameraObserver& camera) {
@@ -140,24 +144,36 @@ bool InProcessVmo::step(int p, int cur, const Measurement& z, double h, bool pub
   return kernel::check_pose(next) == MessageVerdict::accepted;
 }
 
-void InProcessVmo::write_back(std::vector<CameraObserver>& cams, int p, int done, int cur) const {
+void InProcessVmo::keep(int cur) {
+  std::swap(kept_, pub_[cur]);  // (both buffers are written before they are read again)
+  std::swap(kept_init_, pub_init_[cur]);
+  std::swap(kept_incarnation_, incarnation_);  // (gather writes incarnation_ again)
+}
+
+void InProcessVmo::write_back(std::vector<CameraObserver>& cams, int p, int done) {
   const auto k = static_cast<size_t>(p);
   auto& c = cams[static_cast<size_t>(order_[k])];
   c.st_.g_bar = kernel::to_se3(g_bar_[k]);
   c.st_.u = u_[k];
   c.st_.initialized = init_[k];
   c.round_ = round0_[k] + static_cast<std::uint64_t>(done);
+  kept_round_[k] = c.round_;  // its last message's round
+  c.latest_.defer(this, p);
+}
+
+void InProcessVmo::fill(int position, std::vector<std::optional<EstimateMessage>>& slots) const {
+  const auto k = static_cast<size_t>(position);
   // What CameraObserver::receive stored of each neighbour's message of the last round.
   for (int a = offset_[k]; a < offset_[k + 1]; ++a) {
     const auto j = static_cast<size_t>(nbr_[static_cast<size_t>(a)]);
-    auto& slot = c.latest_[static_cast<size_t>(a - offset_[k])];
+    auto& slot = slots[static_cast<size_t>(a - offset_[k])];
     auto& kept = slot.has_value() ? *slot : slot.emplace();
     kept.sender = order_[j];
-    kept.round = round0_[j] + static_cast<std::uint64_t>(done);
+    kept.round = kept_round_[j];
     kept.stamp = 0.0;
-    kept.initialized = pub_init_[cur][j];
-    kept.incarnation = incarnation_[j];
-    kept.g_w = kernel::to_se3(pub_[cur][j]);
+    kept.initialized = kept_init_[j];
+    kept.incarnation = kept_incarnation_[j];
+    kept.g_w = kernel::to_se3(kept_[j]);
   }
 }
 
@@ -176,13 +192,14 @@ int InProcessVmo::run(std::vector<CameraObserver>& cams, const std::vector<Measu
     if (!gather(c, p)) refused.store(true, std::memory_order_relaxed);
   });
   const auto write_back_all = [&](int done_rounds) {
+    keep(cur);
     for_each(pool,
-             [&](int i) { write_back(cams, position_[static_cast<size_t>(i)], done_rounds, cur); });
+             [&](int i) { write_back(cams, position_[static_cast<size_t>(i)], done_rounds); });
   };
   if (check_stored)  // CameraObserver::receive's out-of-order test on the first round's messages
     for_each(pool, [&](int p) {
       const auto k = static_cast<size_t>(p);
-      const auto& latest = cams[static_cast<size_t>(order_[k])].latest_;
+      const auto& latest = cams[static_cast<size_t>(order_[k])].latest();
       for (int a = offset_[k]; a < offset_[k + 1]; ++a) {
         const auto j = static_cast<size_t>(nbr_[static_cast<size_t>(a)]);
         const auto& slot = latest[static_cast<size_t>(a - offset_[k])];

@@ -9,9 +9,11 @@
 // over the cameras and one barrier. Every published pose is checked once (CameraObserver's check,
 // which each of its receivers would apply alike; for a pose fresh from the Euler step, whose
 // rotation is a unit quaternion's, a finiteness test gives the same verdict, see
-// kernel::check_has_room). At the end of the frame the cameras' state,
-// round counters and latest neighbour messages are written back exactly as the per-camera
-// exchange leaves them, so CameraObserver's API (latest(), input(), estimate()) is unchanged.
+// kernel::check_has_room). At the end of the frame the cameras' state and round counters are
+// written back exactly as the per-camera exchange leaves them, and their latest neighbour
+// messages are kept here and written into each camera when first read (fill(),
+// CameraObserver::NeighbourMessages), so CameraObserver's API (latest(), input(), estimate()) is
+// unchanged.
 //
 // The fast path runs a frame only when the result is provably the per-camera exchange's: every
 // published pose passes the check (a refused message makes the rest of the frame run the
@@ -21,6 +23,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <vector>
 
 #include "netvmo/observer/camera_observer.hpp"
@@ -49,6 +52,11 @@ class InProcessVmo {
   int run(std::vector<CameraObserver>& cams, const std::vector<Measurement>& z, int rounds,
           double h, WorkerPool* pool, bool check_stored);
 
+  /// Writes the neighbours' messages of the last frame written back to the camera at `position`
+  /// into its slots (what CameraObserver::receive stored of each): the cameras' deferred
+  /// latest() (CameraObserver::NeighbourMessages).
+  void fill(int position, std::vector<std::optional<EstimateMessage>>& slots) const;
+
  private:
   void for_each(WorkerPool* pool, const std::function<void(int)>& f) const;
   /// Loads camera c into position p and publishes its first estimate; false when the pose would
@@ -57,9 +65,11 @@ class InProcessVmo {
   /// One round of the camera at position p: reads buffer `cur`, writes buffer 1 - cur (when
   /// `publish`); false when the published pose would be refused.
   bool step(int p, int cur, const Measurement& z, double h, bool publish);
-  /// Writes the camera at position p back after `done` rounds (the neighbours' messages of
-  /// buffer cur).
-  void write_back(std::vector<CameraObserver>& cams, int p, int done, int cur) const;
+  /// Writes the camera at position p back after `done` rounds, its neighbours' messages
+  /// deferred to the kept ones (keep()).
+  void write_back(std::vector<CameraObserver>& cams, int p, int done);
+  /// Keeps the messages of buffer cur as the ones the cameras last received (fill()).
+  void keep(int cur);
 
   int n_;
   /// order_[p]: the camera at position p of every array below (breadth-first: neighbours near
@@ -81,6 +91,12 @@ class InProcessVmo {
   std::vector<kernel::Pose> g_io_;
   std::vector<Vec6> u_;
   std::vector<std::uint64_t> round0_, incarnation_;
+  /// The messages of the last round that published of the last frame written back, by sender
+  /// position (pose, initialized flag, round, incarnation): what the cameras' deferred latest()
+  /// holds.
+  std::vector<kernel::Pose> kept_;
+  std::vector<unsigned char> kept_init_;
+  std::vector<std::uint64_t> kept_round_, kept_incarnation_;
 };
 
 }  // namespace netvmo::obs

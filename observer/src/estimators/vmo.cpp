@@ -29,7 +29,7 @@ class Vmo final : public Estimator {
     return s.k_e + 2.0 * s.k_s * max_degree;  // Gershgorin on k_e Delta + k_s L
   }
 
-  void measured(const EstimatorContext& cx, EstimatorState& st) const override {
+  void measured(const MeasurementContext& cx, EstimatorState& st) const override {
     const auto& s = cx.settings;
     const auto& z = cx.z;
     if (!s.init_from_measurement || !z.delta || !z.g_io_pnp) return;

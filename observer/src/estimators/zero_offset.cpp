@@ -72,7 +72,7 @@ class ZeroOffset final : public Estimator {
     return std::max(s.k_e + 2.0 * s.k_s * max_degree, 2.0 * s.k_e * max_degree);
   }
 
-  void measured(const EstimatorContext&, EstimatorState&) const override {}
+  void measured(const MeasurementContext&, EstimatorState&) const override {}
 
   void step(const EstimatorContext& cx, EstimatorState& st, double h) const override {
     const auto& s = cx.settings;

@@ -54,6 +54,14 @@ struct EstimatorContext {
   int network_size;  ///< n, or 0 when unknown
 };
 
+/// What an estimator reads of its camera when a measurement arrives (read-only): not the
+/// neighbours' messages.
+struct MeasurementContext {
+  const ObserverSettings& settings;
+  const ErrorModel& model;
+  const Measurement& z;  ///< the new measurement, held until the next one
+};
+
 class Estimator {
  public:
   virtual ~Estimator() = default;
@@ -70,7 +78,7 @@ class Estimator {
   /// forward-Euler discretisation (docs/observer.md, "Discretisation and stability").
   virtual double rate_bound(const ObserverSettings& s, int max_degree) const = 0;
   /// A new measurement (cx.z) arrived; it is held until the next one.
-  virtual void measured(const EstimatorContext& cx, EstimatorState& st) const = 0;
+  virtual void measured(const MeasurementContext& cx, EstimatorState& st) const = 0;
   /// Advances the state by h with the held measurement and the neighbours' latest messages.
   /// Throws std::domain_error from the error model.
   virtual void step(const EstimatorContext& cx, EstimatorState& st, double h) const = 0;
