@@ -86,9 +86,12 @@ TEST(NetNs, LockStepAcrossNamespacesEqualsRun) {
 
 // Async with 10 % of every namespace's incoming packets dropped by nftables: reliable DDS
 // retransmits, and every camera ends within the async bound; the kernel dropped 10 % +- 4 %.
+// Retransmissions delay messages, and delays slow the settling (docs/processes.md, "Why the same
+// 1 cm / 1° bound holds"), more so on a loaded machine (one run of 30 frames beside a build
+// ended 12.9 mm from g*): 60 frames, 2 s of camera time, as the async faults test runs.
 TEST(NetNs, AsyncConvergesUnderTenPercentKernelLoss) {
   const fs::path dir = test::scratch_dir("netns_loss");
-  const fs::path ds = render(dir, 30);
+  const fs::path ds = render(dir, 60);
   std::string err;
   const int code = netns_run(
       ds, dir / "ns", "--mode async --loss 10 --timeout 100 -- --ke 10 --ks 100 --speed 0.25", err);
