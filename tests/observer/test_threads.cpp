@@ -77,6 +77,21 @@ std::vector<SE3> run(const Network& net, ObserverSettings s, int threads, Exchan
   return obs.estimates_world();
 }
 
+// Two observers of the network: the in-process exchange (the fast path) and the serial exchange
+// through a Transport that is not an InProcessTransport (per camera).
+std::vector<NetworkedObserver> direct_and_forwarding(const Network& net,
+                                                     const ObserverSettings& s) {
+  std::vector<NetworkedObserver> obs;
+  for (Exchange e : {Exchange::direct, Exchange::forwarding}) {
+    obs.emplace_back(net.graph, s);
+    if (e == Exchange::forwarding)
+      obs.back().set_transport(std::make_unique<Forwarding>(net.graph));
+    obs.back().set_camera_poses(net.g_wi);
+    obs.back().reset(net.g_bar);
+  }
+  return obs;
+}
+
 void expect_bit_identical(const std::vector<SE3>& a, const std::vector<SE3>& b, const char* what) {
   ASSERT_EQ(a.size(), b.size());
   size_t differing = 0;
@@ -153,18 +168,11 @@ TEST(Threads, InProcessFastPathLeavesEveryCameraAsTheTransportExchangeDoes) {
       s.substeps = 3;
     }
     if (c == Case::start_from_neighbours) s.init_from_neighbours = true;
-    std::vector<NetworkedObserver> obs;
-    for (Exchange e : {Exchange::direct, Exchange::forwarding}) {
-      obs.emplace_back(net.graph, s);
-      if (e == Exchange::forwarding)
-        obs.back().set_transport(std::make_unique<Forwarding>(net.graph));
-      obs.back().set_camera_poses(net.g_wi);
-      obs.back().reset(net.g_bar);
-      if (c == Case::start_from_neighbours) {
-        std::vector<bool> active(static_cast<size_t>(n), true);
-        for (int i = 0; i < n; i += 5) active[static_cast<size_t>(i)] = false;
-        obs.back().set_active(active);
-      }
+    std::vector<NetworkedObserver> obs = direct_and_forwarding(net, s);
+    if (c == Case::start_from_neighbours) {
+      std::vector<bool> active(static_cast<size_t>(n), true);
+      for (int i = 0; i < n; i += 5) active[static_cast<size_t>(i)] = false;
+      for (auto& o : obs) o.set_active(active);
     }
     const int frames = c == Case::divergence ? 20 : 4;
     for (int frame = 0; frame < frames; ++frame) {
@@ -222,14 +230,7 @@ TEST(Threads, DeferredNeighbourMessagesReadFromTwoThreadsAtOnce) {
   ObserverSettings s;
   s.threads = 2;
   const Network net = network(n, s.features);
-  std::vector<NetworkedObserver> obs;
-  for (Exchange e : {Exchange::direct, Exchange::forwarding}) {
-    obs.emplace_back(net.graph, s);
-    if (e == Exchange::forwarding)
-      obs.back().set_transport(std::make_unique<Forwarding>(net.graph));
-    obs.back().set_camera_poses(net.g_wi);
-    obs.back().reset(net.g_bar);
-  }
+  std::vector<NetworkedObserver> obs = direct_and_forwarding(net, s);
   using Slots = std::vector<std::optional<EstimateMessage>>;
   const auto rounds_and_poses = [](const Slots& m) {
     std::vector<double> v;
