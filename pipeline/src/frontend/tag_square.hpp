@@ -32,15 +32,14 @@ class SquareToImage {
       : calib_(calib && calib->has_distortion() ? calib : nullptr) {
     std::vector<cv::Point2d> ideal(corners.begin(), corners.end());
     if (calib_) ideal = io::ideal_pixels(ideal, *calib_);
-    // Corner k of the object square in cell coordinates (X right, Y down the printed tag,
-    // the black square is [0, n]^2): c0 bottom-left, c1 bottom-right, c2 top-right, c3 top-left.
-    const double N = n;
-    const double src[4][2] = {{0, N}, {N, N}, {N, 0}, {0, 0}};
+    // Corner k of the object square is the start of side k (SquareSides): c0 bottom-left, c1
+    // bottom-right, c2 top-right, c3 top-left of the printed tag.
+    const SquareSides sides(n);
     // H with h33 = 1 from the four correspondences (8 x 8 linear system, in double).
     cv::Matx<double, 8, 8> A;
     cv::Matx<double, 8, 1> b;
     for (int k = 0; k < 4; ++k) {
-      const double x = src[k][0], y = src[k][1];
+      const double x = sides.start[k].x, y = sides.start[k].y;
       const double u = ideal[static_cast<size_t>(k)].x, v = ideal[static_cast<size_t>(k)].y;
       const double r0[8] = {x, y, 1, 0, 0, 0, -x * u, -y * u};
       const double r1[8] = {0, 0, 0, x, y, 1, -x * v, -y * v};
