@@ -1,5 +1,7 @@
 #include "netvmo/observer/exchange.hpp"
 
+#include <algorithm>
+
 namespace netvmo::obs {
 
 void send_estimate(CameraObserver& c, Transport& t, double stamp) {
@@ -21,6 +23,28 @@ TakeReport take_estimates(CameraObserver& c, Transport& t, std::vector<EstimateM
       }
   }
   return report;
+}
+
+namespace {
+
+// How many of c's neighbours' latest estimates it holds are initialised.
+int heard(const CameraObserver& c) {
+  const auto& latest = c.latest();
+  return static_cast<int>(std::count_if(latest.begin(), latest.end(),
+                                        [](const auto& m) { return m && m->initialized; }));
+}
+
+}  // namespace
+
+bool JoinHold::may_step(const CameraObserver& c, double now) const {
+  return !held || now >= until || heard(c) == static_cast<int>(c.neighbours().size());
+}
+
+bool JoinHold::release(const CameraObserver& c, double now) {
+  if (!held) return false;
+  if (!c.initialized() && !(now >= until && heard(c) == 0)) return false;
+  held = false;
+  return true;
 }
 
 }  // namespace netvmo::obs

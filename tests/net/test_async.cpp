@@ -135,8 +135,8 @@ TEST_F(Async, NodesConvergeWithDropsDelaysAndAKilledNode) {
 // Camera 3's node (it sees the tag; neighbours 1, 2 and 4) killed 2 s (wall) into a 45-frame run
 // and restarted 0.5 s later; the staleness bound (0.5 s of camera time, 15 frames) outlasts the
 // downtime, so its neighbours keep its last estimate meanwhile. The restarted node joins at its
-// next image with a new incarnation, starts from its neighbours' estimates and publishes
-// nothing before.
+// next image with a new incarnation, starts from the average of all its neighbours' estimates
+// (obs::JoinHold: it waits until it has heard every one) and publishes nothing before.
 //
 // No jump. In the forward-Euler step every estimate moves to a convex combination of itself,
 // its measurement and its neighbours' latest estimates (h (k_e + 2 k_s d_max) <= 1,
@@ -178,9 +178,12 @@ TEST_F(Async, ARestartedNodeMovesNoNeighbourAndLeavesNoGap) {
   const double fps = 30.0;
   const double kill_frame = events["kill"]["camera_time"].get<double>() * fps;
   const double restart_frame = events["restart"]["camera_time"].get<double>() * fps;
-  const int joined = net_test::read_json(out / "nodes" / "node_3.json")["first_frame"].get<int>();
-  std::printf("kill at frame %.2f, restart at frame %.2f, joined at frame %d\n", kill_frame,
-              restart_frame, joined);
+  const auto node3 = net_test::read_json(out / "nodes" / "node_3.json");
+  const int joined = node3["first_frame"].get<int>();
+  std::printf(
+      "kill at frame %.2f, restart at frame %.2f, joined at frame %d, its measurement used from "
+      "round %d on\n",
+      kill_frame, restart_frame, joined, node3["join_rounds"].get<int>());
   ASSERT_GE(joined, restart_frame - 1e-6);  // at its next image after the restart
   ASSERT_LT(joined, kRestartFrames - 5);    // with frames left to re-converge
 

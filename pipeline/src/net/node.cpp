@@ -297,10 +297,10 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   // is in its mutual term (heard, initialised, not forgotten as stale).
   RowJournal links(files.links, "frame,t,neighbours", o.resume, first);
   // A node that joins late (a restart) starts from its neighbours, like a blind camera, so that
-  // its first estimate is theirs and none of them jumps: its own measurement is held back until
-  // it is initialised from them, or, if none has an estimate, for the staleness bound.
-  bool hold_measurement = async && first > 0 && rs.init == run::InitMode::Pnp;
-  const double hold_until = frame_time(first) + o.stale_s;
+  // its first estimate is theirs and none of them jumps: it steps, and uses its own measurement,
+  // once it has heard every neighbour, or, if one stays silent, after the staleness bound.
+  obs::JoinHold join{async && first > 0 && rs.init == run::InitMode::Pnp,
+                     frame_time(first) + o.stale_s};
   // Async: the faults injected on this side (--drop, --delay), between DDS and the observer.
   FaultyTransport faulty(transport, o.drop, o.delay_ms / 1000.0,
                          o.seed * 1000003ULL + static_cast<std::uint64_t>(o.camera_id),
@@ -327,8 +327,8 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
     if (net.error_model().input() == obs::MeasurementInput::true_pose && z.delta && !z.g_io_true)
       throw InputError("the " + std::string(net.error_model().name()) +
                        " error model needs ground truth (rendered data)");
-    obs::Measurement blind;  // what a restarted node holds until it is initialised
-    net.set_measurement(hold_measurement ? blind : z);
+    obs::Measurement blind;  // what a restarted node holds until it has heard its neighbours
+    net.set_measurement(join.held ? blind : z);
     ind.set_measurement(z);
     const double t = frame_time(k), len = frame_length(k);
     const int N = substeps(len, net), N_ind = substeps(len, ind);
@@ -336,10 +336,10 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
     for (int r = 0; r < N; ++r) {
       // One exchange round (obs exchange.hpp), as NetworkedObserver runs it in one process.
       const double tr = t + r * h;
-      if (hold_measurement && (net.initialized() || tr >= hold_until)) {
-        hold_measurement = false;
+      if (join.release(net, tr))
         net.set_measurement(z);
-      }
+      else if (join.held)
+        ++summary.join_rounds;
       if (async) sleep_until_epoch(start + (tr - t0) / o.speed);
       // Lock-step neighbours wait for every round's message; an async node publishes nothing
       // while it has no estimate. Async: the latest value of each neighbour is forgotten once
@@ -352,7 +352,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
       (r == 0 ? first_round_us : round_us)
           .push_back(std::chrono::duration<double, std::micro>(Clock::now() - round_start).count());
       summary.forgotten += taken.forgotten;
-      net.step(h);
+      if (join.may_step(net, tr)) net.step(h);
     }
     for (int r = 0; r < N_ind; ++r) ind.step(h_ind);
     csv.row(frame_row(k, t + clock, cam, net, ind));
@@ -434,6 +434,7 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   j["messages"]["rejected"] = rej;
   j["messages"]["forgotten_stale"] = summary.forgotten;
   j["first_frame"] = summary.first_frame;
+  j["join_rounds"] = summary.join_rounds;
   // Each neighbour's clock as this node's exchange measured it (ClockSync; netvmo merge aligns
   // the nodes' rows with them).
   nlohmann::json clocks = nlohmann::json::array();

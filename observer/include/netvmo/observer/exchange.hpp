@@ -45,4 +45,28 @@ struct TakeReport {
 TakeReport take_estimates(CameraObserver& c, Transport& t, std::vector<EstimateMessage>& inbox,
                           const std::optional<Staleness>& stale = std::nullopt);
 
+/// A camera that joins a running network late (a restarted process) starts from the average of
+/// its neighbours' estimates (ObserverSettings::init_from_neighbours), as a blind camera does,
+/// so that none of them jumps: it steps (and so initialises and publishes) only once it holds an
+/// estimate of every neighbour, and holds its own measurement back until then. If a neighbour
+/// stays silent (blind and uninitialised, or gone), both wait until `until`; it then starts from
+/// those it has heard, or, having heard none, from its own measurement. Started from one
+/// neighbour with its measurement in use, a late joiner's visual term would weigh k_e against
+/// k_s times that one neighbour instead of all d_i: its estimate would go k_e / (k_e + k_s) of the
+/// way to its own measurement instead of k_e / (k_e + k_s d_i) (eq:input_f-), and the neighbours
+/// would follow it once they hear it. Over DDS the neighbours' streams to a late joiner do not
+/// start together: a reliable stream whose first samples were missed resumes when the writer's
+/// next heartbeat has them sent again (docs/processes.md, "Kill and restart").
+struct JoinHold {
+  bool held = false;   ///< a late join: stepping and the measurement are held back
+  double until = 0.0;  ///< [s] from which neither waits for a silent neighbour
+  /// Whether c steps at `now` (after the round's messages are in): not held, every neighbour's
+  /// latest estimate initialised, or `now` >= `until`.
+  bool may_step(const CameraObserver& c, double now) const;
+  /// True once: at the first `now` at which c may use its measurement (before the round's
+  /// step): once it has started from its neighbours (it steps only as may_step says), or, having
+  /// heard none, from `until` on (it then starts from its measurement). False before and after.
+  bool release(const CameraObserver& c, double now);
+};
+
 }  // namespace netvmo::obs

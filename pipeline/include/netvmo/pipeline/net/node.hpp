@@ -74,6 +74,9 @@ struct NodeSummary {
   std::vector<std::uint64_t> refused;  ///< by obs::MessageVerdict
   std::uint64_t forgotten = 0;         ///< async: neighbours dropped past the staleness bound
   int first_frame = 0;                 ///< async: the frame a (re)started node joined at
+  /// A late join: the rounds it ran without its measurement, waiting for every neighbour's
+  /// estimate and starting from them (obs::JoinHold); 0 otherwise.
+  int join_rounds = 0;
   std::vector<std::string> warnings;
   std::vector<std::string> notes;  ///< the dataset's (e.g. where the image times come from)
   double seconds = 0.0;
