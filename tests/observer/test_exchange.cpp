@@ -182,6 +182,20 @@ TEST(Exchange, AJoinHoldWaitsForEveryNeighbourThenTheBound) {
   some.step(1e-3);
   ASSERT_TRUE(some.initialized());
   EXPECT_TRUE(wait.release(some, 1.0));
+  // An observer that does not start from its neighbours: at the bound one step from those
+  // heard, then its measurement all the same.
+  ObserverSettings own = s;
+  own.init_from_neighbours = false;
+  CameraObserver lone(0, g.neighbors(0), own);
+  lone.set_initialized(false);
+  JoinHold bound{true, 1.0};
+  for (int j = 0; j < 2; ++j) send_estimate(others[size_t(j)], net, 0.5);
+  take_estimates(lone, net, inbox);
+  EXPECT_FALSE(bound.release(lone, 1.0));
+  ASSERT_TRUE(bound.may_step(lone, 1.0));
+  lone.step(1e-3);
+  ASSERT_FALSE(lone.initialized());
+  EXPECT_TRUE(bound.release(lone, 1.01));
   // Nobody heard: at the bound it uses its measurement (and starts from it).
   CameraObserver alone(0, g.neighbors(0), s);
   alone.set_initialized(false);

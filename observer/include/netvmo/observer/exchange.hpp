@@ -60,12 +60,17 @@ TakeReport take_estimates(CameraObserver& c, Transport& t, std::vector<EstimateM
 struct JoinHold {
   bool held = false;   ///< a late join: stepping and the measurement are held back
   double until = 0.0;  ///< [s] from which neither waits for a silent neighbour
+  /// Set by release() at `until` when some neighbours were heard: it waits for one more step
+  /// (from those) before the measurement, used then whether or not that step initialised c.
+  bool stepped_past_until = false;
   /// Whether c steps at `now` (after the round's messages are in): not held, every neighbour's
   /// latest estimate initialised, or `now` >= `until`.
   bool may_step(const CameraObserver& c, double now) const;
   /// True once: at the first `now` at which c may use its measurement (before the round's
-  /// step): once it has started from its neighbours (it steps only as may_step says), or, having
-  /// heard none, from `until` on (it then starts from its measurement). False before and after.
+  /// step): once it has started from its neighbours (it steps only as may_step says); from
+  /// `until` on, having heard none (it then starts from its measurement), or one step after
+  /// `until` whether that step started it or not (an estimator that starts only from its own
+  /// measurement must not wait for ever). False before and after.
   bool release(const CameraObserver& c, double now);
 };
 
