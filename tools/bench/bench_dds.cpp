@@ -9,7 +9,10 @@
 // (Debian's cyclonedds-tools) over the same configuration for kAnchorSeconds, its round trip's
 // median and p99 (the medians of its per-second reports, the first one skipped), and the ratios
 // the round is judged by: round median / ddsperf's one-way median (its round trip / 2) and round
-// p99 / ddsperf's p99. Without ddsperf on PATH the anchor counters are left out.
+// p99 / ddsperf's p99. ddsperf's default takes the samples in a listener, on Cyclone's receive
+// thread; it is also run taking them on a waitset, in its application thread, as our transport
+// does (ddsperf_waitset_rtt_median_us, median_per_ddsperf_waitset_oneway; no goal). Without
+// ddsperf on PATH the anchor counters are left out.
 #include <benchmark/benchmark.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -62,22 +65,27 @@ struct Anchor {
   double rtt_median_us = 0.0, rtt_p99_us = 0.0;
 };
 
-// ddsperf ping / pong on `domain` (CYCLONEDDS_URI already set), both bounded in time.
-std::optional<Anchor> ddsperf_anchor(const std::filesystem::path& dir, int domain) {
+// ddsperf ping / pong on `domain` (CYCLONEDDS_URI already set), both bounded in time, taking
+// their samples in `mode`: "listener" (ddsperf's default: on Cyclone's receive thread, which
+// answers at once) or "waitset" (on the application thread, woken by the receive thread, as our
+// transport takes them).
+std::optional<Anchor> ddsperf_anchor(const std::filesystem::path& dir, int domain,
+                                     const std::string& mode) {
   const auto exe = on_path("ddsperf");
   if (!exe) return std::nullopt;
   const std::string d = std::to_string(domain);
+  const std::filesystem::path ping_log = dir / ("ddsperf_" + mode + ".log");
   const pid_t pong =
-      net::spawn({exe->string(), "-D", std::to_string(kAnchorSeconds + 3), "-i", d, "pong"},
-                 dir / "ddsperf_pong.log");
+      net::spawn({exe->string(), "-D", std::to_string(kAnchorSeconds + 3), "-i", d, "pong", mode},
+                 dir / ("ddsperf_pong_" + mode + ".log"));
   const pid_t ping = net::spawn(
-      {exe->string(), "-D", std::to_string(kAnchorSeconds), "-i", d, "ping"}, dir / "ddsperf.log");
+      {exe->string(), "-D", std::to_string(kAnchorSeconds), "-i", d, "ping", mode}, ping_log);
   net::supervise({ping}, kAnchorSeconds + 20.0, false);
   ::kill(pong, SIGKILL);
   ::waitpid(pong, nullptr, 0);
   // "[pid] t.000  vm:... size 12 mean ...us min ...us 50% 44.4us 90% ...us 99% 73.2us max ..."
   const std::regex line(R"(50% ([0-9.]+)us .* 99% ([0-9.]+)us)");
-  std::ifstream log(dir / "ddsperf.log");
+  std::ifstream log(ping_log);
   std::vector<double> p50, p99;
   std::string text;
   for (bool first = true; std::getline(log, text);) {
@@ -146,7 +154,8 @@ void lock_step_rounds(benchmark::State& state, bool secured) {
     net::write_test_pki(security, io::graph_network({1, 2}, {{1, 2}}));
   }
   const int domain = net::domain_from_pid(::getpid());
-  const auto anchor = ddsperf_anchor(dir, domain);
+  const auto anchor = ddsperf_anchor(dir, domain, "listener");
+  const auto waitset = ddsperf_anchor(dir, domain, "waitset");
   const pid_t peer = ::fork();
   if (peer == 0) {
     try {
@@ -178,6 +187,12 @@ void lock_step_rounds(benchmark::State& state, bool secured) {
           us[us.size() / 2] / (anchor->rtt_median_us / 2.0);
       state.counters["p99_per_ddsperf_p99"] =
           us[std::min(us.size() - 1, us.size() * 99 / 100)] / anchor->rtt_p99_us;
+    }
+    // ddsperf taking its samples as our transport does (not a goal of its own).
+    if (waitset) {
+      state.counters["ddsperf_waitset_rtt_median_us"] = waitset->rtt_median_us;
+      state.counters["median_per_ddsperf_waitset_oneway"] =
+          us[us.size() / 2] / (waitset->rtt_median_us / 2.0);
     }
   }
 }
