@@ -42,11 +42,13 @@ bool JoinHold::may_step(const CameraObserver& c, double now) const {
 
 bool JoinHold::release(const CameraObserver& c, double now) {
   if (!held) return false;
-  if (!c.initialized() && now >= until && heard(c) > 0 && !stepped_past_until) {
-    stepped_past_until = true;  // one step from those heard first (the caller steps next)
-    return false;
+  if (!c.initialized()) {
+    if (now < until) return false;
+    if (heard(c) > 0 && !stepped_past_until) {
+      stepped_past_until = true;  // one step from those heard first (the caller steps next)
+      return false;
+    }
   }
-  if (!c.initialized() && now < until) return false;
   held = false;
   return true;
 }

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <iterator>
 
 #include "netvmo/observer/exchange.hpp"
 #include "netvmo/observer/metrics.hpp"
@@ -169,13 +170,17 @@ TEST(Exchange, AJoinHoldWaitsForEveryNeighbourThenTheBound) {
   EXPECT_FALSE(join.release(c, 0.4));  // once
   EXPECT_TRUE(join.may_step(c, 0.4));
 
-  // Cameras 1 and 2 heard, camera 3 silent: at the bound it starts from those two, then
-  // releases.
-  CameraObserver some(0, g.neighbors(0), s);
-  some.set_initialized(false);
+  // A late joiner with settings `os` that has heard cameras 1 and 2, camera 3 silent.
+  const auto heard_two = [&](const ObserverSettings& os) {
+    CameraObserver o(0, g.neighbors(0), os);
+    o.set_initialized(false);
+    for (int j = 0; j < 2; ++j) send_estimate(others[size_t(j)], net, 0.5);
+    take_estimates(o, net, inbox);
+    return o;
+  };
+  // At the bound it starts from those two, then releases.
+  CameraObserver some = heard_two(s);
   JoinHold wait{true, 1.0};
-  for (int j = 0; j < 2; ++j) send_estimate(others[size_t(j)], net, 0.5);
-  take_estimates(some, net, inbox);
   EXPECT_FALSE(wait.may_step(some, 0.99));
   EXPECT_FALSE(wait.release(some, 1.0));  // heard some: start from them first
   ASSERT_TRUE(wait.may_step(some, 1.0));
@@ -186,11 +191,8 @@ TEST(Exchange, AJoinHoldWaitsForEveryNeighbourThenTheBound) {
   // heard, then its measurement all the same.
   ObserverSettings own = s;
   own.init_from_neighbours = false;
-  CameraObserver lone(0, g.neighbors(0), own);
-  lone.set_initialized(false);
+  CameraObserver lone = heard_two(own);
   JoinHold bound{true, 1.0};
-  for (int j = 0; j < 2; ++j) send_estimate(others[size_t(j)], net, 0.5);
-  take_estimates(lone, net, inbox);
   EXPECT_FALSE(bound.release(lone, 1.0));
   ASSERT_TRUE(bound.may_step(lone, 1.0));
   lone.step(1e-3);
@@ -221,38 +223,36 @@ TEST(Exchange, AJoinHoldWaitsForEveryNeighbourThenTheBound) {
 // way), while all three follow it, and it drags them along.
 namespace {
 
-// Mailbox whose messages from the `late` senders to `receiver` wait, while closed, until open().
+// Mailbox whose messages from the `late` senders to `receiver` wait, while closed, until the
+// receiver's first receive after open() (ahead of what was sent since, in the order sent).
 class LateStreams final : public Transport {
  public:
   LateStreams(Graph g, int receiver, std::vector<int> late)
-      : graph_(std::move(g)),
-        receiver_(receiver),
-        late_(std::move(late)),
-        mail_(size_t(graph_.size())) {}
-  void send(const EstimateMessage& m) override {
-    const bool late = closed_ && std::find(late_.begin(), late_.end(), m.sender) != late_.end();
-    for (int j : graph_.neighbors(m.sender))
-      (late && j == receiver_ ? held_ : mail_[size_t(j)]).push_back(m);
-  }
+      : mail_(std::move(g)), receiver_(receiver), late_(std::move(late)) {}
+  void send(const EstimateMessage& m) override { mail_.send(m); }
   void receive(int receiver, std::vector<EstimateMessage>& out) override {
-    out = std::move(mail_[size_t(receiver)]);
-    mail_[size_t(receiver)].clear();
+    mail_.receive(receiver, out);
+    if (receiver != receiver_) return;
+    if (closed_) {
+      const auto is_late = [&](const EstimateMessage& m) {
+        return std::find(late_.begin(), late_.end(), m.sender) != late_.end();
+      };
+      std::copy_if(out.begin(), out.end(), std::back_inserter(held_), is_late);
+      out.erase(std::remove_if(out.begin(), out.end(), is_late), out.end());
+    } else if (!held_.empty()) {
+      out.insert(out.begin(), held_.begin(), held_.end());
+      held_.clear();
+    }
   }
   void close() { closed_ = true; }
-  void open() {
-    closed_ = false;
-    auto& to = mail_[size_t(receiver_)];
-    to.insert(to.end(), held_.begin(), held_.end());
-    held_.clear();
-  }
+  void open() { closed_ = false; }
 
  private:
-  Graph graph_;
+  Mailbox mail_;
   int receiver_;
   std::vector<int> late_;
   bool closed_ = false;
   std::vector<EstimateMessage> held_;
-  std::vector<std::vector<EstimateMessage>> mail_;
 };
 
 // How the late joiner is let in: JoinHold, or the rule before it (it steps from whoever it has
