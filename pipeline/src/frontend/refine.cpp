@@ -101,7 +101,7 @@ bool refine_edge_lines(const cv::Mat& g, std::array<cv::Point2d, 4>& c, int bord
     for (double t = skip; t <= len - skip; t += 1.0) {
       const cv::Point2d p = a + t * d;
       double s = 0.0;
-      if (edge_offset(g, p, n, wk, s)) pts.push_back(p + s * n);
+      if (edge_offset(g, p, n, wk, s, true)) pts.push_back(p + s * n);
     }
     if (pts.size() < 4) return false;
     if (undistort) pts = io::ideal_pixels(pts, *calib);

@@ -31,21 +31,40 @@ inline double min_side(const std::array<cv::Point2d, 4>& c) {
 /// Sub-pixel position of the dark-to-bright step along the outward normal n through p: the
 /// centroid of the intensity differences in a window re-centred on the estimate (exact for a
 /// pixel-integrated straight step edge sampled with bilinear interpolation). Returns false if the
-/// step is too weak or the estimate leaves the window.
-inline bool edge_offset(const cv::Mat& g, cv::Point2d p, cv::Point2d n, double w, double& s_out) {
+/// step is too weak or the estimate leaves the window; w <= 4.
+///
+/// `stop_at_peak`: the bright side may be a narrow band in front of something darker (a tag's
+/// white margin cut short by the card's edge or a darker background): that band's far edge, a
+/// bright-to-dark step within the window, pulls the centroid toward the dark side, by more than
+/// 1 px for a band of a quarter cell (tests/pipeline/test_border_check.cpp, narrow quiet zone).
+/// Where the intensity beyond the estimate falls from its peak by more than a quarter of the
+/// window's range before the window ends, the differences beyond the peak are left out. A
+/// window over an isolated edge never falls that far, and gives the same result as without it.
+inline bool edge_offset(const cv::Mat& g, cv::Point2d p, cv::Point2d n, double w, double& s_out,
+                        bool stop_at_peak = false) {
   constexpr double h = 0.25;
-  const int m = static_cast<int>(std::ceil(w / h));
+  constexpr int kMaxHalf = 16;  // w <= 4
+  const int m = std::min(kMaxHalf, static_cast<int>(std::ceil(w / h)));
   double s0 = 0.0;
+  std::array<double, 2 * kMaxHalf + 1> v{};  // v[j + m]: the sample at s0 + j h
   for (int iter = 0; iter < 3; ++iter) {
+    for (int j = -m; j <= m; ++j)
+      v[static_cast<size_t>(j + m)] =
+          sample_bilinear(g, p.x + (s0 + j * h) * n.x, p.y + (s0 + j * h) * n.y);
+    int last = m;  // the last sample whose difference counts
+    if (stop_at_peak) {
+      const auto lo = std::min_element(v.begin(), v.begin() + 2 * m + 1);
+      const auto hi = std::max_element(v.begin(), v.begin() + 2 * m + 1);
+      const auto peak = std::max_element(v.begin() + m, v.begin() + 2 * m + 1);
+      if (*peak - v[static_cast<size_t>(2 * m)] > 0.1 * (*hi - *lo))
+        last = static_cast<int>(peak - v.begin()) - m;
+    }
     double sum_g = 0.0, sum_sg = 0.0;
-    double prev = sample_bilinear(g, p.x + (s0 - m * h) * n.x, p.y + (s0 - m * h) * n.y);
-    for (int j = -m + 1; j <= m; ++j) {
+    for (int j = -m + 1; j <= last; ++j) {
       const double s = s0 + j * h;
-      const double cur = sample_bilinear(g, p.x + s * n.x, p.y + s * n.y);
-      const double d = cur - prev;
+      const double d = v[static_cast<size_t>(j + m)] - v[static_cast<size_t>(j + m - 1)];
       sum_g += d;
       sum_sg += d * (s - 0.5 * h);
-      prev = cur;
     }
     if (sum_g < 8.0) return false;  // less than 8 gray levels of contrast across the edge
     const double s = sum_sg / sum_g;
