@@ -37,7 +37,7 @@ inline double min_side(const std::array<cv::Point2d, 4>& c) {
 /// white margin cut short by the card's edge or a darker background): that band's far edge, a
 /// bright-to-dark step within the window, pulls the centroid toward the dark side, by more than
 /// 1 px for a band of a quarter cell (tests/pipeline/test_border_check.cpp, narrow quiet zone).
-/// Where the intensity beyond the estimate falls from its peak by more than a quarter of the
+/// Where the intensity beyond the estimate falls from its peak by more than a tenth of the
 /// window's range before the window ends, the differences beyond the peak are left out. A
 /// window over an isolated edge never falls that far, and gives the same result as without it.
 inline bool edge_offset(const cv::Mat& g, cv::Point2d p, cv::Point2d n, double w, double& s_out,
