@@ -42,6 +42,28 @@ std::string describe(const BorderCheck& b) {
   return buf;
 }
 
+/// The quads of `img` with one side of the correct quad `c` moved 1 or 1.5 px out or in that put
+/// a corner more than 1 px from `truth`: each is expected rejected by the check with `s`.
+/// `measured` (the check of `c`), when given: a side whose thickness it could not measure (no
+/// white data cell next to it) is not moved. Returns how many quads were checked.
+int expect_moved_sides_rejected(const cv::Mat& img, const std::array<cv::Point2d, 4>& c,
+                                const std::array<cv::Point2d, 4>& truth, const cv::Mat& pattern,
+                                const DetectorSettings& s, const io::Calibration& calib,
+                                const std::string& what, const BorderCheck* measured = nullptr) {
+  int checked = 0;
+  for (size_t k = 0; k < 4; ++k) {
+    if (measured && std::isnan(measured->thickness_error[k])) continue;
+    for (double d : {-1.5, -1.0, 1.0, 1.5}) {
+      const auto w = testing::move_side(c, k, d);
+      if (max_corner_error(w, truth) <= 1.0) continue;
+      ++checked;
+      const BorderCheck bw = check_border(img, w, pattern, 8, s, &calib);
+      EXPECT_FALSE(bw.ok) << what << ", side " << k << " moved " << d << " px: " << describe(bw);
+    }
+  }
+  return checked;
+}
+
 /// Multiplies the image by `factor` on the left of the directed line through `p` at angle
 /// `angle` (4x4 supersampled, so the shadow edge is a sharp, pixel-integrated straight edge).
 void shade(cv::Mat& img, cv::Point2d p, double angle, double factor) {
@@ -309,16 +331,7 @@ TEST(BorderCheck, BlurredTagThinnedByTheToneCurveKeptWrongSideRejected) {
     EXPECT_EQ(TagDetector(dflt).detect(img, &calib).status, TargetStatus::detected) << what;
 
     // The same picture, one side of the quad moved along its outward normal.
-    for (size_t k = 0; k < 4; ++k) {
-      if (std::isnan(bd.thickness_error[k])) continue;  // no white data cell next to it
-      for (double d : {-1.5, -1.0, 1.0, 1.5}) {
-        const auto w = testing::move_side(c, k, d);
-        if (max_corner_error(w, truth) <= 1.0) continue;
-        ++wrong_quads;
-        const BorderCheck bw = check_border(img, w, pattern, 8, dflt, &calib);
-        EXPECT_FALSE(bw.ok) << what << ", side " << k << " moved " << d << " px: " << describe(bw);
-      }
-    }
+    wrong_quads += expect_moved_sides_rejected(img, c, truth, pattern, dflt, calib, what, &bd);
   }
   EXPECT_GT(fixed_rejects, 0) << "the fixed limit kept every tag: the test shows nothing";
   EXPECT_GT(wrong_quads, 20);
@@ -484,17 +497,7 @@ TEST(BorderCheck, BorderThinnerOrThickerThanACellOnEverySideKeptWrongSideRejecte
         EXPECT_TRUE(bd.ok) << what << ": " << bd.reason;
         EXPECT_EQ(bd.shared_deviation < 0.0, width < 1.0) << what << ": " << describe(bd);
         EXPECT_EQ(TagDetector(dflt).detect(img, &calib).status, TargetStatus::detected) << what;
-        for (size_t k = 0; k < 4; ++k) {
-          if (std::isnan(bd.thickness_error[k])) continue;  // no white data cell next to it
-          for (double d : {-1.5, -1.0, 1.0, 1.5}) {
-            const auto w = testing::move_side(c, k, d);
-            if (max_corner_error(w, truth) <= 1.0) continue;
-            ++wrong_quads;
-            const BorderCheck bw = check_border(img, w, pattern, 8, dflt, &calib);
-            EXPECT_FALSE(bw.ok) << what << ", side " << k << " moved " << d
-                                << " px: " << describe(bw);
-          }
-        }
+        wrong_quads += expect_moved_sides_rejected(img, c, truth, pattern, dflt, calib, what, &bd);
       }
   std::printf("without the shared deviation %d of %d correct quads rejected; %d wrong quads\n",
               unshared_rejects, correct, wrong_quads);
@@ -612,15 +615,7 @@ TEST(BorderCheck, NarrowQuietZoneBeforeSomethingDarkerKeptWrongSideRejected) {
           if (!ok) continue;
           ++kept;
           EXPECT_LT(max_corner_error(a.target()->corners, truth), 1.0) << what;
-          for (size_t k = 0; k < 4; ++k)
-            for (double d : {-1.5, -1.0, 1.0, 1.5}) {
-              const auto w = testing::move_side(c, k, d);
-              if (max_corner_error(w, truth) <= 1.0) continue;
-              ++wrong_quads;
-              const BorderCheck bw = check_border(img, w, pattern, 8, dflt, &calib);
-              EXPECT_FALSE(bw.ok) << what << ", side " << k << " moved " << d
-                                  << " px: " << describe(bw);
-            }
+          wrong_quads += expect_moved_sides_rejected(img, c, truth, pattern, dflt, calib, what);
         }
   std::printf("%d of %d tags found kept; %d wrong quads\n", kept, detected, wrong_quads);
   EXPECT_GE(detected, 40);
