@@ -101,6 +101,15 @@ struct OccluderCase {
     opt.occluders = {cv::Rect(0, 0, static_cast<int>(std::lround(left + edge_cells * cell)), 480)};
     return opt;
   }
+  std::array<cv::Point2d, 4> truth(const Calibration& calib) const {
+    return testing::project_corners(calib, pose(), kSize);
+  }
+  /// The tag and the occluder as they are, with noise of 2 gray levels.
+  cv::Mat image(const Calibration& calib) const {
+    testing::SynthSettings opt = options(truth(calib));
+    opt.noise_sigma = 2.0;
+    return testing::render_tags(calib, {{0, kSize, pose(), {}}}, opt);
+  }
 };
 // Occluders over part of the border's left cell row: grey, bright grey and nearly the quiet
 // zone's white. (A dark one there leaves no tag libapriltag decodes.)
@@ -119,11 +128,8 @@ constexpr OccluderCase kShortOccluderCases[] = {{20, 0.03, -0.4}, {90, 0.06, -0.
 TEST(BorderCheck, QuadOnAnOccludersOutlineRejected) {
   const auto calib = testing::test_calibration();
   for (const OccluderCase& c : kOccluderCases) {
-    const obs::SE3 g = c.pose();
-    const auto truth = testing::project_corners(calib, g, kSize);
-    testing::SynthSettings opt = c.options(truth);
-    opt.noise_sigma = 2.0;
-    const cv::Mat img = testing::render_tags(calib, {{0, kSize, g, {}}}, opt);
+    const auto truth = c.truth(calib);
+    const cv::Mat img = c.image(calib);
     const std::string what = "occluder level " + std::to_string(c.level);
 
     const auto unchecked = TagDetector(with_check(false)).detect(img, &calib);
@@ -145,11 +151,8 @@ TEST(BorderCheck, QuadOnAnOccludersOutlineRejected) {
     EXPECT_EQ(o.reason, checked.reason);
   }
   for (const OccluderCase& c : kShortOccluderCases) {
-    const obs::SE3 g = c.pose();
-    const auto truth = testing::project_corners(calib, g, kSize);
-    testing::SynthSettings opt = c.options(truth);
-    opt.noise_sigma = 2.0;
-    const cv::Mat img = testing::render_tags(calib, {{0, kSize, g, {}}}, opt);
+    const auto truth = c.truth(calib);
+    const cv::Mat img = c.image(calib);
     const std::string what = "occluder level " + std::to_string(c.level) + " short of the border";
     const auto unchecked = TagDetector(with_check(false)).detect(img, &calib);
     ASSERT_EQ(unchecked.status, TargetStatus::detected) << what;
@@ -341,9 +344,8 @@ TEST(BorderCheck, BlurredTagThinnedByTheToneCurveKeptWrongSideRejected) {
   // A quad on an occluder's outline (the cases of QuadOnAnOccludersOutlineRejected), blurred
   // and encoded the same way.
   for (const OccluderCase& oc : kOccluderCases) {
-    const obs::SE3 g = oc.pose();
-    const auto truth = testing::project_corners(calib, g, kSize);
-    const cv::Mat img = camera_picture(calib, g, 1.0, oc.options(truth), 400);
+    const auto truth = oc.truth(calib);
+    const cv::Mat img = camera_picture(calib, oc.pose(), 1.0, oc.options(truth), 400);
     const std::string what = "occluder level " + std::to_string(oc.level);
     const auto unchecked = TagDetector(with_check(false)).detect(img, &calib);
     ASSERT_EQ(unchecked.status, TargetStatus::detected) << what;

@@ -53,11 +53,17 @@ inline bool edge_offset(const cv::Mat& g, cv::Point2d p, cv::Point2d n, double w
           sample_bilinear(g, p.x + (s0 + j * h) * n.x, p.y + (s0 + j * h) * n.y);
     int last = m;  // the last sample whose difference counts
     if (stop_at_peak) {
-      const auto lo = std::min_element(v.begin(), v.begin() + 2 * m + 1);
-      const auto hi = std::max_element(v.begin(), v.begin() + 2 * m + 1);
-      const auto peak = std::max_element(v.begin() + m, v.begin() + 2 * m + 1);
-      if (*peak - v[static_cast<size_t>(2 * m)] > 0.1 * (*hi - *lo))
-        last = static_cast<int>(peak - v.begin()) - m;
+      // The window's range, and the first brightest sample beyond the estimate (j >= 0).
+      double lo = v[0], hi = v[0];
+      int peak = 0;
+      for (int j = -m; j <= m; ++j) {
+        const double x = v[static_cast<size_t>(j + m)];
+        lo = std::min(lo, x);
+        hi = std::max(hi, x);
+        if (j > 0 && x > v[static_cast<size_t>(peak + m)]) peak = j;
+      }
+      if (v[static_cast<size_t>(peak + m)] - v[static_cast<size_t>(2 * m)] > 0.1 * (hi - lo))
+        last = peak;
     }
     double sum_g = 0.0, sum_sg = 0.0;
     for (int j = -m + 1; j <= last; ++j) {
