@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Every speed figure of the README's table (docs/benchmarks.md), each with its anchor measured in
 # the same run (not a CI test; run it on an otherwise idle machine):
-#   1. the observer on one thread and on two, frame for frame alternately (bench_observer's
-#      BM_ObserverTwoThreadsSpeedup: ms per frame of each and the speed-up), 1,000 and 10,000
-#      cameras;
+#   1. the observer on one thread and on two, in alternate blocks of 16 frames (bench_observer's
+#      BM_ObserverTwoThreadsSpeedup: ms per frame of each after a block's first, the speed-up,
+#      and each block's first frame apart), 1,000 and 10,000 cameras;
 #   2. a lock-step round over Cyclone DDS against ddsperf ping/pong of the same Cyclone over the
 #      same loopback configuration (bench_dds: both, and the ratios);
 #   3. recordings at real resolution, 5 cameras of which 2 are blind, 1920x1080 and 1280x720

@@ -71,10 +71,16 @@ void BM_ObserverFrame(benchmark::State& state, const char* error_model) {
                                                         benchmark::Counter::kInvert);
   state.SetItemsProcessed(state.iterations() * work);
 }
-// The same network on one thread and on two, frame for frame alternately in the same
-// iterations (the anchor measured in the same run): the wall time per frame of each and the
-// speed-up (one thread's time / two threads').
+// The same network on one thread and on two, in alternate blocks of kBlock frames in the same
+// iterations (the anchor measured in the same run, so both see the machine's speed of the
+// moment): the wall time per frame of each and the speed-up (one thread's time / two threads').
+// A block's first frame follows the other observer's frames, which left the caches holding that
+// observer's state and the second thread asleep (waking it is a futex wake-up, tens of
+// microseconds on a VM); it is timed apart (ms_*_first). The speed-up is that of the following
+// frames, a stream of frames as a run makes them: alternating frame by frame made every frame
+// such a first one (2026-12-03, 2-core AMD EPYC VM: 1.13x instead of 2.1x at 1,000 cameras).
 void BM_ObserverTwoThreadsSpeedup(benchmark::State& state) {
+  constexpr int kBlock = 16;  // frames per block: the first, then 15 timed as the stream
   const int n = static_cast<int>(state.range(0));
   const Graph g = ring_with_chords(n);
   ObserverSettings s;
@@ -89,21 +95,26 @@ void BM_ObserverTwoThreadsSpeedup(benchmark::State& state) {
     obs.back().reset(c.g_bar);
   }
   const double dt = 1.0 / 30.0;
-  double seconds[2] = {0.0, 0.0};
+  double stream[2] = {0.0, 0.0}, first[2] = {0.0, 0.0};
   for (auto _ : state) {
-    for (size_t t = 0; t < 2; ++t) {
-      const auto t0 = std::chrono::steady_clock::now();
-      obs[t].step(dt, z);
-      benchmark::DoNotOptimize(obs[t].estimates().data());
-      seconds[t] += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    }
+    for (size_t t = 0; t < 2; ++t)
+      for (int f = 0; f < kBlock; ++f) {
+        const auto t0 = std::chrono::steady_clock::now();
+        obs[t].step(dt, z);
+        benchmark::DoNotOptimize(obs[t].estimates().data());
+        const double sec =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        (f == 0 ? first[t] : stream[t]) += sec;
+      }
   }
-  const auto frames = static_cast<double>(state.iterations());
+  const auto blocks = static_cast<double>(state.iterations());
   state.counters["cameras"] = n;
   state.counters["threads_used"] = obs[1].threads();
-  state.counters["ms_1_thread"] = 1000.0 * seconds[0] / frames;
-  state.counters["ms_2_threads"] = 1000.0 * seconds[1] / frames;
-  state.counters["speedup"] = seconds[0] / seconds[1];  // goal (README): >= 1.8 at 10,000
+  state.counters["ms_1_thread"] = 1000.0 * stream[0] / (blocks * (kBlock - 1));
+  state.counters["ms_2_threads"] = 1000.0 * stream[1] / (blocks * (kBlock - 1));
+  state.counters["speedup"] = stream[0] / stream[1];  // goal (README): >= 1.8 at 10,000
+  state.counters["ms_1_thread_first"] = 1000.0 * first[0] / blocks;
+  state.counters["ms_2_threads_first"] = 1000.0 * first[1] / blocks;
 }
 BENCHMARK(BM_ObserverTwoThreadsSpeedup)
     ->ArgName("n")
