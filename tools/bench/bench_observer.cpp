@@ -78,7 +78,8 @@ void BM_ObserverFrame(benchmark::State& state, const char* error_model) {
 // observer's state and the second thread asleep (waking it is a futex wake-up, tens of
 // microseconds on a VM); it is timed apart (ms_*_first). The speed-up is that of the following
 // frames, a stream of frames as a run makes them: alternating frame by frame made every frame
-// such a first one (2026-12-03, 2-core AMD EPYC VM: 1.13x instead of 2.1x at 1,000 cameras).
+// such a first one (2026-12-03, 2-core AMD EPYC VM, 1,000 cameras: 0.50x and 1.13x frame by
+// frame, 1.49-1.87x in blocks, 1.9-2.1x each observer alone; docs/benchmarks.md).
 void BM_ObserverTwoThreadsSpeedup(benchmark::State& state) {
   constexpr int kBlock = 16;  // frames per block: the first, then 15 timed as the stream
   const int n = static_cast<int>(state.range(0));
