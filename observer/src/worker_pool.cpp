@@ -16,7 +16,7 @@ inline void relax() {
 
 WorkerPool::WorkerPool(int size, std::chrono::microseconds spin) : spin_(spin) {
   if (size <= 0) size = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-  errors_.resize(static_cast<size_t>(size));
+  parts_state_ = std::vector<Part>(static_cast<size_t>(size));
   workers_.reserve(static_cast<size_t>(size - 1));
   for (int t = 1; t < size; ++t) workers_.emplace_back([this, t] { work(t); });
 }
@@ -49,17 +49,32 @@ void WorkerPool::wait_for(std::condition_variable& cv, Ready ready) {
   cv.wait(lock, ready);
 }
 
-void WorkerPool::run_chunk(int t) {
-  const auto begin = static_cast<int>(static_cast<std::int64_t>(count_) * t / parts_);
-  const auto end = static_cast<int>(static_cast<std::int64_t>(count_) * (t + 1) / parts_);
-  for (int i = begin; i < end; ++i) {
-    try {
-      (*job_)(i);
-    } catch (...) {
-      errors_[static_cast<size_t>(t)] = std::current_exception();
-      return;
+void WorkerPool::drain(int part) {
+  auto& p = parts_state_[static_cast<size_t>(part)];
+  for (;;) {
+    if (p.failed.load(std::memory_order_relaxed)) return;
+    const int begin = p.next.fetch_add(grain_, std::memory_order_relaxed);
+    if (begin >= p.end) return;
+    const int end = std::min(p.end, begin + grain_);
+    for (int i = begin; i < end; ++i) {
+      try {
+        (*job_)(i);
+      } catch (...) {
+        p.failed.store(true, std::memory_order_relaxed);
+        std::lock_guard<std::mutex> lock(error_mu_);
+        if (!error_ || i < error_index_) {
+          error_ = std::current_exception();
+          error_index_ = i;
+        }
+        return;
+      }
     }
   }
+}
+
+void WorkerPool::run_parts(int t) {
+  // Its own part first, then what is left of the others (in the order of the parts after it).
+  for (int k = 0; k < parts_; ++k) drain((t + k) % parts_);
 }
 
 void WorkerPool::work(int t) {
@@ -72,9 +87,9 @@ void WorkerPool::work(int t) {
     });
     if (stop_.load(std::memory_order_acquire)) return;
     seen = now;
-    // Every worker counts in the job's barrier, a chunk or not, so that the caller cannot set up
+    // Every worker counts in the job's barrier, a part or not, so that the caller cannot set up
     // the next job while one still reads this one's fields.
-    if (t < parts_) run_chunk(t);
+    if (t < parts_) run_parts(t);
     if (pending_.fetch_sub(1, std::memory_order_acq_rel) == 1) {
       std::lock_guard<std::mutex> lock(mu_);  // see wait_for
       done_.notify_one();
@@ -88,21 +103,30 @@ void WorkerPool::for_each(int count, int parts, const std::function<void(int)>& 
     for (int i = 0; i < count; ++i) f(i);
     return;
   }
-  std::fill(errors_.begin(), errors_.end(), nullptr);
+  error_ = nullptr;
   job_ = &f;
-  count_ = count;
   parts_ = parts;
+  // Grains of about 1/32 of a part (at most 128 indices): few enough that claiming them costs
+  // nothing next to the job, many enough that a thread that finishes early takes a fair share of
+  // what the other has left.
+  grain_ = std::clamp(count / (parts * 32), 1, 128);
+  for (int t = 0; t < parts; ++t) {
+    auto& p = parts_state_[static_cast<size_t>(t)];
+    p.next.store(static_cast<int>(static_cast<std::int64_t>(count) * t / parts),
+                 std::memory_order_relaxed);
+    p.end = static_cast<int>(static_cast<std::int64_t>(count) * (t + 1) / parts);
+    p.failed.store(false, std::memory_order_relaxed);
+  }
   pending_.store(size() - 1, std::memory_order_relaxed);
   {
     std::lock_guard<std::mutex> lock(mu_);  // see wait_for
     generation_.fetch_add(1, std::memory_order_release);
   }
   start_.notify_all();
-  run_chunk(0);
+  run_parts(0);
   wait_for(done_, [&] { return pending_.load(std::memory_order_acquire) == 0; });
   job_ = nullptr;
-  for (int t = 0; t < parts; ++t)  // chunks are in index order: the first error is the smallest
-    if (errors_[static_cast<size_t>(t)]) std::rethrow_exception(errors_[static_cast<size_t>(t)]);
+  if (error_) std::rethrow_exception(error_);
 }
 
 }  // namespace netvmo::obs

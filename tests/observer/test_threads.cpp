@@ -293,6 +293,36 @@ TEST(WorkerPool, EveryIndexOnceAndTheSmallestIndexExceptionWins) {
   EXPECT_EQ(sum.load(), 45);
 }
 
+// A thread through with its own part takes the grains of another part that its thread has not
+// reached. The first index of part 0 to run waits until another thread has run an index of part
+// 0: with every part on its own thread nobody else ever does, and the wait runs out (bounded, so
+// that a loaded machine, which may keep the worker off the CPU for a while, still passes).
+TEST(WorkerPool, AThreadThroughWithItsPartTakesWhatIsLeftOfAnother) {
+  WorkerPool pool(2);
+  constexpr int kCount = 2000;  // part 0 is [0, 1000), part 1 [1000, 2000)
+  std::vector<std::thread::id> ran(kCount);
+  std::atomic<std::thread::id> first{};
+  std::atomic<int> taken{0};
+  bool waited_in_vain = false;
+  pool.for_each(kCount, 2, [&](int i) {
+    const auto me = std::this_thread::get_id();
+    ran[static_cast<size_t>(i)] = me;
+    if (i >= kCount / 2) return;
+    auto none = std::thread::id();
+    if (first.compare_exchange_strong(none, me)) {
+      const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+      while (taken.load() == 0 && std::chrono::steady_clock::now() < until)
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      waited_in_vain = taken.load() == 0;
+    } else if (first.load() != me) {
+      ++taken;
+    }
+  });
+  EXPECT_FALSE(waited_in_vain) << "no other thread ran an index of part 0 within 60 s";
+  EXPECT_GT(taken.load(), 0);
+  for (const auto& id : ran) ASSERT_NE(id, std::thread::id()) << "an index did not run";
+}
+
 // A waiting thread polls for the pool's spin and then sleeps on a condition variable; both ways
 // must hand over every job. With no spin every wait sleeps; with a long one every wait polls; with
 // a short one and pauses between jobs longer than it, the workers are asleep when the next job

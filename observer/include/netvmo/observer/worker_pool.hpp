@@ -2,15 +2,18 @@
 // NetworkedObserver. The calling thread takes part, so a pool of size 1 starts no thread and runs
 // everything in the caller, in index order.
 //
-// Determinism: for_each(count, f) splits [0, count) into size() contiguous chunks whose bounds
-// depend on count and size() only, and every call is a barrier. A job whose iterations touch
-// disjoint state (camera i writes only camera i's state) therefore gives bit-identical results
-// for any pool size.
+// Determinism: for_each(count, parts, f) splits [0, count) into T = min(size(), parts)
+// contiguous parts whose bounds depend on count and T only, and every call is a barrier. Thread t
+// runs part t in small grains from its start, then takes the grains the others have not reached
+// yet (so a thread that a virtual machine slows down, or that got the costlier cameras, does not
+// hold up the barrier). Which thread runs an index varies, what f(i) computes does not: a job
+// whose iterations touch disjoint state (camera i writes only camera i's state) gives
+// bit-identical results for any pool size.
 //
 // Waiting: a frame of the observer is ~15 jobs of well under a millisecond each, so the time a
 // sleeping thread takes to wake (a futex wake-up is tens of microseconds on a virtual machine)
 // would eat the second core's gain. A waiting thread (a worker between jobs, the caller for the
-// workers' chunks) therefore first polls for up to `spin` (the constructor's), then blocks on
+// workers' parts) therefore first polls for up to `spin` (the constructor's), then blocks on
 // a condition variable. The spin is bounded in time, so a loaded machine loses at most that much
 // CPU per job and never waits on a spinning thread for longer.
 #pragma once
@@ -40,15 +43,16 @@ class WorkerPool {
 
   int size() const { return static_cast<int>(workers_.size()) + 1; }
 
-  /// Calls f(i) for every i in [0, count), chunk t = [count t / T, count (t + 1) / T) of the
-  /// T = min(size(), parts) chunks on thread t (0: the caller), and returns when all are done.
-  /// A chunk stops at its first exception; after all chunks have finished, the exception of
-  /// the smallest index is rethrown (with T = 1: exactly a plain loop).
+  /// Calls f(i) exactly once for every i in [0, count), on the T = min(size(), parts) threads
+  /// (0: the caller; see above), and returns when all are done. A part stops at its first
+  /// exception (no grain of it is started after it); after all threads have finished, the
+  /// exception of the smallest index is rethrown (with T = 1: exactly a plain loop).
   void for_each(int count, int parts, const std::function<void(int)>& f);
 
  private:
   void work(int t);
-  void run_chunk(int t);
+  void run_parts(int t);
+  void drain(int part);
   /// Polls `ready` for up to spin_, then blocks on `cv` under mu_ until it holds.
   template <class Ready>
   void wait_for(std::condition_variable& cv, Ready ready);
@@ -61,8 +65,18 @@ class WorkerPool {
   std::atomic<bool> stop_{false};
   // The current job (written before generation_ is advanced, read after it is seen).
   const std::function<void(int)>* job_ = nullptr;
-  int count_ = 0, parts_ = 1;
-  std::vector<std::exception_ptr> errors_;  ///< per chunk: its first exception
+  int parts_ = 1, grain_ = 1;
+  /// Part t of the current job: the next index not yet claimed, its end, and whether an index of
+  /// it threw. One cache line each, so that claiming a grain of one's own part shares nothing.
+  struct alignas(64) Part {
+    std::atomic<int> next{0};
+    int end = 0;
+    std::atomic<bool> failed{false};
+  };
+  std::vector<Part> parts_state_;
+  std::mutex error_mu_;
+  std::exception_ptr error_;  ///< the exception of the smallest index that threw (under error_mu_)
+  int error_index_ = 0;
   std::vector<std::thread> workers_;
 };
 
