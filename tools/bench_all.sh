@@ -12,8 +12,10 @@
 #
 #   tools/bench_all.sh [BUILD_DIR [DATA]]     (defaults: build, BUILD_DIR/bench_data)
 #
-# Builds what it runs (Release), prints the machine and the date first. Takes ~10 minutes the
-# first time (the renders), ~4 minutes after.
+# Builds what it runs (Release), prints the machine and the date first, and after each section
+# the share of the machine's CPU time that a virtual machine's host took for other work (steal,
+# /proc/stat): where it is large, every figure is slower and two threads gain less. Takes ~10
+# minutes the first time (the renders), ~4 minutes after.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build}
@@ -26,15 +28,32 @@ echo "bench_all: $(date -u '+%Y-%m-%d %H:%M UTC'); $(nproc) cores," \
 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$build" -j"$(nproc)" --target netvmo bench_observer bench_dds >/dev/null
 
+# "steal total" of the cpu line of /proc/stat (clock ticks of all cores; total: user to steal).
+cpu_ticks() {
+  awk '/^cpu /{t = 0; for (i = 2; i <= 9; ++i) t += $i; print $9, t}' /proc/stat
+}
+# Prints the steal share since $1 (cpu_ticks' output).
+steal_since() {
+  local s0 t0 s1 t1
+  read -r s0 t0 <<<"$1"
+  read -r s1 t1 <<<"$(cpu_ticks)"
+  awk -v s="$((s1 - s0))" -v t="$((t1 - t0))" 'BEGIN {
+    if (t > 0) printf "host steal during this section: %.1f %% of the CPU time\n", 100 * s / t }'
+}
+
 echo
+ticks=$(cpu_ticks)
 echo "== 1. observer: one thread against two (goal: >= 1.8x at 10,000 cameras, no slowdown at 1,000)"
 "$build"/bench/bench_observer --benchmark_filter='BM_ObserverTwoThreadsSpeedup' \
   --benchmark_repetitions=5 --benchmark_report_aggregates_only=true 2>&1 | grep -E 'median|Benchmark'
+steal_since "$ticks"
 
 echo
+ticks=$(cpu_ticks)
 echo "== 2. lock-step round over DDS against ddsperf (goals: median <= 2x ddsperf's one-way median," \
   "p99 <= 3x its p99)"
 "$build"/bench/bench_dds 2>&1 | grep -E 'BM_|Benchmark'
+steal_since "$ticks"
 
 echo
 echo "== 3. recordings at real resolution (goals: 1920x1080 >= 30, 1280x720 >= 100 network" \
@@ -45,5 +64,7 @@ for res in 1920x1080 1280x720; do
     "$build"/netvmo render datasets/paper5_render_hd.yaml --out "$data/$res" --frames 20 --spp 4 \
       --resolution "$res" --quiet >/dev/null
   fi
+  ticks=$(cpu_ticks)
   "$build"/netvmo bench --recording "$data/$res" --frames "$frames"
+  steal_since "$ticks"
 done
