@@ -1,6 +1,6 @@
 // The observer's per-camera steps on several threads: results bit-identical to one thread and to
 // the serial exchange through a Transport, for every estimator and error model; the worker
-// pool's chunking and exceptions.
+// pool's parts, grains and exceptions.
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -278,7 +278,7 @@ TEST(WorkerPool, EveryIndexOnceAndTheSmallestIndexExceptionWins) {
   std::vector<std::atomic<int>> hits(1000);
   pool.for_each(1000, 3, [&](int i) { ++hits[static_cast<size_t>(i)]; });
   for (const auto& h : hits) ASSERT_EQ(h.load(), 1);
-  // Indices 100 (chunk 0) and 900 (chunk 2) throw: the first one is reported.
+  // Indices 100 (part 0) and 900 (part 2) throw: the first one is reported.
   try {
     pool.for_each(1000, 3, [](int i) {
       if (i == 100 || i == 900) throw std::runtime_error(std::to_string(i));
@@ -333,7 +333,7 @@ TEST(WorkerPool, JobsReachPollingAndSleepingWorkers) {
     WorkerPool pool(3, spin);
     std::vector<int> count(64, 0);
     for (int job = 0; job < 200; ++job) {
-      // 1, 2 and 3 chunks in turn: workers left out of a job still keep in step.
+      // 1, 2 and 3 parts in turn: workers left out of a job still keep in step.
       pool.for_each(64, 1 + job % 3, [&](int i) { ++count[static_cast<size_t>(i)]; });
       if (spin == microseconds(50) && job % 20 == 0)
         std::this_thread::sleep_for(std::chrono::milliseconds(2));

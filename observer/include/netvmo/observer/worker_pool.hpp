@@ -45,8 +45,9 @@ class WorkerPool {
 
   /// Calls f(i) exactly once for every i in [0, count), on the T = min(size(), parts) threads
   /// (0: the caller; see above), and returns when all are done. A part stops at its first
-  /// exception (no grain of it is started after it); after all threads have finished, the
-  /// exception of the smallest index is rethrown (with T = 1: exactly a plain loop).
+  /// exception: the thread that caught it runs no more of its grain, and no thread claims a grain
+  /// of that part once it has seen the exception; after all threads have finished, the exception
+  /// of the smallest index is rethrown (with T = 1: exactly a plain loop).
   void for_each(int count, int parts, const std::function<void(int)>& f);
 
  private:
