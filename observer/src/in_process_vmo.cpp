@@ -9,10 +9,10 @@ namespace netvmo::obs {
 namespace {
 // The cameras in breadth-first order from a pseudo-peripheral camera (George and Liu's heuristic:
 // the camera a breadth-first search from camera 0 reaches last starts a second one). Cameras
-// that are neighbours get nearby positions, so each thread's contiguous block of positions reads
-// mostly estimates its own block wrote (few cache lines cross between cores in a round) and a
-// camera's neighbours share cache lines. (A camera no search reaches, in a disconnected graph
-// NetworkedObserver refuses anyway, is appended.)
+// that are neighbours get nearby positions, so each thread's contiguous part of the positions
+// (WorkerPool; most of it run by that thread) reads mostly estimates its own part wrote (few cache
+// lines cross between cores in a round) and a camera's neighbours share cache lines. (A camera no
+// search reaches, in a disconnected graph NetworkedObserver refuses anyway, is appended.)
 std::vector<int> breadth_first_order(const Graph& g) {
   const auto n = static_cast<size_t>(g.size());
   const auto search = [&](int start) {

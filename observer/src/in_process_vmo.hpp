@@ -73,7 +73,7 @@ class InProcessVmo {
 
   int n_;
   /// order_[p]: the camera at position p of every array below (breadth-first: neighbours near
-  /// each other, each thread a contiguous block of positions).
+  /// each other, each thread a contiguous part of the positions).
   std::vector<int> order_;
   std::vector<int> position_;            ///< position_[i]: camera i's position
   const ObserverSettings* s_ = nullptr;  ///< the cameras' settings (the network's: all alike)

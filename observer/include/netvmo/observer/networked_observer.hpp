@@ -21,8 +21,9 @@
 // the end of the frame. Otherwise (another estimator, another transport) each sub-step is an
 // exchange round of exchange.hpp, the same one a camera's own process runs: every camera sends
 // through the transport, then takes in what reached it, on the calling thread, then steps. The
-// steps run over ObserverSettings::threads threads (contiguous blocks of cameras, each camera
-// writing only its own state), so the results are bit-identical for any thread count.
+// steps run over ObserverSettings::threads threads (a contiguous part of the cameras each, what a
+// thread has not reached taken by one through with its own, each camera writing only its own
+// state), so the results are bit-identical for any thread count.
 #pragma once
 
 #include <functional>
