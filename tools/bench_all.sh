@@ -32,28 +32,31 @@ cmake --build "$build" -j"$(nproc)" --target netvmo bench_observer bench_dds >/d
 cpu_ticks() {
   awk '/^cpu /{t = 0; for (i = 2; i <= 9; ++i) t += $i; print $9, t}' /proc/stat
 }
-# Prints the steal share since $1 (cpu_ticks' output).
-steal_since() {
+# Runs "$@", then prints the share of the CPU time the host took (steal) while it ran.
+with_steal() {
   local s0 t0 s1 t1
-  read -r s0 t0 <<<"$1"
+  read -r s0 t0 <<<"$(cpu_ticks)"
+  "$@"
   read -r s1 t1 <<<"$(cpu_ticks)"
   awk -v s="$((s1 - s0))" -v t="$((t1 - t0))" 'BEGIN {
     if (t > 0) printf "host steal during this section: %.1f %% of the CPU time\n", 100 * s / t }'
 }
+observer_speedup() {
+  "$build"/bench/bench_observer --benchmark_filter='BM_ObserverTwoThreadsSpeedup' \
+    --benchmark_repetitions=5 --benchmark_report_aggregates_only=true 2>&1 | grep -E 'median|Benchmark'
+}
+dds_round() {
+  "$build"/bench/bench_dds 2>&1 | grep -E 'BM_|Benchmark'
+}
 
 echo
-ticks=$(cpu_ticks)
 echo "== 1. observer: one thread against two (goal: >= 1.8x at 10,000 cameras, no slowdown at 1,000)"
-"$build"/bench/bench_observer --benchmark_filter='BM_ObserverTwoThreadsSpeedup' \
-  --benchmark_repetitions=5 --benchmark_report_aggregates_only=true 2>&1 | grep -E 'median|Benchmark'
-steal_since "$ticks"
+with_steal observer_speedup
 
 echo
-ticks=$(cpu_ticks)
 echo "== 2. lock-step round over DDS against ddsperf (goals: median <= 2x ddsperf's one-way median," \
   "p99 <= 3x its p99)"
-"$build"/bench/bench_dds 2>&1 | grep -E 'BM_|Benchmark'
-steal_since "$ticks"
+with_steal dds_round
 
 echo
 echo "== 3. recordings at real resolution (goals: 1920x1080 >= 30, 1280x720 >= 100 network" \
@@ -64,7 +67,5 @@ for res in 1920x1080 1280x720; do
     "$build"/netvmo render datasets/paper5_render_hd.yaml --out "$data/$res" --frames 20 --spp 4 \
       --resolution "$res" --quiet >/dev/null
   fi
-  ticks=$(cpu_ticks)
-  "$build"/netvmo bench --recording "$data/$res" --frames "$frames"
-  steal_since "$ticks"
+  with_steal "$build"/netvmo bench --recording "$data/$res" --frames "$frames"
 done
