@@ -5,11 +5,15 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <future>
 #include <thread>
 
 #include "net_test_util.hpp"
 #include "netvmo/pipeline/io/network_config.hpp"
+#include "netvmo/pipeline/net/live_camera.hpp"
+#include "netvmo/pipeline/net/play.hpp"
 #include "netvmo/pipeline/sources/network_source.hpp"
+#include "netvmo/pipeline/sources/topic_network.hpp"
 
 using namespace netvmo;
 namespace fs = std::filesystem;
@@ -209,4 +213,65 @@ TEST_F(Live, BadLiveInputIsOneLine) {
                                dir, 60);
   EXPECT_NE(r.code, 0);
   test::expect_one_line(r.err, {"/cam_1/image_raw", "no image within"});
+}
+
+// A node busy (integrating rounds, or starved of the CPU by a loaded machine) for longer than
+// --idle while its camera's images keep coming must take them, not end its stream: the stream is
+// silent only when no image has come. Every camera's first image is published and camera 1's
+// taken; then, while this test holds the node for idle_s + 1 s, the other five frames come; the
+// node must then have all six. (Before, a node that came back after more than idle_s ended its
+// stream without looking at what had come.)
+TEST_F(Live, ImagesThatCameWhileTheNodeWasBusyAreTaken) {
+  const fs::path dir = dir_;
+  constexpr int kShort = 6;
+  const auto r = net_test::netvmo_bounded(
+      "render " + std::string(NETVMO_SOURCE_DIR) + "/datasets/paper5_render.yaml --frames " +
+          std::to_string(kShort) + " --out " + (dir / "ds").string(),
+      dir, 120);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const int domain = net_test::loopback_domain(dir);
+  auto ds = sources::open_dataset_source(dir / "ds");
+  const int cameras = static_cast<int>(ds->network().cameras.size());
+  sources::TopicNetwork network(live_folder(dir / "ds", dir, "live", "", false));
+  net::LiveSettings settings;
+  settings.idle_s = 0.5;
+  // A reader on every camera's topic (the writer waits for them all); camera 1's is the node's.
+  std::vector<std::unique_ptr<net::LiveCamera>> live;
+  for (int i = 0; i < cameras; ++i)
+    live.push_back(std::make_unique<net::LiveCamera>(domain, network, i, settings));
+  net::LiveCamera& camera = *live.front();
+
+  // The writer stops after every camera's first image until the node has taken its own.
+  std::promise<void> taken;
+  std::future<void> go = taken.get_future();
+  net::PlaySettings play;
+  play.domain = domain;
+  play.reliable = true;
+  play.wait_readers = 1;
+  play.timeout_s = 60.0;
+  play.linger_s = 0.5;
+  std::string play_error;
+  std::thread writer([&] {
+    try {
+      net::play(*ds, play, [&](int done, int) {
+        if (done == cameras) go.wait_for(std::chrono::seconds(60));
+      });
+    } catch (const std::exception& e) {
+      play_error = e.what();
+    }
+  });
+  bool first = false;
+  try {
+    first = camera.wait_frame(0, 60.0);
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << e.what();
+  }
+  taken.set_value();
+  // Busy for longer than idle_s while the other frames come (real time: 5 frames in 0.17 s).
+  std::this_thread::sleep_for(std::chrono::duration<double>(settings.idle_s + 1.0));
+  writer.join();
+  ASSERT_TRUE(play_error.empty()) << play_error;
+  ASSERT_TRUE(first);
+  EXPECT_TRUE(camera.wait_frame(kShort - 1, 10.0)) << "the stream ended with frames waiting";
+  EXPECT_EQ(network.camera_frame_count(0), kShort);
 }

@@ -104,8 +104,11 @@ bool LiveCamera::wait_frame(int frame, double first_timeout_s) {
             (net_.has_calibration(index_) ? "" : " (nor camera info on " + info_topic_ + ")"));
       continue;
     }
+    // What came while this node was busy (integrating, or starved of the CPU) for longer than
+    // idle_s is taken too: the stream is silent only when nothing is waiting and nothing comes
+    // within what is left of idle_s.
     const double left = last_wall_ + settings_.idle_s - epoch_seconds();
-    if (left <= 0 || !take_images(left))
+    if (!take_images(std::max(0.0, left)))
       ended_ = ended_ || epoch_seconds() >= last_wall_ + settings_.idle_s;
   }
   return true;
