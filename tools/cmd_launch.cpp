@@ -68,7 +68,7 @@ json merge_and_report(sources::NetworkSource& source, const run::ImageRunSetting
 void add_launch(CLI::App& app, int& exit_code) {
   struct Options {
     std::string dataset, out = "results/launch";
-    int domain = -1;
+    int domain = -1, ros_wait_readers = 0;
     std::uint64_t seed = 0;
     double timeout = 600.0, node_timeout = 20.0;
     std::string mode = "lockstep", kill, clock_offsets;
@@ -124,6 +124,11 @@ void add_launch(CLI::App& app, int& exit_code) {
       ->capture_default_str()
       ->check(CLI::Range(0.001, 3600.0));
   add_live_options(*cmd, o->live, o->live_settings);
+  cmd->add_option("--ros-wait-readers", o->ros_wait_readers,
+                  "Every node waits (at most --node-timeout) before its first frame until this "
+                  "many readers match its camera's average_pose topic")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1000));
   cmd->add_option("--security", o->security,
                   "DDS Security: every node with its cam_<id> identity of this folder (netvmo "
                   "security init)");
@@ -191,6 +196,7 @@ void add_launch(CLI::App& app, int& exit_code) {
       ls.frames = frames;
       ls.timeout = o->timeout;
       ls.node_timeout = o->node_timeout;
+      ls.ros_wait_readers = o->ros_wait_readers;
       ls.async = async;
       ls.speed = o->speed;
       ls.stale = o->stale;

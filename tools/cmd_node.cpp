@@ -66,7 +66,7 @@ void add_live_options(CLI::App& cmd, bool& on, net::LiveSettings& live) {
 void add_node(CLI::App& app, int& exit_code) {
   struct Options {
     std::string dataset, out, mode = "lockstep";
-    int camera = 0, domain = -1, frames = 0;
+    int camera = 0, domain = -1, frames = 0, ros_wait_readers = 0;
     double timeout = 20.0, speed = 1.0, stale = 0.25, drop = 0.0, delay = 0.0, start_at = 0.0;
     double clock_offset = 0.0;
     std::uint64_t seed = 0;
@@ -131,6 +131,11 @@ void add_node(CLI::App& app, int& exit_code) {
       ->capture_default_str()
       ->check(CLI::Range(0.001, 3600.0));
   add_live_options(*cmd, o->live, o->live_settings);
+  cmd->add_option("--ros-wait-readers", o->ros_wait_readers,
+                  "Before the first frame, wait (at most --timeout) until this many readers match "
+                  "the camera's average_pose topic")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1000));
   cmd->add_option("--security", o->security,
                   "DDS Security: this folder's cam_<id> identity, certificates and permissions "
                   "(netvmo security init; docs/processes.md, \"Security\")");
@@ -167,6 +172,7 @@ void add_node(CLI::App& app, int& exit_code) {
       no.dds.domain = o->domain;
       no.dds.mode = net::parse_mode(o->mode);
       no.dds.timeout_s = o->timeout;
+      no.ros_wait_readers = o->ros_wait_readers;
       no.dds.clock_offset_s = o->clock_offset;
       if (o->frames > 0) no.frames = o->frames;
       no.speed = o->speed;

@@ -489,6 +489,27 @@ TEST_F(Launch, ANodeNamesItsSilentNeighbour) {
       << r.err;
 }
 
+// --ros-wait-readers: a node waits for the readers of its average_pose topic before its first
+// frame, at most --timeout, then fails with one line naming the topic; with a reader there it
+// goes on (camera 4 alone: it then fails in round 1, naming its silent neighbour).
+TEST_F(Launch, ANodeWaitsForItsPoseReadersAndNamesTheTopicWhenNoneComes) {
+  const int domain = net_test::loopback_domain(*dir_);
+  const std::string node = "node " + (*dir_ / "ds").string() + " --camera 4 --domain " +
+                           std::to_string(domain) + " --timeout 2 --ros-wait-readers 1 --out ";
+  const auto none = net_test::netvmo_bounded(node + (*dir_ / "none").string(), *dir_, 60);
+  EXPECT_EQ(none.code, 1);
+  test::expect_one_line(none.err, {"rt/netvmo/camera_4/average_pose", "1 reader(s)",
+                                   "did not come within 2 s", "--ros-wait-readers"});
+  // With a reader: past the wait, to the neighbours' silence.
+  net::RosTopicReader reader(domain, "rt/netvmo/camera_4/average_pose",
+                             ros::pose_stamped_descriptor());
+  const auto with = net_test::netvmo_bounded(node + (*dir_ / "with").string(), *dir_, 60);
+  EXPECT_EQ(with.code, 1);
+  EXPECT_EQ(with.err.find("average_pose"), std::string::npos) << with.err;
+  EXPECT_NE(with.err.find("no message of round 1 from neighbour camera"), std::string::npos)
+      << with.err;
+}
+
 TEST_F(Launch, NodesWhoseGraphsDifferStopNamingBothCameras) {
   // Cameras 4 and 5 are neighbours; camera 5's copy of network.yaml has one more edge (2, 5).
   const fs::path other = *dir_ / "ds_graph";

@@ -102,6 +102,9 @@ std::vector<std::string> node_argv(const LaunchSettings& s, int camera_id,
     for (auto a : {std::string("--frames"), std::to_string(s.frames)}) argv.push_back(a);
   if (!s.security.empty())
     for (auto a : {std::string("--security"), s.security.string()}) argv.push_back(a);
+  if (s.ros_wait_readers > 0)
+    for (auto a : {std::string("--ros-wait-readers"), std::to_string(s.ros_wait_readers)})
+      argv.push_back(a);
   if (s.live)
     for (auto a :
          {std::string("--live"), std::string("--duration"), num(s.live->duration_s),

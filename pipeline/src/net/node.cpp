@@ -260,6 +260,15 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   std::vector<double> first_round_us, round_us;
   std::optional<RosPublisher> ros;
   if (o.publish_ros_pose) ros.emplace(transport.participant(), o.camera_id);
+  if (ros && o.ros_wait_readers > 0 &&
+      !ros->wait_pose_readers(o.ros_wait_readers, o.dds.timeout_s)) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  "rt/netvmo/camera_%d/average_pose: %d reader(s) did not come within %g s "
+                  "(--ros-wait-readers)",
+                  o.camera_id, o.ros_wait_readers, o.dds.timeout_s);
+    throw InputError(buf);
+  }
 
   io::ensure_directory(out_dir);
   const NodeFiles files = node_files(out_dir, o.camera_id);

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <stdexcept>
+#include <thread>
 
 #include "dds_util.hpp"
 #include "netvmo/pipeline/ros/cdr.hpp"
@@ -71,6 +72,17 @@ void RosPublisher::tf(const std::vector<ros::StampedTransform>& m) {
 void RosPublisher::tf_static(const std::vector<ros::StampedTransform>& m) {
   ros::with_tf_message(m,
                        [&](const void* s) { check(dds_write(tf_static_, s), "write tf_static"); });
+}
+
+bool RosPublisher::wait_pose_readers(int n, double timeout_s) const {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  for (;;) {
+    dds_publication_matched_status_t st;
+    check(dds_get_publication_matched_status(pose_, &st), "matched status");
+    if (static_cast<int>(st.current_count) >= n) return true;
+    if (std::chrono::steady_clock::now() >= until) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
 }
 
 RosTopicReader::RosTopicReader(int domain, const std::string& dds_topic,

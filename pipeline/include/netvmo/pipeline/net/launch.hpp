@@ -61,6 +61,9 @@ struct LaunchSettings {
   std::optional<LiveSettings> live;
   /// DDS Security: the security folder every node takes its cam_<id> identity from; empty: none.
   std::filesystem::path security;
+  /// Every node waits for this many readers of its average_pose topic before its first frame
+  /// (NodeSettings::ros_wait_readers); 0: none.
+  int ros_wait_readers = 0;
 };
 
 /// Async: the common start is this many seconds after every node is ready.

@@ -33,6 +33,11 @@ struct NodeSettings {
   /// Also publish the camera's ROS 2 topics (RosPublisher: its estimate, measurement and
   /// transforms).
   bool publish_ros_pose = true;
+  /// Before its first frame, wait (at most dds.timeout_s; then InputError naming the topic)
+  /// until this many readers match the camera's rt/netvmo/camera_<id>/average_pose (a viewer or
+  /// recorder that must not miss the first poses; a secured one matches once its handshake is
+  /// done). 0: start at once.
+  int ros_wait_readers = 0;
 
   // Async mode only (dds.mode == Mode::async).
   /// Camera time runs at `speed` x wall time: frame k's round r is due at

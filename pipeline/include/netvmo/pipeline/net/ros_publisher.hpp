@@ -36,6 +36,9 @@ class RosPublisher {
   void measurement(const ros::StampedPose& m);
   void tf(const std::vector<ros::StampedTransform>& m);
   void tf_static(const std::vector<ros::StampedTransform>& m);
+  /// Waits until at least `n` readers match the average_pose topic, at most `timeout_s`;
+  /// false when they did not come.
+  bool wait_pose_readers(int n, double timeout_s) const;
 
  private:
   dds_entity_t pose_ = 0, pose_cov_ = 0, measurement_ = 0, tf_ = 0, tf_static_ = 0;
