@@ -3,8 +3,12 @@
 
 #include <dds/dds.h>
 
+#include <algorithm>
+#include <chrono>
 #include <stdexcept>
 #include <string>
+#include <thread>
+#include <vector>
 
 namespace netvmo::net::detail {
 
@@ -22,6 +26,26 @@ inline void make_waitset(dds_entity_t participant, dds_entity_t reader, dds_enti
   readcond = check(dds_create_readcondition(reader, DDS_ANY_STATE), "create read condition");
   waitset = check(dds_create_waitset(participant), "create waitset");
   check(dds_waitset_attach(waitset, readcond, 0), "attach read condition");
+}
+
+/// How many readers match writer `w` now.
+inline int matched_readers(dds_entity_t w) {
+  dds_publication_matched_status_t st;
+  check(dds_get_publication_matched_status(w, &st), "matched status");
+  return static_cast<int>(st.current_count);
+}
+
+/// Waits until every writer of `writers` matches at least `n` readers, at most `timeout_s`
+/// (polled every 10 ms); false when they did not come.
+inline bool wait_for_readers(const std::vector<dds_entity_t>& writers, int n, double timeout_s) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  for (;;) {
+    if (std::all_of(writers.begin(), writers.end(),
+                    [n](dds_entity_t w) { return matched_readers(w) >= n; }))
+      return true;
+    if (std::chrono::steady_clock::now() >= until) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
 }
 
 }  // namespace netvmo::net::detail

@@ -43,12 +43,6 @@ dds_entity_t writer(dds_entity_t participant, const std::string& name,
   return check(w, "create writer");
 }
 
-int matched(dds_entity_t w) {
-  dds_publication_matched_status_t st;
-  check(dds_get_publication_matched_status(w, &st), "matched status");
-  return static_cast<int>(st.current_count);
-}
-
 }  // namespace
 
 PlayStats play(sources::NetworkSource& source, const PlaySettings& s,
@@ -69,23 +63,12 @@ PlayStats play(sources::NetworkSource& source, const PlaySettings& s,
       infos.push_back(
           writer(p.id, prefix + "/camera_info", ros::camera_info_descriptor(), s.reliable));
   }
-  if (s.wait_readers > 0) {
-    const auto t0 = std::chrono::steady_clock::now();
-    const auto ready = [&] {
-      return std::all_of(images.begin(), images.end(),
-                         [&](dds_entity_t w) { return matched(w) >= s.wait_readers; });
-    };
-    while (!ready()) {
-      if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >
-          s.timeout_s) {
-        char buf[160];
-        std::snprintf(buf, sizeof buf,
-                      "--wait-readers %d: fewer readers of every camera's image topic within %g s",
-                      s.wait_readers, s.timeout_s);
-        throw InputError(buf);
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
+  if (s.wait_readers > 0 && !detail::wait_for_readers(images, s.wait_readers, s.timeout_s)) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf,
+                  "--wait-readers %d: fewer readers of every camera's image topic within %g s",
+                  s.wait_readers, s.timeout_s);
+    throw InputError(buf);
   }
   // Every image in time order (ties: camera order).
   std::vector<std::tuple<double, size_t, int>> order;

@@ -2,7 +2,6 @@
 
 #include <chrono>
 #include <stdexcept>
-#include <thread>
 
 #include "dds_util.hpp"
 #include "netvmo/pipeline/ros/cdr.hpp"
@@ -75,14 +74,7 @@ void RosPublisher::tf_static(const std::vector<ros::StampedTransform>& m) {
 }
 
 bool RosPublisher::wait_pose_readers(int n, double timeout_s) const {
-  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  for (;;) {
-    dds_publication_matched_status_t st;
-    check(dds_get_publication_matched_status(pose_, &st), "matched status");
-    if (static_cast<int>(st.current_count) >= n) return true;
-    if (std::chrono::steady_clock::now() >= until) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
+  return detail::wait_for_readers({pose_}, n, timeout_s);
 }
 
 RosTopicReader::RosTopicReader(int domain, const std::string& dds_topic,
