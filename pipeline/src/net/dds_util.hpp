@@ -48,4 +48,24 @@ inline bool wait_for_readers(const std::vector<dds_entity_t>& writers, int n, do
   }
 }
 
+/// Whether a best-effort reader matches writer `w` now (it acknowledges nothing, so
+/// dds_wait_for_acks does not wait for it). More matched readers than 256: assumed so.
+inline bool has_best_effort_reader(dds_entity_t w) {
+  std::vector<dds_instance_handle_t> handles(256);
+  const dds_return_t n = check(dds_get_matched_subscriptions(w, handles.data(), handles.size()),
+                               "matched subscriptions");
+  if (static_cast<size_t>(n) > handles.size()) return true;
+  for (dds_return_t i = 0; i < n; ++i) {
+    dds_builtintopic_endpoint_t* e = dds_get_matched_subscription_data(w, handles[i]);
+    if (!e) continue;  // unmatched meanwhile
+    dds_reliability_kind_t kind = DDS_RELIABILITY_RELIABLE;
+    dds_duration_t blocking = 0;
+    const bool best_effort = e->qos && dds_qget_reliability(e->qos, &kind, &blocking) &&
+                             kind == DDS_RELIABILITY_BEST_EFFORT;
+    dds_builtintopic_free_endpoint(e);
+    if (best_effort) return true;
+  }
+  return false;
+}
+
 }  // namespace netvmo::net::detail

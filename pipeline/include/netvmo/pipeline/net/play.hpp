@@ -31,7 +31,9 @@ struct PlaySettings {
   /// (bounded by timeout_s; then InputError). 0: start at once.
   int wait_readers = 0;
   double timeout_s = 30.0;
-  /// After the last image, wait this long for reliable readers to acknowledge [s].
+  /// After the last image, the writers stay until reliable readers acknowledge, at most this
+  /// long [s], and, where a best-effort reader (which acknowledges nothing) matches any of them,
+  /// this long in any case, so that it receives the last images whole.
   double linger_s = 2.0;
   /// DDS Security: the identity to publish with (a security folder's `player`); none: unsecured.
   std::optional<SecurityIdentity> security;
