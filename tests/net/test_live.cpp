@@ -350,7 +350,7 @@ TEST_F(Live, ALiveNodeGetsPlaysLastImage) {
     // The last frame's row (its image time). The first images are not asserted: a best-effort
     // reader that has not itself discovered the writer yet when play, its readers matched,
     // starts writing misses them (docs/ros2.md); at --rate 0 the first one or two were missing
-    // in 1 of 48 plays.
+    // in 6 of 88 plays.
     const auto rows = net_test::read_csv(out / "node_1.csv");
     ASSERT_GE(rows.size(), 2u);
     EXPECT_NEAR(std::stod(rows.back().at(1)), ds->frame_time(0, kFrames - 1), 1e-9)
