@@ -109,7 +109,7 @@ PlayStats play(sources::NetworkSource& source, const PlaySettings& s,
   // (each writer waits up to linger_s). A best-effort reader does not, and deleting a writer
   // right after its last write can leave that reader with part of the last image only (its
   // first fragments, measured with Cyclone DDS's trace), i.e. without it: the last of 30 images
-  // was lost in 2 of 6 plays at --rate 0, without load. So with a best-effort reader on any
+  // was lost in 13 of 64 plays at --rate 0, without load. So with a best-effort reader on any
   // topic, the writers stay linger_s after the last image.
   bool best_effort = false;
   for (const auto* writers : {&images, &infos})
