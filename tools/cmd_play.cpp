@@ -50,6 +50,11 @@ void add_play(CLI::App& app, int& exit_code) {
   cmd->add_option("--timeout", o->play.timeout_s, "how long --wait-readers waits [s]")
       ->capture_default_str()
       ->check(CLI::Range(0.1, 3600.0));
+  cmd->add_option("--settle", o->play.settle_s,
+                  "where a best-effort reader matches, wait this long before the first image, so "
+                  "that the reader has discovered the writers too [s]")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 3600.0));
   cmd->add_option("--linger", o->play.linger_s,
                   "after the last image, keep the writers this long for best-effort readers "
                   "(and at most this long for reliable readers' acknowledgements) [s]")
