@@ -12,7 +12,6 @@
 #include <cstdio>
 #include <cstring>
 #include <map>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <set>
 
@@ -22,6 +21,7 @@
 #include "netvmo/pipeline/frontend/front_end.hpp"
 #include "netvmo/pipeline/frontend/photo_recall.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/io/image_file.hpp"
 #include "netvmo/pipeline/io/output_dir.hpp"
 #include "netvmo/pipeline/io/truth_io.hpp"
 #include "netvmo/pipeline/progress.hpp"
@@ -284,9 +284,11 @@ int run_detect_photos(DetectOptions o) {
   std::vector<std::string> unreadable;
   for (const fs::path& f : files) {
     const fs::path folder = f.parent_path();
-    cv::Mat gray = cv::imread(f.string(), cv::IMREAD_GRAYSCALE);
-    if (gray.empty()) {
-      unreadable.push_back(f.string() + ": cannot be decoded as an image");
+    cv::Mat gray;
+    try {
+      gray = io::read_gray_image(f);
+    } catch (const InputError& e) {
+      unreadable.push_back(e.what());
       if (o.keep_going)
         std::fprintf(stderr, "netvmo detect: warning: %s\n", unreadable.back().c_str());
       continue;

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
@@ -236,6 +237,30 @@ std::vector<std::uint8_t> image_message(const std::string& encoding, int w, int 
   m.data._length = m.data._maximum = static_cast<uint32_t>(bytes.size());
   m.data._buffer = bytes.data();
   return ros::encode(sensor_msgs_msg_dds__Image__desc, &m);
+}
+
+// A CompressedImage message whose JPEG data is cut short (a message truncated on its way) is
+// refused naming the message, not decoded with the rest of the image gray; the whole message
+// decodes.
+TEST(RosBag, CompressedImageCutShortIsRefused) {
+  cv::Mat m(48, 64, CV_8UC1);
+  cv::randu(m, 0, 256);
+  std::vector<uchar> jpeg;
+  ASSERT_TRUE(cv::imencode(".jpg", m, jpeg));
+  const auto message = [](std::vector<uchar> data) {
+    sensor_msgs_msg_dds__CompressedImage_ c{};
+    std::string frame = "cam", format = "jpeg";
+    c.header.frame_id = frame.data();
+    c.format = format.data();
+    c.data._length = c.data._maximum = static_cast<uint32_t>(data.size());
+    c.data._buffer = data.data();
+    return ros::encode(sensor_msgs_msg_dds__CompressedImage__desc, &c);
+  };
+  EXPECT_EQ(ros::decode_gray(ros::kCompressedImageType, message(jpeg), "m").size(), m.size());
+  jpeg.resize(jpeg.size() * 2 / 3);
+  test::expect_input_error(
+      [&] { ros::decode_gray(ros::kCompressedImageType, message(jpeg), "topic message 7"); },
+      {"topic message 7", "data: JPEG cut short"});
 }
 
 // Each encoding of a 2x1 image: the gray OpenCV's conversions give for the pixels (ITU-R BT.601

@@ -2,9 +2,9 @@
 // sources/dataset.hpp).
 #include <algorithm>
 #include <map>
-#include <opencv2/imgcodecs.hpp>
 
 #include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/io/image_file.hpp"
 #include "netvmo/pipeline/sources/camera_stream.hpp"
 #include "stream_util.hpp"
 
@@ -64,16 +64,7 @@ class ImageFolderStream : public CameraStream {
   }
   cv::Mat read(int f) override {
     if (!has_frame(f)) return {};
-    const fs::path& p = frames_[static_cast<size_t>(f)];
-    cv::Mat m;
-    try {
-      m = cv::imread(p.string(), cv::IMREAD_GRAYSCALE);
-    } catch (const cv::Exception& e) {
-      throw InputError(p.string() + ": cannot read image: " + e.err);
-    }
-    if (m.empty())
-      throw InputError(p.string() + ": cannot read image (unreadable, corrupt or not an image)");
-    return to_gray(m);
+    return to_gray(io::read_gray_image(frames_[static_cast<size_t>(f)]));
   }
   std::string frame_name(int f) const override {
     if (has_frame(f)) return frames_[static_cast<size_t>(f)].string();

@@ -1,0 +1,28 @@
+// Image files and encoded images read as 8-bit gray with OpenCV's imgcodecs, and the one check
+// OpenCV leaves out: a JPEG cut short (a recording or a copy interrupted, a message truncated) is
+// decoded by libjpeg with the rest of the image filled gray, and only a warning without the
+// file's name on stderr ("Premature end of JPEG file"). Here it is an InputError naming the file.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <string>
+
+namespace netvmo::io {
+
+/// Whether the JPEG stream data[0, size) ends before its EOI marker, and where: "" when it is
+/// not a JPEG (it does not start with the SOI marker FF D8) or its markers lead to an EOI marker
+/// (ITU-T T.81, B.1.1: each marker segment skipped by its length, each scan's entropy-coded data
+/// read up to the next marker that is not RSTn, fill bytes FF and stuffed FF 00 skipped; bytes
+/// after the EOI, such as a trailer, do not count); else what the data ends in ("the file ends
+/// at byte 5000 inside scan 1's entropy-coded data, without an EOI marker").
+std::string jpeg_cut_short(const std::uint8_t* data, std::size_t size);
+
+/// The image file as 8-bit gray (cv::imread, IMREAD_GRAYSCALE); InputError naming the file when
+/// it cannot be read or decoded, or is a JPEG cut short (jpeg_cut_short; checked before it is
+/// decoded, so libjpeg prints nothing).
+cv::Mat read_gray_image(const std::filesystem::path& file);
+
+}  // namespace netvmo::io

@@ -1,0 +1,134 @@
+// Image files read as gray (io/image_file.hpp). A JPEG cut short anywhere before its EOI marker
+// is an error naming the file, not an image whose rest libjpeg fills gray; complete JPEGs
+// (baseline, progressive, with restart markers, colour, with bytes after the EOI, and the
+// repository's real photos) read as OpenCV reads them.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/io/image_file.hpp"
+#include "synth.hpp"
+#include "test_util.hpp"
+
+namespace netvmo {
+namespace {
+namespace fs = std::filesystem;
+
+// A dark square on uniform noise: the entropy-coded data holds every byte value, FF 00 (a
+// stuffed FF) included.
+cv::Mat picture(int channels) {
+  cv::Mat m(96, 128, CV_8UC(channels));
+  cv::RNG rng(7);
+  rng.fill(m, cv::RNG::UNIFORM, 0, 256);
+  cv::rectangle(m, {30, 20}, {90, 70}, cv::Scalar::all(0), cv::FILLED);
+  return m;
+}
+
+std::vector<std::uint8_t> encode(const cv::Mat& m, const std::vector<int>& params) {
+  std::vector<std::uint8_t> out;
+  EXPECT_TRUE(cv::imencode(".jpg", m, out, params));
+  return out;
+}
+
+void write(const fs::path& p, const std::vector<std::uint8_t>& bytes) {
+  std::ofstream(p, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()),
+             static_cast<std::streamsize>(bytes.size()));
+}
+
+// The smallest length below the whole that jpeg_cut_short takes for complete, or 0 if there is
+// none: every cut must be found.
+size_t first_cut_missed(const std::vector<std::uint8_t>& b) {
+  for (size_t n = 2; n < b.size(); ++n)
+    if (io::jpeg_cut_short(b.data(), n).empty()) return n;
+  return 0;
+}
+
+TEST(ImageFile, JpegCutShortAnywhereIsFound) {
+  const struct {
+    const char* name;
+    int channels;
+    std::vector<int> params;
+  } kinds[] = {
+      {"baseline", 1, {cv::IMWRITE_JPEG_QUALITY, 90}},
+      {"progressive", 1, {cv::IMWRITE_JPEG_PROGRESSIVE, 1}},
+      {"restart markers", 1, {cv::IMWRITE_JPEG_RST_INTERVAL, 2}},
+      {"colour 4:2:0", 3, {cv::IMWRITE_JPEG_QUALITY, 75}},
+  };
+  for (const auto& k : kinds) {
+    std::vector<std::uint8_t> b = encode(picture(k.channels), k.params);
+    ASSERT_GT(b.size(), 1000u) << k.name;
+    EXPECT_EQ(io::jpeg_cut_short(b.data(), b.size()), "") << k.name;
+    EXPECT_EQ(first_cut_missed(b), 0u) << k.name << ": a cut at this byte was not found";
+    // The message says where.
+    const std::string why = io::jpeg_cut_short(b.data(), b.size() / 2);
+    EXPECT_NE(why.find("byte " + std::to_string(b.size() / 2)), std::string::npos) << why;
+    EXPECT_NE(why.find("EOI"), std::string::npos) << why;
+    // Bytes after the EOI (a camera's trailer) are not the image's.
+    const std::string trailer = "trailer \xFF\xD8\xFF";
+    b.insert(b.end(), trailer.begin(), trailer.end());
+    EXPECT_EQ(io::jpeg_cut_short(b.data(), b.size()), "") << k.name << " with a trailer";
+  }
+  // Not a JPEG: nothing to say.
+  std::vector<std::uint8_t> png;
+  cv::imencode(".png", picture(1), png);
+  EXPECT_EQ(io::jpeg_cut_short(png.data(), png.size() / 2), "");
+  EXPECT_EQ(io::jpeg_cut_short(png.data(), 0), "");
+}
+
+TEST(ImageFile, ReadGrayImageRefusesACutJpegNamingTheFile) {
+  const fs::path dir = testing::fresh_dir("image_file");
+  const cv::Mat m = picture(1);
+  const std::vector<std::uint8_t> b = encode(m, {cv::IMWRITE_JPEG_QUALITY, 90});
+  // Whole, and whole with a trailer (no EOI at the end: the markers are walked): as OpenCV reads
+  // it.
+  std::vector<std::uint8_t> trailed = b;
+  trailed.insert(trailed.end(), {'x', 'y', 'z'});
+  for (const auto& [name, bytes] : {std::pair{"whole.jpg", b}, std::pair{"trailed.jpg", trailed}}) {
+    write(dir / name, bytes);
+    const cv::Mat got = io::read_gray_image(dir / name);
+    const cv::Mat want = cv::imread((dir / name).string(), cv::IMREAD_GRAYSCALE);
+    ASSERT_FALSE(want.empty()) << name;
+    EXPECT_EQ(cv::norm(got, want, cv::NORM_INF), 0.0) << name;
+  }
+  // Cut short: OpenCV alone gives an image (the rest gray); here one line naming the file.
+  const fs::path cut = dir / "cut.jpg";
+  write(cut, std::vector<std::uint8_t>(b.begin(), b.begin() + static_cast<long>(b.size() * 3 / 4)));
+  EXPECT_FALSE(cv::imread(cut.string(), cv::IMREAD_GRAYSCALE).empty());
+  test::expect_input_error([&] { io::read_gray_image(cut); }, {cut.string(), "JPEG cut short"});
+  // Two bytes short: only the EOI marker missing.
+  const fs::path no_eoi = dir / "no_eoi.jpg";
+  write(no_eoi, std::vector<std::uint8_t>(b.begin(), b.end() - 2));
+  test::expect_input_error([&] { io::read_gray_image(no_eoi); }, {no_eoi.string(), "EOI"});
+  // Other formats: what OpenCV cannot decode, one line naming the file.
+  std::vector<std::uint8_t> png;
+  cv::imencode(".png", m, png);
+  const fs::path bad_png = dir / "cut.png";
+  write(bad_png, std::vector<std::uint8_t>(png.begin(), png.begin() + 40));
+  test::expect_input_error([&] { io::read_gray_image(bad_png); }, {bad_png.string()});
+  test::expect_input_error([&] { io::read_gray_image(dir / "none.jpg"); }, {"none.jpg"});
+}
+
+// The repository's real JPEG photos (phones and cameras: EXIF, thumbnails, their own tables) are
+// complete, and each cut at half of its length is found.
+TEST(ImageFile, RealPhotosAreCompleteAndTheirCutsFound) {
+  int photos = 0;
+  for (const auto& e : fs::recursive_directory_iterator(fs::path(NETVMO_SOURCE_DIR) / "datasets" /
+                                                        "real_photos" / "photos")) {
+    std::string ext = e.path().extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (ext != ".jpg" && ext != ".jpeg") continue;
+    std::ifstream in(e.path(), std::ios::binary);
+    const std::vector<std::uint8_t> b((std::istreambuf_iterator<char>(in)), {});
+    ++photos;
+    EXPECT_EQ(io::jpeg_cut_short(b.data(), b.size()), "") << e.path();
+    EXPECT_NE(io::jpeg_cut_short(b.data(), b.size() / 2), "") << e.path();
+  }
+  EXPECT_GE(photos, 10);
+}
+
+}  // namespace
+}  // namespace netvmo
