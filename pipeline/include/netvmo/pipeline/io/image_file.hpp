@@ -16,8 +16,8 @@ namespace netvmo::io {
 /// not a JPEG (it does not start with the SOI marker FF D8) or its markers lead to an EOI marker
 /// (ITU-T T.81, B.1.1: each marker segment skipped by its length, each scan's entropy-coded data
 /// read up to the next marker that is not RSTn, fill bytes FF and stuffed FF 00 skipped; bytes
-/// after the EOI, such as a trailer, do not count); else what the data ends in ("the file ends
-/// at byte 5000 inside scan 1's entropy-coded data, without an EOI marker").
+/// after the EOI, such as a trailer, do not count); else where the data ends ("the data ends
+/// at byte 500 inside scan 1's entropy-coded data, without an EOI marker").
 std::string jpeg_cut_short(const std::uint8_t* data, std::size_t size);
 
 /// The image file as 8-bit gray (cv::imread, IMREAD_GRAYSCALE); InputError naming the file when
