@@ -339,8 +339,11 @@ int run_detect_photos(DetectOptions o) {
   const auto print = [](const std::string& name, const PhotoRecall& r) {
     std::vector<double> d = r.corner_differences;
     std::sort(d.begin(), d.end());
-    std::printf("%-32s %6d %6d %8d %6d %7.1f%%", name.c_str(), r.photos, r.references, r.eligible,
-                r.kept, 100.0 * r.recall());
+    std::printf("%-32s %6d %6d %8d %6d", name.c_str(), r.photos, r.references, r.eligible, r.kept);
+    if (r.eligible > 0)  // no recall of no tags
+      std::printf(" %7.1f%%", 100.0 * r.recall());
+    else
+      std::printf(" %8s", "-");
     if (d.empty())
       std::printf(" %8s %8s", "-", "-");
     else

@@ -131,6 +131,18 @@ TEST(RealPhotos, DetectPhotosReportAndBadJpeg) {
       "detect --photos " + (dir / "photos").string() + " --out " + out + " --keep-going", dir, 300);
   EXPECT_EQ(kept.code, 0) << kept.err;
   EXPECT_NE(kept.err.find("warning"), std::string::npos) << kept.err;
+  // A folder without tags: no recall to print (not 100 % of none).
+  fs::create_directories(dir / "blank");
+  cv::imwrite((dir / "blank" / "white.png").string(), cv::Mat(120, 160, CV_8UC1, cv::Scalar(255)));
+  const auto blank = test::run_netvmo(
+      "detect --photos " + (dir / "blank").string() + " --out " + (dir / "out_blank").string(), dir,
+      300);
+  EXPECT_EQ(blank.code, 0) << blank.err;
+  EXPECT_EQ(blank.out.find('%'), std::string::npos) << blank.out;
+  EXPECT_NE(
+      blank.out.find("all                                   1      0        0      0        -"),
+      std::string::npos)
+      << blank.out;
   fs::remove_all(dir);
 }
 
