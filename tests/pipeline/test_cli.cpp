@@ -120,28 +120,33 @@ TEST(Cli, CorruptImageOneErrorLineOtherCamerasKept) {
   EXPECT_EQ(slurp(dir / "out" / "detections.csv"), slurp(dir / "out2" / "detections.csv"));
 }
 
-// A JPEG frame cut short (a recording interrupted): libjpeg alone would decode it with the rest
-// gray and print a warning without the file's name. Here it is the frame's one error line, as a
-// corrupt image is, and its own line only (libjpeg says nothing: the frame is not decoded).
-TEST(Cli, CutShortJpegOneErrorLineOtherCamerasKept) {
-  const auto dir = testing::fresh_dir("cli_cut_jpeg");
-  testing::write_synth_dataset(dir / "ds", testing::simple_dataset_spec(2, 2));
-  const fs::path png = dir / "ds" / "cam_2" / "000001.png",
-                 cut = dir / "ds" / "cam_2" / "000001.jpg";
-  std::vector<uchar> bytes;
-  ASSERT_TRUE(cv::imencode(".jpg", cv::imread(png.string()), bytes));
-  fs::remove(png);
-  std::ofstream(cut, std::ios::binary)
-      .write(reinterpret_cast<const char*>(bytes.data()),
-             static_cast<std::streamsize>(bytes.size() / 2));
-  const auto r = run_detect(dir / "ds", dir / "out");
-  EXPECT_NE(r.code, 0);
-  EXPECT_EQ(count_lines(r.err), 1) << r.err;
-  EXPECT_NE(r.err.find(cut.string() + ": JPEG cut short"), std::string::npos) << r.err;
-  const auto rows = read_detections_csv(dir / "out" / "detections.csv");
-  ASSERT_EQ(rows.size(), 4u);
-  for (const auto& row : rows)
-    EXPECT_EQ(row.detected, !(row.camera == 2 && row.frame == 1)) << row.camera << " " << row.frame;
+// A JPEG or PNG frame cut short (a recording or copy interrupted): libjpeg alone would decode it
+// with the rest gray and print a warning without the file's name; libpng would fail with a line
+// of its own. Here it is the frame's one error line, as a corrupt image is, and the only line
+// (neither library says anything: the frame is not decoded).
+TEST(Cli, CutShortImageOneErrorLineOtherCamerasKept) {
+  for (const std::string ext : {".jpg", ".png"}) {
+    const auto dir = testing::fresh_dir("cli_cut_" + ext.substr(1));
+    testing::write_synth_dataset(dir / "ds", testing::simple_dataset_spec(2, 2));
+    const fs::path png = dir / "ds" / "cam_2" / "000001.png";
+    const fs::path cut = dir / "ds" / "cam_2" / ("000001" + ext);
+    std::vector<uchar> bytes;
+    ASSERT_TRUE(cv::imencode(ext, cv::imread(png.string()), bytes));
+    fs::remove(png);
+    std::ofstream(cut, std::ios::binary)
+        .write(reinterpret_cast<const char*>(bytes.data()),
+               static_cast<std::streamsize>(bytes.size() / 2));
+    const auto r = run_detect(dir / "ds", dir / "out");
+    EXPECT_NE(r.code, 0) << ext;
+    EXPECT_EQ(count_lines(r.err), 1) << r.err;
+    const std::string format = ext == ".jpg" ? "JPEG" : "PNG";
+    EXPECT_NE(r.err.find(cut.string() + ": " + format + " cut short"), std::string::npos) << r.err;
+    const auto rows = read_detections_csv(dir / "out" / "detections.csv");
+    ASSERT_EQ(rows.size(), 4u);
+    for (const auto& row : rows)
+      EXPECT_EQ(row.detected, !(row.camera == 2 && row.frame == 1))
+          << ext << ": " << row.camera << " " << row.frame;
+  }
 }
 
 TEST(Cli, DatasetErrorsOneLineNothingWritten) {

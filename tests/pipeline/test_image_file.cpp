@@ -1,7 +1,8 @@
-// Image files read as gray (io/image_file.hpp). A JPEG cut short anywhere before its EOI marker
-// is an error naming the file, not an image whose rest libjpeg fills gray; complete JPEGs
-// (baseline, progressive, with restart markers, colour, with bytes after the EOI, and the
-// repository's real photos) read as OpenCV reads them.
+// Image files read as gray (io/image_file.hpp). A JPEG or PNG cut short anywhere before its end
+// (EOI marker, IEND chunk) is an error naming the file, not an image whose rest libjpeg fills gray
+// or a failure with libpng's own line; complete ones (JPEG: baseline, progressive, with restart
+// markers, colour; PNG: gray and colour; either with bytes after its end; the repository's real
+// photos) read as OpenCV reads them.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -79,7 +80,30 @@ TEST(ImageFile, JpegCutShortAnywhereIsFound) {
   EXPECT_EQ(io::jpeg_cut_short(png.data(), 0), "");
 }
 
-TEST(ImageFile, ReadGrayImageRefusesACutJpegNamingTheFile) {
+TEST(ImageFile, PngCutShortAnywhereIsFound) {
+  for (int channels : {1, 3}) {
+    std::vector<std::uint8_t> b;
+    ASSERT_TRUE(cv::imencode(".png", picture(channels), b));
+    EXPECT_EQ(io::png_cut_short(b.data(), b.size()), "") << channels;
+    size_t missed = 0;  // every cut from the end of the signature on must be found
+    for (size_t n = 8; n < b.size() && !missed; ++n)
+      if (io::png_cut_short(b.data(), n).empty()) missed = n;
+    EXPECT_EQ(missed, 0u) << channels << " channels: a cut at this byte was not found";
+    const std::string why = io::image_cut_short(b.data(), b.size() / 2);
+    EXPECT_EQ(why.rfind("PNG cut short: the data ends at byte " + std::to_string(b.size() / 2), 0),
+              0u)
+        << why;
+    EXPECT_NE(why.find("IDAT"), std::string::npos) << why;
+    b.insert(b.end(), {'t', 'r', 'a', 'i', 'l'});
+    EXPECT_EQ(io::png_cut_short(b.data(), b.size()), "") << channels << " with a trailer";
+  }
+  // A JPEG is not a PNG.
+  const std::vector<std::uint8_t> jpeg = encode(picture(1), {});
+  EXPECT_EQ(io::png_cut_short(jpeg.data(), jpeg.size() / 2), "");
+  EXPECT_EQ(io::image_cut_short(jpeg.data(), jpeg.size() / 2).rfind("JPEG cut short: ", 0), 0u);
+}
+
+TEST(ImageFile, ReadGrayImageRefusesACutImageNamingTheFile) {
   const fs::path dir = testing::fresh_dir("image_file");
   const cv::Mat m = picture(1);
   const std::vector<std::uint8_t> b = encode(m, {cv::IMWRITE_JPEG_QUALITY, 90});
@@ -103,31 +127,40 @@ TEST(ImageFile, ReadGrayImageRefusesACutJpegNamingTheFile) {
   const fs::path no_eoi = dir / "no_eoi.jpg";
   write(no_eoi, std::vector<std::uint8_t>(b.begin(), b.end() - 2));
   test::expect_input_error([&] { io::read_gray_image(no_eoi); }, {no_eoi.string(), "EOI"});
-  // Other formats: what OpenCV cannot decode, one line naming the file.
+  // A PNG cut short (libpng would fail, with a line of its own), and one whole with a trailer.
   std::vector<std::uint8_t> png;
   cv::imencode(".png", m, png);
-  const fs::path bad_png = dir / "cut.png";
-  write(bad_png, std::vector<std::uint8_t>(png.begin(), png.begin() + 40));
-  test::expect_input_error([&] { io::read_gray_image(bad_png); }, {bad_png.string()});
+  const fs::path cut_png = dir / "cut.png";
+  write(cut_png, std::vector<std::uint8_t>(png.begin(), png.begin() + 40));
+  test::expect_input_error([&] { io::read_gray_image(cut_png); },
+                           {cut_png.string(), "PNG cut short"});
+  std::vector<std::uint8_t> trailed_png = png;
+  trailed_png.insert(trailed_png.end(), {'x', 'y', 'z'});
+  write(dir / "trailed.png", trailed_png);
+  EXPECT_EQ(cv::norm(io::read_gray_image(dir / "trailed.png"), m, cv::NORM_INF), 0.0);
+  // Not an image at all: what OpenCV cannot decode, one line naming the file.
+  write(dir / "text.png", {'n', 'o', 't', ' ', 'a', 'n', ' ', 'i', 'm', 'a', 'g', 'e'});
+  test::expect_input_error([&] { io::read_gray_image(dir / "text.png"); }, {"text.png"});
   test::expect_input_error([&] { io::read_gray_image(dir / "none.jpg"); }, {"none.jpg"});
 }
 
-// The repository's real JPEG photos (phones and cameras: EXIF, thumbnails, their own tables) are
-// complete, and each cut at half of its length is found.
+// The repository's real photos, JPEG (phones and cameras: EXIF, thumbnails, their own tables) and
+// PNG, are complete, and each cut at half of its length is found.
 TEST(ImageFile, RealPhotosAreCompleteAndTheirCutsFound) {
-  int photos = 0;
+  int photos[2] = {0, 0};  // JPEG, PNG
   for (const auto& e : fs::recursive_directory_iterator(fs::path(NETVMO_SOURCE_DIR) / "datasets" /
                                                         "real_photos" / "photos")) {
     std::string ext = e.path().extension().string();
     for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (ext != ".jpg" && ext != ".jpeg") continue;
+    if (ext != ".jpg" && ext != ".jpeg" && ext != ".png") continue;
     std::ifstream in(e.path(), std::ios::binary);
     const std::vector<std::uint8_t> b((std::istreambuf_iterator<char>(in)), {});
-    ++photos;
-    EXPECT_EQ(io::jpeg_cut_short(b.data(), b.size()), "") << e.path();
-    EXPECT_NE(io::jpeg_cut_short(b.data(), b.size() / 2), "") << e.path();
+    ++photos[ext == ".png"];
+    EXPECT_EQ(io::image_cut_short(b.data(), b.size()), "") << e.path();
+    EXPECT_NE(io::image_cut_short(b.data(), b.size() / 2), "") << e.path();
   }
-  EXPECT_GE(photos, 10);
+  EXPECT_GE(photos[0], 10);
+  EXPECT_GE(photos[1], 10);
 }
 
 }  // namespace

@@ -239,9 +239,9 @@ std::vector<std::uint8_t> image_message(const std::string& encoding, int w, int 
   return ros::encode(sensor_msgs_msg_dds__Image__desc, &m);
 }
 
-// A CompressedImage message whose JPEG data is cut short (a message truncated on its way) is
-// refused naming the message, not decoded with the rest of the image gray; the whole message
-// decodes.
+// A CompressedImage message whose JPEG or PNG data is cut short (a message truncated on its way)
+// is refused naming the message (not decoded with the rest of the image gray, nor failing with
+// the decoder's own line); the whole message decodes.
 TEST(RosBag, CompressedImageCutShortIsRefused) {
   cv::Mat m(48, 64, CV_8UC1);
   cv::randu(m, 0, 256);
@@ -258,9 +258,16 @@ TEST(RosBag, CompressedImageCutShortIsRefused) {
   };
   EXPECT_EQ(ros::decode_gray(ros::kCompressedImageType, message(jpeg), "m").size(), m.size());
   jpeg.resize(jpeg.size() * 2 / 3);
-  test::expect_input_error(
+  expect_input_error(
       [&] { ros::decode_gray(ros::kCompressedImageType, message(jpeg), "topic message 7"); },
       {"topic message 7", "data: JPEG cut short"});
+  std::vector<uchar> png;
+  ASSERT_TRUE(cv::imencode(".png", m, png));
+  EXPECT_EQ(ros::decode_gray(ros::kCompressedImageType, message(png), "m").size(), m.size());
+  png.resize(png.size() * 2 / 3);
+  expect_input_error(
+      [&] { ros::decode_gray(ros::kCompressedImageType, message(png), "topic message 8"); },
+      {"topic message 8", "data: PNG cut short"});
 }
 
 // Each encoding of a 2x1 image: the gray OpenCV's conversions give for the pixels (ITU-R BT.601

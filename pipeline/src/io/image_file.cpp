@@ -1,5 +1,6 @@
 #include "netvmo/pipeline/io/image_file.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -13,6 +14,9 @@ namespace fs = std::filesystem;
 
 namespace {
 constexpr std::uint8_t kSOI = 0xD8, kEOI = 0xD9, kSOS = 0xDA, kTEM = 0x01;
+constexpr std::uint8_t kPngSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+// The IEND chunk: length 0, type, CRC.
+constexpr std::uint8_t kPngEnd[12] = {0, 0, 0, 0, 'I', 'E', 'N', 'D', 0xAE, 0x42, 0x60, 0x82};
 bool restart(std::uint8_t m) {  // RST0..RST7: no length, also inside a scan's data
   return m >= 0xD0 && m <= 0xD7;
 }
@@ -70,24 +74,61 @@ std::string jpeg_cut_short(const std::uint8_t* d, std::size_t n) {
   }
 }
 
+std::string png_cut_short(const std::uint8_t* d, std::size_t n) {
+  if (n < sizeof kPngSignature || std::memcmp(d, kPngSignature, sizeof kPngSignature) != 0)
+    return {};
+  const auto ends = [n](const std::string& where) {
+    return "the data ends at byte " + std::to_string(n) + where + ", without an IEND chunk";
+  };
+  // Chunks: length (4 bytes, big-endian, at most 2^31 - 1), type (4), data, CRC (4).
+  for (std::size_t i = sizeof kPngSignature; i < n;) {
+    if (n - i < 8) return ends(" inside a chunk's length and type at byte " + std::to_string(i));
+    const std::uint32_t length = (std::uint32_t{d[i]} << 24) | (std::uint32_t{d[i + 1]} << 16) |
+                                 (std::uint32_t{d[i + 2]} << 8) | d[i + 3];
+    std::string type(reinterpret_cast<const char*>(d + i + 4), 4);  // letters in a PNG
+    const auto letter = [](char c) { return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z'); };
+    if (!std::all_of(type.begin(), type.end(), letter)) type = "(not a chunk type)";
+    if (length > 0x7FFFFFFFu)
+      return {};  // not a PNG chunk: the decoder will say what it makes of it
+    if (n - i - 8 < std::size_t{length} + 4)
+      return ends(" inside the " + type + " chunk at byte " + std::to_string(i));
+    i += 12 + std::size_t{length};
+    if (type == "IEND") return {};
+  }
+  return ends("");
+}
+
+std::string image_cut_short(const std::uint8_t* data, std::size_t size) {
+  if (std::string why = jpeg_cut_short(data, size); !why.empty()) return "JPEG cut short: " + why;
+  if (std::string why = png_cut_short(data, size); !why.empty()) return "PNG cut short: " + why;
+  return {};
+}
+
 cv::Mat read_gray_image(const fs::path& file) {
-  // A JPEG (it starts with SOI) is checked before it is decoded. Most end with EOI, which two
-  // bytes at the end tell; the others (cut short, or bytes after the EOI) are read whole.
+  // A JPEG or PNG is checked before it is decoded. Most end with their last marker or chunk
+  // (EOI; IEND, whose 12 bytes are always the same), which the file's last bytes tell; the
+  // others (cut short, or bytes after the end) are read whole.
   if (std::ifstream in{file, std::ios::binary}) {
-    char head[2] = {0, 0}, tail[2] = {0, 0};
-    if (in.read(head, 2) && static_cast<std::uint8_t>(head[0]) == 0xFF &&
-        static_cast<std::uint8_t>(head[1]) == kSOI && in.seekg(-2, std::ios::end) &&
-        in.read(tail, 2) &&
-        !(static_cast<std::uint8_t>(tail[0]) == 0xFF &&
-          static_cast<std::uint8_t>(tail[1]) == kEOI)) {
+    std::uint8_t head[8] = {}, tail[12] = {};
+    in.read(reinterpret_cast<char*>(head), sizeof head);
+    const std::streamsize got = in.gcount();
+    const bool jpeg = got >= 2 && head[0] == 0xFF && head[1] == kSOI;
+    const bool png = got == sizeof head && std::memcmp(head, kPngSignature, sizeof head) == 0;
+    if (jpeg || png) {
       in.clear();
-      in.seekg(0, std::ios::end);
-      std::vector<std::uint8_t> bytes(static_cast<std::size_t>(in.tellg()));
-      in.seekg(0);
-      in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-      if (in) {
-        const std::string why = jpeg_cut_short(bytes.data(), bytes.size());
-        if (!why.empty()) throw InputError(file.string() + ": JPEG cut short: " + why);
+      const std::streamsize t = jpeg ? 2 : sizeof kPngEnd;
+      const bool whole = in.seekg(-t, std::ios::end) && in.read(reinterpret_cast<char*>(tail), t) &&
+                         (jpeg ? tail[0] == 0xFF && tail[1] == kEOI
+                               : std::memcmp(tail, kPngEnd, sizeof kPngEnd) == 0);
+      if (!whole) {
+        in.clear();
+        in.seekg(0, std::ios::end);
+        std::vector<std::uint8_t> bytes(static_cast<std::size_t>(in.tellg()));
+        in.seekg(0);
+        in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+        if (in)
+          if (const std::string why = image_cut_short(bytes.data(), bytes.size()); !why.empty())
+            throw InputError(file.string() + ": " + why);
       }
     }
   }

@@ -59,8 +59,8 @@ cv::Mat decode_gray(const std::string& type, const std::vector<std::uint8_t>& ms
     Decoded<Compressed> c(sensor_msgs_msg_dds__CompressedImage__desc);
     if (!c.read(msg.data(), msg.size(), why)) throw InputError(where + ": " + why);
     const cv::Mat bytes(1, static_cast<int>(c->data._length), CV_8U, c->data._buffer);
-    if (const std::string cut = io::jpeg_cut_short(c->data._buffer, c->data._length); !cut.empty())
-      throw InputError(where + ": data: JPEG cut short: " + cut);
+    if (const std::string cut = io::image_cut_short(c->data._buffer, c->data._length); !cut.empty())
+      throw InputError(where + ": data: " + cut);
     cv::Mat gray;
     try {
       if (c->data._length > 0) gray = cv::imdecode(bytes, cv::IMREAD_GRAYSCALE);

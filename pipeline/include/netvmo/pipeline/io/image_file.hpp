@@ -1,7 +1,8 @@
 // Image files and encoded images read as 8-bit gray with OpenCV's imgcodecs, and the one check
 // OpenCV leaves out: a JPEG cut short (a recording or a copy interrupted, a message truncated) is
 // decoded by libjpeg with the rest of the image filled gray, and only a warning without the
-// file's name on stderr ("Premature end of JPEG file"). Here it is an InputError naming the file.
+// file's name on stderr ("Premature end of JPEG file"); a PNG cut short fails with libpng's own
+// line on stderr. Here both are checked before decoding: one InputError naming the file.
 #pragma once
 
 #include <cstddef>
@@ -20,9 +21,17 @@ namespace netvmo::io {
 /// at byte 500 inside scan 1's entropy-coded data, without an EOI marker").
 std::string jpeg_cut_short(const std::uint8_t* data, std::size_t size);
 
+/// Whether the PNG data[0, size) ends before its IEND chunk, and where: "" when it is not a PNG
+/// (no PNG signature) or its chunks (length, type, data, CRC) lead to IEND; else where the data
+/// ends ("the data ends at byte 700 inside the IDAT chunk at byte 91, without an IEND chunk").
+std::string png_cut_short(const std::uint8_t* data, std::size_t size);
+
+/// "JPEG cut short: " + jpeg_cut_short, or "PNG cut short: " + png_cut_short, or "".
+std::string image_cut_short(const std::uint8_t* data, std::size_t size);
+
 /// The image file as 8-bit gray (cv::imread, IMREAD_GRAYSCALE); InputError naming the file when
-/// it cannot be read or decoded, or is a JPEG cut short (jpeg_cut_short; checked before it is
-/// decoded, so libjpeg prints nothing).
+/// it cannot be read or decoded, or is a JPEG or PNG cut short (image_cut_short; checked before it
+/// is decoded, so libjpeg and libpng print nothing).
 cv::Mat read_gray_image(const std::filesystem::path& file);
 
 }  // namespace netvmo::io
