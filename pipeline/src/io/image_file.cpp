@@ -105,36 +105,29 @@ std::string image_cut_short(const std::uint8_t* data, std::size_t size) {
 }
 
 cv::Mat read_gray_image(const fs::path& file) {
-  // A JPEG or PNG is checked before it is decoded. Most end with their last marker or chunk
-  // (EOI; IEND, whose 12 bytes are always the same), which the file's last bytes tell; the
-  // others (cut short, or bytes after the end) are read whole.
-  if (std::ifstream in{file, std::ios::binary}) {
-    std::uint8_t head[8] = {}, tail[12] = {};
-    in.read(reinterpret_cast<char*>(head), sizeof head);
-    const std::streamsize got = in.gcount();
-    const bool jpeg = got >= 2 && head[0] == 0xFF && head[1] == kSOI;
-    const bool png = got == sizeof head && std::memcmp(head, kPngSignature, sizeof head) == 0;
-    if (jpeg || png) {
-      in.clear();
-      const std::streamsize t = jpeg ? 2 : sizeof kPngEnd;
-      const bool whole = in.seekg(-t, std::ios::end) && in.read(reinterpret_cast<char*>(tail), t) &&
-                         (jpeg ? tail[0] == 0xFF && tail[1] == kEOI
-                               : std::memcmp(tail, kPngEnd, sizeof kPngEnd) == 0);
-      if (!whole) {
-        in.clear();
-        in.seekg(0, std::ios::end);
-        std::vector<std::uint8_t> bytes(static_cast<std::size_t>(in.tellg()));
-        in.seekg(0);
-        in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-        if (in)
-          if (const std::string why = image_cut_short(bytes.data(), bytes.size()); !why.empty())
-            throw InputError(file.string() + ": " + why);
-      }
+  // The file is read once and decoded from memory (cv::imdecode: what cv::imread does with the
+  // file, EXIF orientation included). A JPEG or PNG is checked first: most end with their last
+  // marker or chunk (EOI; IEND, whose 12 bytes are always the same), which their last bytes tell;
+  // the others (cut short, or bytes after the end) are walked.
+  std::vector<std::uint8_t> bytes;
+  if (std::ifstream in{file, std::ios::binary | std::ios::ate}) {
+    const std::streamoff size = in.tellg();  // -1 where it has no size (not a regular file)
+    if (size > 0) {
+      bytes.resize(static_cast<std::size_t>(size));
+      in.seekg(0);
+      if (!in.read(reinterpret_cast<char*>(bytes.data()), size)) bytes.clear();
     }
   }
+  const std::size_t n = bytes.size();
+  const bool jpeg_end = n >= 2 && bytes[n - 2] == 0xFF && bytes[n - 1] == kEOI;
+  const bool png_end =
+      n >= sizeof kPngEnd && std::memcmp(&bytes[n - sizeof kPngEnd], kPngEnd, sizeof kPngEnd) == 0;
+  if (!jpeg_end && !png_end)
+    if (const std::string why = image_cut_short(bytes.data(), n); !why.empty())
+      throw InputError(file.string() + ": " + why);
   cv::Mat m;
   try {
-    m = cv::imread(file.string(), cv::IMREAD_GRAYSCALE);
+    if (n > 0) m = cv::imdecode(bytes, cv::IMREAD_GRAYSCALE);
   } catch (const cv::Exception& e) {
     throw InputError(file.string() + ": cannot read image: " + e.err);
   }
