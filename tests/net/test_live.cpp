@@ -46,26 +46,35 @@ fs::path live_folder(const fs::path& ds, const fs::path& dir, const std::string&
   return f;
 }
 
+// `netvmo READER_ARGS` (a live node or launch, bounded by reader_s) run on a thread while
+// `netvmo play PLAY_ARGS` (bounded by play_s) publishes; their logs in logs/reader and logs/play.
+struct PlayedTo {
+  test::CliResult reader, play;
+};
+PlayedTo play_to(const std::string& reader_args, int reader_s, const std::string& play_args,
+                 int play_s, const fs::path& logs) {
+  fs::create_directories(logs / "reader");
+  fs::create_directories(logs / "play");
+  PlayedTo r;
+  std::thread t(
+      [&] { r.reader = net_test::netvmo_bounded(reader_args, logs / "reader", reader_s); });
+  r.play = net_test::netvmo_bounded("play " + play_args, logs / "play", play_s);
+  t.join();
+  return r;
+}
+
 // `launch FOLDER --live` into `out` while `play DS` publishes (waiting for the nodes' readers).
 void live_launch(const fs::path& dir, const fs::path& folder, const fs::path& ds,
                  const fs::path& out, int domain, const std::string& play_args) {
-  const fs::path logs = dir / (out.filename().string() + "_logs");
-  fs::create_directories(logs / "launch");
-  fs::create_directories(logs / "play");
-  test::CliResult launch;
-  std::thread t([&] {
-    launch = net_test::netvmo_bounded("launch " + folder.string() + " --live --domain " +
-                                          std::to_string(domain) + " --speed 0.25 --lag 0.3" +
-                                          kGains + "--out " + out.string(),
-                                      logs / "launch", 150);
-  });
-  const auto play = net_test::netvmo_bounded(
-      "play " + ds.string() + " --domain " + std::to_string(domain) +
-          " --rate 0.25 --wait-readers 1 --timeout 90 --quiet " + play_args,
-      logs / "play", 120);
-  t.join();
-  EXPECT_EQ(play.code, 0) << play.out << play.err;
-  ASSERT_EQ(launch.code, 0) << launch.out << launch.err;
+  const auto r =
+      play_to("launch " + folder.string() + " --live --domain " + std::to_string(domain) +
+                  " --speed 0.25 --lag 0.3" + kGains + "--out " + out.string(),
+              150,
+              ds.string() + " --domain " + std::to_string(domain) +
+                  " --rate 0.25 --wait-readers 1 --timeout 90 --quiet " + play_args,
+              120, dir / (out.filename().string() + "_logs"));
+  EXPECT_EQ(r.play.code, 0) << r.play.out << r.play.err;
+  ASSERT_EQ(r.reader.code, 0) << r.reader.out << r.reader.err;
 }
 
 // Largest differences between the two runs' estimates over every camera: over the first ten
@@ -326,23 +335,16 @@ TEST_F(Live, ALiveNodeGetsEveryImageOfAPlay) {
   const int domain = net_test::loopback_domain(dir);
   for (int k = 0; k < 24; ++k) {
     const fs::path logs = dir / ("run_" + std::to_string(k)), out = logs / "out";
-    fs::create_directories(logs / "node");
-    fs::create_directories(logs / "play");
-    test::CliResult node;
-    std::thread t([&] {
-      node = net_test::netvmo_bounded("node " + live.string() + " --camera 1 --live --domain " +
-                                          std::to_string(domain) + " --idle 1 --no-plots --out " +
-                                          out.string(),
-                                      logs / "node", 90);
-    });
-    const auto play = net_test::netvmo_bounded(
-        "play " + one.string() + " --domain " + std::to_string(domain) +
-            " --rate 0 --wait-readers 1 --linger 0.5 --timeout 60 --quiet" +
-            (k % 2 ? " --reliable" : ""),
-        logs / "play", 90);
-    t.join();
-    ASSERT_EQ(play.code, 0) << play.out << play.err;
-    ASSERT_EQ(node.code, 0) << node.out << node.err;
+    const auto r =
+        play_to("node " + live.string() + " --camera 1 --live --domain " + std::to_string(domain) +
+                    " --idle 1 --no-plots --out " + out.string(),
+                90,
+                one.string() + " --domain " + std::to_string(domain) +
+                    " --rate 0 --wait-readers 1 --linger 0.5 --timeout 60 --quiet" +
+                    (k % 2 ? " --reliable" : ""),
+                90, logs);
+    ASSERT_EQ(r.play.code, 0) << r.play.out << r.play.err;
+    ASSERT_EQ(r.reader.code, 0) << r.reader.out << r.reader.err;
     // A row per frame (its image time), the first and the last included.
     const auto rows = net_test::read_csv(out / "node_1.csv");
     EXPECT_EQ(missing_frames(rows, *ds, 0), "frames without a row:")
