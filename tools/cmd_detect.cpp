@@ -277,7 +277,7 @@ int run_detect_photos(DetectOptions o) {
   csv << "file,id,hamming,libapriltag_margin,narrowest_px,fully_visible,eligible,status,"
          "corner_difference_px,reason,check_e0,check_e1,check_e2,check_e3,expected_e0,"
          "expected_e1,expected_e2,expected_e3,edge_bias_x,edge_bias_y,edge_blur,scatter_x,scatter_"
-         "y,se0,se1,se2,se3,shared_deviation,check_reason\n";
+         "y,se0,se1,se2,se3,shared_deviation,bow_px,bow_se,check_reason\n";
   std::map<fs::path, io::Calibration> calibs;  // a folder's calib.yaml
   std::map<fs::path, PhotoRecall> by_folder;
   PhotoRecall total;
@@ -331,7 +331,20 @@ int run_detect_photos(DetectOptions o) {
       csv << buf;
       std::snprintf(buf, sizeof buf, "%.3f,%.3f,%.3f,%.3f,%.3f,", b.thickness_se[0],
                     b.thickness_se[1], b.thickness_se[2], b.thickness_se[3], b.shared_deviation);
-      csv << buf << check_reason << "\n";
+      csv << buf;
+      // The bow of the same quad's sides (where the other tests passed): the largest shift of a
+      // corner and its standard error (empty where not measured).
+      if (b.bow.measured) {
+        size_t w = 0;
+        for (size_t k = 1; k < 4; ++k)
+          if (cv::norm(b.bow.corner_shift[k]) > cv::norm(b.bow.corner_shift[w])) w = k;
+        std::snprintf(buf, sizeof buf, "%.3f,%.3f,", cv::norm(b.bow.corner_shift[w]),
+                      b.bow.corner_se[w]);
+        csv << buf;
+      } else {
+        csv << ",,";
+      }
+      csv << check_reason << "\n";
     }
   }
   csv.commit();
@@ -480,6 +493,12 @@ void add_detect(CLI::App& app, int& exit_code) {
                   "many of its own standard errors (0: off), 0 to 20")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 20.0));
+  cmd->add_option("--border-max-bow", o->det.border_max_bow,
+                  "Border check: a quad fails where its sides bow so that a corner lies more than "
+                  "this many px from where their straight lines meet (a bent print, lens "
+                  "distortion not calibrated; 0: off), 0 to 100")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 100.0));
   cmd->add_option("--refine", o->refinement,
                   "Corner refinement of the target: none, subpix (cv::cornerSubPix) or edges "
                   "(lines fitted to the border edges)")

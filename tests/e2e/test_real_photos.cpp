@@ -21,6 +21,7 @@
 #include <fstream>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
+#include <string>
 #include <vector>
 
 #include "netvmo/pipeline/frontend/photo_recall.hpp"
@@ -152,8 +153,9 @@ fs::path corpus_dir() {
 }
 
 /// Recall against libapriltag over every photo below `dir` (a folder's calib.yaml is its photos'
-/// camera), every eligible loss printed with its reason.
-PhotoRecall recall_over(const fs::path& dir) {
+/// camera), every eligible loss printed with its reason; with `losses`, each as "<folder>/<file>
+/// id <id>: <reason>".
+PhotoRecall recall_over(const fs::path& dir, std::vector<std::string>* losses = nullptr) {
   PhotoRecall total;
   std::vector<fs::path> photos;
   for (const auto& e : fs::recursive_directory_iterator(dir)) {
@@ -171,10 +173,12 @@ PhotoRecall recall_over(const fs::path& dir) {
       calib = io::load_calibration_opencv(photo.parent_path() / "calib.yaml");
     const auto results = evaluate_photo(gray, calib, DetectorSettings{}, TrackingSettings{});
     for (const auto& t : results)
-      if (t.eligible && t.status != TargetStatus::detected)
-        std::printf("lost: %s/%s id %d (%.0f px): %s\n",
-                    photo.parent_path().filename().string().c_str(),
-                    photo.filename().string().c_str(), t.ref.id, t.ref.narrowest, t.reason.c_str());
+      if (t.eligible && t.status != TargetStatus::detected) {
+        const std::string name = photo.parent_path().filename().string() + "/" +
+                                 photo.filename().string() + " id " + std::to_string(t.ref.id);
+        std::printf("lost: %s (%.0f px): %s\n", name.c_str(), t.ref.narrowest, t.reason.c_str());
+        if (losses) losses->push_back(name + ": " + t.reason);
+      }
     total.add(results);
   }
   std::printf("%d photos, %d eligible tags, %d kept (%.1f %%)\n", total.photos, total.eligible,
@@ -201,16 +205,24 @@ TEST(RealPhotos, Corpus) {
 // The part of the corpus this repository holds (datasets/real_photos/photos: 29 photos of 8 sets
 // from 5 repositories, chosen by set and file name, not by result; MANIFEST.md, "In this
 // repository"), so every CI run judges the front end on real photos. libapriltag finds 206
-// eligible tags there; the front end keeps 202 (98.1 %; 192 before the shared border deviation
-// and the significance test) and may not keep fewer (the goal, 99 %, is not reached: every
-// loss is printed with its reason).
+// eligible tags there; the front end keeps 201 (97.6 %; 192 before the shared border deviation
+// and the significance test, 202 before the straight-sides test) and may not keep fewer (the
+// goal, 99 %, is not reached: every loss is printed with its reason). The straight-sides test
+// rejects one of them, and only that one: id 3 of swatbotics_hallway/IMG_0613.jpg, a curled
+// sheet whose bowed sides put a corner 2.3 px from where its straight sides meet.
 TEST(RealPhotos, PhotosInTheRepository) {
   const fs::path dir = fs::path(NETVMO_SOURCE_DIR) / "datasets" / "real_photos" / "photos";
   ASSERT_TRUE(fs::is_directory(dir)) << dir;
-  const PhotoRecall total = recall_over(dir);
+  std::vector<std::string> losses;
+  const PhotoRecall total = recall_over(dir, &losses);
   EXPECT_EQ(total.photos, 29);
   EXPECT_EQ(total.eligible, 206) << "libapriltag's own eligible tags";
-  EXPECT_GE(total.kept, 202);
+  EXPECT_GE(total.kept, 201);
+  for (const std::string& loss : losses) {
+    if (loss.find("bowed") != std::string::npos) {
+      EXPECT_EQ(loss.rfind("swatbotics_hallway/IMG_0613.jpg id 3: ", 0), 0u) << loss;
+    }
+  }
   for (double d : total.corner_differences) EXPECT_LT(d, 1.65);
 }
 

@@ -14,8 +14,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
+#include <optional>
 #include <random>
 #include <stdexcept>
+#include <utility>
 
 #include "netvmo/observer/jacobian.hpp"
 #include "netvmo/render/tag_family.hpp"
@@ -114,6 +116,28 @@ bool printed_white(const cv::Mat& bits, double cx, double cy, double spread) {
   return white;
 }
 
+/// The ray o + lambda d (tag frame) against a card of curvature k wrapped on the cylinder of
+/// SynthTag::bend: the nearest hit with lambda > 0 on the card's half of the cylinder
+/// (cos(k u) > 0), as lambda and (u, y, 0), u the arc length along the tag's x axis.
+std::optional<std::pair<double, obs::Vec3>> bent_hit(const obs::Vec3& o, const obs::Vec3& d,
+                                                     double k) {
+  // (o_x + l d_x)^2 + (o_z + l d_z + 1/k)^2 = 1/k^2, multiplied by k: the terms in 1/k cancel
+  const double a = k * (d.x() * d.x() + d.z() * d.z());
+  const double b = 2.0 * (k * (o.x() * d.x() + o.z() * d.z()) + d.z());
+  const double c = k * (o.x() * o.x() + o.z() * o.z()) + 2.0 * o.z();
+  const double disc = b * b - 4.0 * a * c;
+  if (!(disc >= 0.0)) return std::nullopt;
+  const double h = -0.5 * (b + std::copysign(std::sqrt(disc), b));  // no cancellation
+  std::optional<std::pair<double, obs::Vec3>> best;
+  for (const double l : {h != 0.0 ? c / h : -1.0, a != 0.0 ? h / a : -1.0}) {
+    if (!(l > 0.0) || (best && l >= best->first)) continue;
+    const obs::Vec3 x = o + l * d;
+    if (!(1.0 + k * x.z() > 0.0)) continue;  // the far half of the cylinder
+    best = {l, obs::Vec3(std::atan2(k * x.x(), 1.0 + k * x.z()) / k, x.y(), 0.0)};
+  }
+  return best;
+}
+
 }  // namespace
 
 cv::Mat render_tags(const Calibration& calib, const std::vector<SynthTag>& tags,
@@ -124,7 +148,8 @@ cv::Mat render_tags(const Calibration& calib, const std::vector<SynthTag>& tags,
     Bitmap bm;
     obs::Mat3 R;
     obs::Vec3 t, n;
-    double cell, half;
+    double cell, half, bend;
+    obs::Vec3 origin;  // the camera centre in the tag frame
   };
   std::vector<Prepared> prep;
   for (const auto& tag : tags) {
@@ -138,9 +163,10 @@ cv::Mat render_tags(const Calibration& calib, const std::vector<SynthTag>& tags,
     const int at_border = p.bm.total - 2 * p.bm.border;
     p.cell = tag.size / at_border;
     p.half = 0.5 * tag.size;
+    p.bend = tag.bend;
+    p.origin = -p.R.transpose() * p.t;
     // the printed face is visible only from the side its z axis points to
-    const obs::Vec3 cam_in_tag = -p.R.transpose() * p.t;
-    if (cam_in_tag.z() > 0) prep.push_back(std::move(p));
+    if (p.origin.z() > 0) prep.push_back(std::move(p));
   }
   const double wq = opt.quiet_zone_cells;
   cv::Mat out(calib.height, calib.width, CV_8UC1);
@@ -156,11 +182,21 @@ cv::Mat render_tags(const Calibration& calib, const std::vector<SynthTag>& tags,
           const obs::Vec3 ray(rays[i].x, rays[i].y, 1.0);
           double best = 1e300, value = opt.background;
           for (const auto& p : prep) {
-            const double den = p.n.dot(ray);
-            if (std::abs(den) < 1e-12) continue;
-            const double lambda = p.n.dot(p.t) / den;
-            if (!(lambda > 0) || lambda >= best) continue;
-            const obs::Vec3 q = p.R.transpose() * (lambda * ray - p.t);
+            double lambda;
+            obs::Vec3 q;  // the hit in the tag frame; for a bent card, (arc length along x, y)
+            if (p.bend == 0.0) {
+              const double den = p.n.dot(ray);
+              if (std::abs(den) < 1e-12) continue;
+              lambda = p.n.dot(p.t) / den;
+              if (!(lambda > 0) || lambda >= best) continue;
+              q = p.R.transpose() * (lambda * ray - p.t);
+            } else {
+              const auto hit = bent_hit(p.origin, p.R.transpose() * ray, p.bend);
+              if (!hit) continue;
+              lambda = hit->first;
+              if (lambda >= best) continue;
+              q = hit->second;
+            }
             const double cx = (q.x() + p.half) / p.cell + p.bm.border;  // bitmap column
             const double cy = (p.half - q.y()) / p.cell + p.bm.border;  // bitmap row (+y up)
             if (cx < -wq || cy < -wq || cx >= p.bm.total + wq || cy >= p.bm.total + wq) continue;
@@ -252,6 +288,22 @@ std::array<cv::Point2d, 4> project_corners(const Calibration& calib, const obs::
   std::vector<cv::Point3d> cam_pts;
   for (const auto& p : model.points_o) {
     const obs::Vec3 q = g_io * p;
+    cam_pts.emplace_back(q.x(), q.y(), q.z());
+  }
+  std::vector<cv::Point2d> px;
+  cv::projectPoints(cam_pts, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(calib.K),
+                    calib.distortion(), px);
+  return {px[0], px[1], px[2], px[3]};
+}
+
+std::array<cv::Point2d, 4> project_corners(const Calibration& calib, const SynthTag& tag) {
+  if (tag.bend == 0.0) return project_corners(calib, tag.g_io, tag.size);
+  const double k = tag.bend;
+  std::vector<cv::Point3d> cam_pts;
+  for (const auto& p : obs::FeatureModel::square(tag.size).points_o) {
+    const double u = p.x();  // the corner's arc length along x
+    const obs::Vec3 q =
+        tag.g_io * obs::Vec3(std::sin(k * u) / k, p.y(), -(1.0 - std::cos(k * u)) / k);
     cam_pts.emplace_back(q.x(), q.y(), q.z());
   }
   std::vector<cv::Point2d> px;

@@ -27,6 +27,12 @@ struct SynthTag {
   double size = 0.2;                               ///< black border side, metres
   obs::SE3 g_io = obs::SE3::Identity();            ///< tag -> camera
   std::vector<std::pair<int, int>> flipped_cells;  ///< (row, col) bitmap cells to invert
+  /// Curvature of the card [1/m]: the print wrapped, without stretching, on a cylinder whose
+  /// axis is parallel to the tag's y axis, so its x axis (and the sides along it) bends and its
+  /// y axis stays straight; > 0 bulges toward the face (the ends curl away from the camera),
+  /// < 0 the other way; 0: flat. A point at arc length u along x lies at
+  /// (sin(k u) / k, y, -(1 - cos(k u)) / k) in the tag frame.
+  double bend = 0.0;
 };
 
 struct SynthSettings {
@@ -66,6 +72,10 @@ cv::Mat render_camera_picture(const io::Calibration& calib, const std::vector<Sy
 /// distortion (cv::projectPoints).
 std::array<cv::Point2d, 4> project_corners(const io::Calibration& calib, const obs::SE3& g_io,
                                            double size);
+
+/// The true corners of a tag as synthesized (bent as tag.bend says; tag.size the black
+/// square's side measured along the print).
+std::array<cv::Point2d, 4> project_corners(const io::Calibration& calib, const SynthTag& tag);
 
 /// Largest distance between corresponding corners of two quads [px].
 double max_corner_error(const std::array<cv::Point2d, 4>& a, const std::array<cv::Point2d, 4>& b);

@@ -7,10 +7,12 @@
 
 #include <cmath>
 #include <cstdio>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
 
 #include "netvmo/pipeline/frontend/front_end.hpp"
+#include "netvmo/pipeline/frontend/refine.hpp"
 #include "netvmo/pipeline/frontend/tag_detector.hpp"
 #include "synth.hpp"
 
@@ -634,6 +636,156 @@ TEST(BorderCheck, ReversedBorderFamilyNotChecked) {
   EXPECT_FALSE(bc.checked);
   EXPECT_TRUE(bc.ok);
   EXPECT_TRUE(tag_pattern("tag36h11", 100000).empty());  // id outside the family
+}
+
+// Poses of the bent-card tests: up to 57 degrees off the normal, 0.8-1.6 m away.
+const std::vector<obs::SE3> kBentPoses = {
+    testing::facing_pose(1.2, 0.0, 0.0, {0.1, -0.1, 0.2}),
+    testing::facing_pose(1.6, 0.1, -0.05, {0.2, -0.1, 0.5}),
+    testing::facing_pose(1.0, 0.05, 0.0, {1.0, 0.1, 0.3}),
+    testing::facing_pose(1.1, -0.05, 0.05, {0.15, -1.05, 2.0}),
+    testing::facing_pose(0.8, 0.0, 0.0, {0.0, 0.3, 1.2}),
+};
+
+/// One bent tag at kBentPoses[pose] and a camera's picture of it (blur 0.6 px, noise 2 gray
+/// levels, encoded with `gamma`), with its true corners.
+struct BentCase {
+  std::string what;
+  cv::Mat img;
+  std::array<cv::Point2d, 4> truth;
+};
+BentCase bent_case(const io::Calibration& calib, size_t pose, double bend, double gamma,
+                   unsigned seed) {
+  testing::SynthTag tag{0, kSize, kBentPoses[pose], {}};
+  tag.bend = bend;
+  testing::SynthSettings opt;
+  opt.black = 12.0;
+  opt.noise_sigma = 2.0;
+  opt.seed = seed;
+  return {"bend " + std::to_string(bend) + "/m, pose " + std::to_string(pose),
+          testing::render_camera_picture(calib, {tag}, opt, 0.6, gamma),
+          testing::project_corners(calib, tag)};
+}
+
+// A card bent as a sheet curls off a wall (SynthTag::bend, about the tag's y axis): the sides
+// along the bend bow in the image, and the straight sides fitted to them meet away from the
+// print's corners (a real photo's case: the curled sheet of swatbotics_hallway/IMG_0613.jpg,
+// docs/frontend.md). The thickness test rejects most such quads, but not all: without the bow
+// test cards bent to radii of 0.33 and 0.25 m are accepted with a corner 1.01 and 1.38 px off.
+// With it every accepted bent card has its corners within 1 px of the print's, and the mildly
+// bent ones (a bow moving a corner by about 0.65 px) are kept.
+TEST(BorderCheck, BentCardWithCornersOffRejectedMildBendKept) {
+  const auto calib = testing::test_calibration();
+  const DetectorSettings dflt;
+  DetectorSettings no_bow = dflt;
+  no_bow.border_max_bow = 0.0;
+  int decoded = 0, kept = 0, bowed = 0, off_kept_without = 0;
+  for (const double bend : {2.0, -2.0, 3.0, -3.0, 4.0, -4.0, 5.0, -5.0, 6.0, -6.0})
+    for (size_t p = 0; p < kBentPoses.size(); ++p) {
+      const auto [what, img, truth] =
+          bent_case(calib, p, bend, 2.2, static_cast<unsigned>(700 + p));
+      const FrameDetections d = TagDetector(dflt).detect(img, &calib);
+      const FrameDetections dn = TagDetector(no_bow).detect(img, &calib);
+      if (d.status == TargetStatus::detected) {
+        ++decoded, ++kept;
+        EXPECT_LE(max_corner_error(d.target()->corners, truth), 1.0) << what;
+      } else if (d.status == TargetStatus::border_mismatch) {
+        ++decoded;
+        bowed += d.reason.find("bowed") != std::string::npos;
+      }
+      if (dn.status == TargetStatus::detected &&
+          max_corner_error(dn.target()->corners, truth) > 1.0) {
+        ++off_kept_without;
+        std::printf("%s: without the bow test kept with a corner %.2f px off; %s\n", what.c_str(),
+                    max_corner_error(dn.target()->corners, truth), d.reason.c_str());
+      }
+    }
+  std::printf(
+      "%d decoded, %d kept, %d rejected as bowed; without the bow test %d kept more than 1 "
+      "px off\n",
+      decoded, kept, bowed, off_kept_without);
+  EXPECT_GT(off_kept_without, 0) << "no bent card fools the other tests: this one shows nothing";
+  EXPECT_GT(bowed, 0);
+  EXPECT_GE(kept, 4) << "the mildly bent cards (2/m at poses 0 and 1) are lost";
+}
+
+// quad_bow against the truth: on bent cards pictured in linear light (no edge bias, so the
+// straight sides fit the inked outline), the corners of the straight sides moved by
+// corner_shift lie on the bent print's true corners (measured: within 0.14 px of them where
+// the straight sides' corners are up to 1.7 px off, 0.3-0.5 px where they are 4 px off).
+TEST(BorderCheck, QuadBowPutsTheCornersWhereTheBentSidesEnd) {
+  const auto calib = testing::test_calibration();
+  int measured = 0;
+  double worst_straight = 0.0;
+  for (const double bend : {3.0, -3.0, 5.0, -5.0})
+    for (const size_t p : {0u, 1u, 4u}) {
+      const auto [what, img, truth] =
+          bent_case(calib, p, bend, 1.0, static_cast<unsigned>(800 + p));
+      const auto a = TagDetector(with_check(false)).detect(img, &calib);
+      if (a.status != TargetStatus::detected) continue;
+      const auto& c = a.target()->corners;
+      const QuadBow bow = quad_bow(img, c, 8, &calib);
+      if (!bow.measured) continue;
+      ++measured;
+      worst_straight = std::max(worst_straight, max_corner_error(c, truth));
+      for (size_t k = 0; k < 4; ++k) {
+        // A quadratic extrapolated to the ends, where the bent side's image is a conic: near
+        // the decision (a corner 1 px off) within 0.25 px; a 4 px bow's corner within 15 %.
+        const double straight = cv::norm(c[k] - truth[k]);
+        EXPECT_LT(cv::norm(c[k] + bow.corner_shift[k] - truth[k]), std::max(0.25, 0.15 * straight))
+            << what << ", corner " << k << ": straight sides' corner " << straight
+            << " px off, bow shift " << bow.corner_shift[k];
+      }
+    }
+  EXPECT_GE(measured, 8);
+  EXPECT_GT(worst_straight, 1.0) << "no corner of the straight sides was off: nothing shown";
+}
+
+// Flat tags have straight sides, also where blur and JPEG's blocks move the edge samples: over
+// cells of 3.8-15 px, blur 0.6-2 px, raw and JPEG at quality 75, every bow measured is below
+// 0.3 px, far from border_max_bow. Where the border is too thin for its blur (the inner edge
+// within 3 sigma of the window across the outer edge), the data cells next to the border would
+// move the samples (0.7-1.1 px of apparent bow on 3.8-5 px cells blurred by 1.5-2 px) and the
+// bow is not measured.
+TEST(BorderCheck, FlatTagsShowNoBow) {
+  const auto calib = testing::test_calibration();
+  int measured = 0;
+  double worst = 0.0;
+  for (const double dist : {1.0, 2.0, 4.0})
+    for (const double blur : {0.6, 1.5, 2.0})
+      for (const int quality : {0, 75})
+        for (int p = 0; p < 3; ++p) {
+          char what[120];
+          std::snprintf(what, sizeof what, "distance %.0f m, blur %.1f px, JPEG %d, pose %d", dist,
+                        blur, quality, p);
+          const obs::SE3 pose =
+              testing::facing_pose(dist, 0.05 * p - 0.1, 0.03 * p - 0.05,
+                                   {0.3 * std::sin(p), 0.4 * std::cos(p), 0.5 * p});
+          testing::SynthSettings opt;
+          opt.black = 12.0;
+          opt.noise_sigma = 2.0;
+          opt.seed = static_cast<unsigned>(900 + p);
+          cv::Mat img = testing::render_camera_picture(calib, {{0, kSize, pose, {}}}, opt, blur);
+          if (quality > 0) {
+            std::vector<uchar> jpeg;
+            cv::imencode(".jpg", img, jpeg, {cv::IMWRITE_JPEG_QUALITY, quality});
+            img = cv::imdecode(jpeg, cv::IMREAD_GRAYSCALE);
+          }
+          const auto a = TagDetector(with_check(false)).detect(img, &calib);
+          if (a.status != TargetStatus::detected) continue;
+          const BorderCheck bc = check_border(img, a.target()->corners, tag_pattern("tag36h11", 0),
+                                              8, DetectorSettings{}, &calib);
+          EXPECT_EQ(bc.reason.find("bowed"), std::string::npos) << what << ": " << bc.reason;
+          const QuadBow bow = quad_bow(img, a.target()->corners, 8, &calib);
+          if (!bow.measured) continue;
+          ++measured;
+          for (size_t k = 0; k < 4; ++k) {
+            worst = std::max(worst, cv::norm(bow.corner_shift[k]));
+            EXPECT_LT(cv::norm(bow.corner_shift[k]), 0.3) << what << ", corner " << k;
+          }
+        }
+  std::printf("bow measured on %d flat tags, the largest %.2f px\n", measured, worst);
+  EXPECT_GE(measured, 20);
 }
 
 }  // namespace

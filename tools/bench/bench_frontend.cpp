@@ -145,7 +145,7 @@ void BM_RefineOnly(benchmark::State& state) {
 }
 
 // The border / quiet-zone check alone on the refined corners (what it adds per frame when the
-// target is accepted).
+// target is accepted). arg: the straight-sides test (border_max_bow) off (0) or on (1).
 void BM_BorderCheckOnly(benchmark::State& state) {
   const Calibration calib = bench_calibration();
   const cv::Mat frame = bench_frame(calib);
@@ -158,14 +158,21 @@ void BM_BorderCheckOnly(benchmark::State& state) {
     return;
   }
   const cv::Mat pattern = tag_pattern(s.family, s.target_id);
+  DetectorSettings check;
+  if (state.range(0) == 0) check.border_max_bow = 0.0;
+  // As in the front end: the edge-line fit's corners and samples (refined once more).
+  auto corners = d.target()->corners;
+  EdgeSamples edges;
+  refine_corners(frame, corners, Refinement::edge_lines, det.border_cells(), &calib, &edges);
   bool ok = false;
   for (auto _ : state) {
-    const BorderCheck bc = check_border(frame, d.target()->corners, pattern, det.border_cells(),
-                                        DetectorSettings{}, &calib);
+    const BorderCheck bc =
+        check_border(frame, corners, pattern, det.border_cells(), check, &calib, &edges);
     ok = bc.ok && bc.checked;
   }
   if (!ok) state.SkipWithError("the check rejected the benchmark frame");
-  state.SetLabel("border check, calibration with distortion");
+  state.SetLabel(std::string("border check, calibration with distortion, straight sides ") +
+                 (state.range(0) ? "on" : "off"));
 }
 
 // The front end on frames rendered from datasets/paper5_render.yaml (its default 2x2 samples and
@@ -297,7 +304,7 @@ BENCHMARK(BM_AprilTagOnly)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK(BM_RefineOnly)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_BorderCheckOnly)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_BorderCheckOnly)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
 // args: quad_decimate, refinement (0 none, 1 subpix, 2 edges), min_white_black_diff
 BENCHMARK(BM_FrontEnd)

@@ -271,7 +271,7 @@ cv::Mat tag_pattern(const std::string& family, int id) {
 
 BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners,
                          const cv::Mat& pattern, int border_cells, const DetectorSettings& s,
-                         const io::Calibration* calib) {
+                         const io::Calibration* calib, const EdgeSamples* edges) {
   CV_Assert(gray.type() == CV_8UC1);
   BorderCheck out;
   const int n = border_cells;
@@ -624,6 +624,24 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
                     out.thickness_error[ks] < 0 ? "thinner" : "thicker",
                     std::abs(out.common_offset));
     out.reason = buf;
+  }
+  if (out.ok && s.border_max_bow > 0.0) {
+    out.bow = quad_bow(gray, corners, n, calib, edges);
+    double worst_bow = 0.0;
+    for (int k = 0; k < 4 && out.bow.measured; ++k) {
+      const size_t ks = static_cast<size_t>(k);
+      const double shift = cv::norm(out.bow.corner_shift[ks]);
+      if (!(shift > s.border_max_bow && shift > s.border_significance * out.bow.corner_se[ks]) ||
+          shift <= worst_bow)
+        continue;
+      worst_bow = shift;
+      out.ok = false;
+      std::snprintf(buf, sizeof buf,
+                    "sides %d and %d bowed: corner %d lies %.2f px (se %.2f) from where their "
+                    "straight lines meet (a bent print or lens distortion not calibrated)",
+                    (k + 3) % 4, k, k, shift, out.bow.corner_se[ks]);
+      out.reason = buf;
+    }
   }
   return out;
 }

@@ -53,6 +53,8 @@ void validate(const DetectorSettings& s) {
     bad("border_scatter_allowance must be in 0..20");
   if (!(s.border_significance >= 0.0 && s.border_significance <= 20.0))
     bad("border_significance must be in 0..20");
+  if (!(s.border_max_bow >= 0.0 && s.border_max_bow <= 100.0))
+    bad("border_max_bow must be in 0..100 (px; 0: off)");
   if (!(s.edge_bias_deadband >= 0.0)) bad("edge_bias_deadband must be >= 0");
   if (!(s.corner_sigma_px > 0.0 && std::isfinite(s.corner_sigma_px)))
     bad("corner_sigma_px must be > 0 and finite");

@@ -104,9 +104,10 @@ std::vector<PhotoTagResult> evaluate_photo(const cv::Mat& gray, const io::Calibr
             std::max(t.corner_difference, cv::norm(o.corners_px[c] - r.corners[c]));
     }
     std::array<cv::Point2d, 4> refined = r.corners;
-    refine_corners(gray, refined, s.refinement, fe.detector().border_cells(), &calib);
+    EdgeSamples edges;
+    refine_corners(gray, refined, s.refinement, fe.detector().border_cells(), &calib, &edges);
     t.check = check_border(gray, refined, tag_pattern(s.family, r.id), fe.detector().border_cells(),
-                           s, &calib);
+                           s, &calib, &edges);
     out.push_back(t);
   }
   return out;

@@ -177,11 +177,13 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
     return [&, pattern](std::array<cv::Point2d, 4>& corners) {
       const std::array<cv::Point2d, 4> found = corners;
       const auto t_refine = Clock::now();
-      auto covariance = refine_corners(*g, corners, s.refinement, border_cells(), calib);
+      EdgeSamples edges;
+      auto covariance = refine_corners(*g, corners, s.refinement, border_cells(), calib, &edges);
       const auto t_check = Clock::now();
       impl_->seconds.refinement += seconds_since(t_refine, t_check);
-      BorderCheck bc = s.border_check ? check_border(*g, corners, pattern, border_cells(), s, calib)
-                                      : BorderCheck{};
+      BorderCheck bc = s.border_check
+                           ? check_border(*g, corners, pattern, border_cells(), s, calib, &edges)
+                           : BorderCheck{};
       if (bc.ok && opt.normalized) {
         // Corners must not depend on the illumination correction: where a shadow boundary runs
         // along a border edge, the fits on the image and on its normalised copy disagree.

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "netvmo/pipeline/frontend/detector_settings.hpp"
+#include "netvmo/pipeline/frontend/refine.hpp"
 #include "netvmo/pipeline/io/calibration.hpp"
 
 namespace netvmo::frontend {
@@ -94,6 +95,9 @@ struct BorderCheck {
   /// as (transition, coefficient) pairs; empty where the corners are not moved by it (the
   /// deadband, not measured, clamped). edge_bias_covariance() uses them.
   std::array<std::array<std::vector<std::pair<int, double>>, 2>, 4> side_edge_bias_sensitivity;
+  /// The sides' bow and where it puts the corners (quad_bow()); measured where the other tests
+  /// passed and DetectorSettings::border_max_bow > 0.
+  QuadBow bow;
 };
 
 /// The tag's bitmap as libapriltag prints it (apriltag_to_image): total_width x total_width
@@ -150,11 +154,18 @@ cv::Mat tag_pattern(const std::string& family, int id);
 ///    with a white data cell next to it among them, and all are thinner (e_k < 0), the common
 ///    offset c is the error of the least thin one, but no lower than -border_blur_allowance x
 ///    `edge_blur`, otherwise c = 0, and the side fails when |e_k - c| exceeds the limit.
+/// Where all sides pass, their straightness (DetectorSettings::border_max_bow): the check fails
+/// where the sides' outer edges bow so that a corner lies more than border_max_bow px from
+/// where they end (quad_bow(); a bent card or distortion the calibration leaves: the quad's
+/// corners are then not the print's).
 /// Families without a black border ring inside a white one (tagStandard41h12, ...) are not
 /// checked (`checked` false).
+/// `edges`: the edge-line fit's samples of these corners (refine_corners()), for the
+/// straight-sides test (else it samples the sides itself).
 BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners,
                          const cv::Mat& pattern, int border_cells, const DetectorSettings& s,
-                         const io::Calibration* calib = nullptr);
+                         const io::Calibration* calib = nullptr,
+                         const EdgeSamples* edges = nullptr);
 
 /// The corners of the print's cell grid from corners fitted to the outer edges of its black
 /// border: every black/white edge of a print is imaged displaced toward the white by the edge

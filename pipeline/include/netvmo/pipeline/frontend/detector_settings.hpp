@@ -100,6 +100,13 @@ struct DetectorSettings {
   /// one independent measurement per data cell): a deviation within a noisy image's own
   /// measurement noise is no evidence of a wrong side. 0: off.
   double border_significance = 3.0;
+  /// Straight sides: a flat print imaged by a pinhole camera (distortion removed) has straight
+  /// sides. Where a quadratic fitted to a side's outer edge samples ends away from the straight
+  /// line fitted to them (a bent card, distortion the calibration leaves), the straight sides
+  /// meet away from the print's corner. The check fails when that puts a corner more than this
+  /// far from where the bowed edges end [px] and by more than border_significance of its
+  /// standard error (BorderCheck::bow, quad_bow()). 0: off.
+  double border_max_bow = 1.0;
   /// Report the corners of the print's cell grid (remove_edge_bias()): each side of the quad
   /// fitted to the black border's outer edges moved inward by the print's edge bias the check
   /// measured across it on the tag's own data cells (ink spread and bloom grow the black, a
