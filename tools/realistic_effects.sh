@@ -8,9 +8,10 @@
 #
 #   bash tools/realistic_effects.sh [--netvmo PATH] [--frames N] [--out DIR] [EFFECT ...]
 #
-# EFFECT names (default: all): clean ink+0.2 ink-0.2 gloss srgb vignetting psf1.0 bloom jpeg50
-# blur20ms rolling30us defocus realistic. Takes about a minute per effect on two shared cores at
-# the default 20 frames.
+# EFFECT names (default: all): clean ink+0.2 ink-0.2 bent1 bent gloss srgb vignetting psf1.0
+# bloom jpeg50 blur20ms rolling30us defocus realistic (bent1, bent: the card bent to a radius of
+# 1 m and 0.25 m, its ends curling toward the camera). Takes about a minute per effect on two
+# shared cores at the default 20 frames.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 netvmo=build/netvmo
@@ -26,8 +27,8 @@ while [ $# -gt 0 ]; do
     *) effects+=("$1"); shift ;;
   esac
 done
-[ ${#effects[@]} -gt 0 ] || effects=(clean ink+0.2 ink-0.2 gloss srgb vignetting psf1.0 bloom jpeg50
-                                     blur20ms rolling30us defocus realistic)
+[ ${#effects[@]} -gt 0 ] || effects=(clean ink+0.2 ink-0.2 bent1 bent gloss srgb vignetting psf1.0 bloom
+                                     jpeg50 blur20ms rolling30us defocus realistic)
 [ -x "$netvmo" ] || { echo "realistic_effects.sh: no netvmo at $netvmo (build it, or --netvmo PATH)" >&2; exit 1; }
 if [ -z "$out" ]; then out=$(mktemp -d); trap 'rm -rf "$out"' EXIT; fi
 mkdir -p "$out"
@@ -38,6 +39,8 @@ effect_keys() {
     clean) echo "clean|clean" ;;
     ink+0.2) echo "{ink_spread: 0.2}|clean" ;;
     ink-0.2) echo "{ink_spread: -0.2}|clean" ;;
+    bent1) echo "{bend: -1}|clean" ;;
+    bent) echo "{bend: -4}|clean" ;;
     gloss) echo "{gloss: 0.3, shininess: 20}|clean" ;;
     srgb) echo "clean|{tone: srgb}" ;;
     vignetting) echo "clean|{vignetting: cos4}" ;;

@@ -2,13 +2,14 @@
 # The figures of docs/realistic_camera.md: per effect, a 200 x 150 rendering of a tag 1.3 m from
 # the camera, clean (left) and with the effect strong enough to see (right), written to
 # docs/figures/realistic_<effect>.png. Needs netvmo (build/netvmo or --netvmo PATH) and
-# ImageMagick's convert.
+# ImageMagick's convert. EFFECT names: only those figures (default: all).
 #
-#   bash tools/realistic_figures.sh [--netvmo PATH]
+#   bash tools/realistic_figures.sh [--netvmo PATH] [EFFECT ...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 netvmo=build/netvmo
-[ "${1:-}" = "--netvmo" ] && netvmo=$2
+if [ "${1:-}" = "--netvmo" ]; then netvmo=$2; shift 2; fi
+only=("$@")
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
@@ -46,6 +47,7 @@ figure() {  # $1 effect, $2 print, $3 sensor, [$4 velocity, $5 imaging extras, $
             #  $7 intrinsics of the effect's camera]
   local v=${4:-0} extra=${5:-} light=${6:-"[0.3, 0.4, 1.0]"} lens=${7:-}
   local a b
+  if [ ${#only[@]} -gt 0 ] && [[ " ${only[*]} " != *" $1 "* ]]; then return; fi
   a=$(render "clean_$1" clean clean "$v" "$extra" "$light" "")
   b=$(render "$1" "$2" "$3" "$v" "$extra" "$light" "$lens")
   convert "$a" "$b" -background white -splice 4x0 +append -chop 4x0 \
@@ -56,6 +58,7 @@ figure() {  # $1 effect, $2 print, $3 sensor, [$4 velocity, $5 imaging extras, $
 mkdir -p docs/figures
 figure ink_spread "{ink_spread: 0.3}" clean
 figure ink_shrink "{ink_spread: -0.3}" clean
+figure bent "{bend: -8}" clean
 figure gloss "{gloss: 0.6, shininess: 8}" clean 0 "" "[0, 0, 1]"
 figure srgb clean "{tone: srgb}"
 figure bloom clean "{full_well: 200, bloom: 0.5}" 0 ", exposure: 1.5"

@@ -24,9 +24,13 @@ bool in_fov(const Intrinsics& Kc, const CameraCache& cc, const Vec3& pc,
          uv->y() <= Kc.height - 0.5;
 }
 
-// The corners of the black square, c0 (-h,-h), c1 (h,-h), c2 (h,h), c3 (-h,h), projected.
-void project_corners(const Intrinsics& Kc, const CameraCache& cc, double h, FrameTruth& t) {
-  const Vec3 corners_o[4] = {{-h, -h, 0}, {h, -h, 0}, {h, h, 0}, {-h, h, 0}};
+// The corners of the black square, c0 (-h,-h), c1 (h,-h), c2 (h,h), c3 (-h,h), on the card
+// (bent as its print says), projected.
+void project_corners(const Intrinsics& Kc, const CameraCache& cc, const TagTexture& tag,
+                     FrameTruth& t) {
+  const double h = tag.spec().size / 2;
+  const Vec3 corners_o[4] = {tag.card_point(-h, -h), tag.card_point(h, -h), tag.card_point(h, h),
+                             tag.card_point(-h, h)};
   t.in_fov = true;
   for (int k = 0; k < 4; ++k) {
     const Vec3 pc = t.g_io * corners_o[k];
@@ -59,22 +63,24 @@ bool line_of_sight(RTCScene top, RTCIntersectContext* ctx, const Vec3& cam_w, co
   return ray.tfar >= 0;
 }
 
-// Visible fraction: an n x n grid over the printed tag of side 2 hp (the black square and its
-// white quiet zone, which the detector needs too), each sample front-facing, in view and with
-// an unobstructed line of sight from the camera centre.
+// Visible fraction: an n x n grid over the printed tag (the black square and its white quiet
+// zone, which the detector needs too; on the card, bent as its print says), each sample
+// front-facing, in view and with an unobstructed line of sight from the camera centre.
 double visible_fraction(RTCScene top, const CameraSpec& cam, const CameraCache& cc,
-                        const FrameTruth& t, const Pose& g_wi, double hp, int n, float time) {
+                        const FrameTruth& t, const Pose& g_wi, const TagTexture& tag, int n,
+                        float time) {
   const Vec3 cam_w = g_wi.translation();
-  const Vec3 normal_w = t.g_wo.linear().col(2);
+  const double hp = 0.5 * tag.printed_side();
   int seen = 0;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   for (int a = 0; a < n; ++a)
     for (int b = 0; b < n; ++b) {
-      const Vec3 po(-hp + (2 * hp) * (a + 0.5) / n, -hp + (2 * hp) * (b + 0.5) / n, 0);
+      const double u = -hp + (2 * hp) * (a + 0.5) / n;
+      const Vec3 po = tag.card_point(u, -hp + (2 * hp) * (b + 0.5) / n);
       const Vec3 pw = t.g_wo * po;
       const Vec3 to_cam = cam_w - pw;
-      if (normal_w.dot(to_cam) <= 0) continue;
+      if ((t.g_wo.linear() * tag.card_normal(u)).dot(to_cam) <= 0) continue;
       if (!in_fov(cam.intrinsics, cc, t.g_io * po, nullptr)) continue;
       const double dist = to_cam.norm();
       if (line_of_sight(top, &ctx, cam_w, -to_cam / dist, dist, time)) ++seen;
@@ -96,10 +102,11 @@ FrameTruth Renderer::truth(int ci, int frame) {
   t.g_wo = I.instances[size_t(I.target_instances.at(0))].g_wb;
   const Pose g_wi = cam.true_pose(t.t);
   t.g_io = g_wi.inverse() * t.g_wo;
-  project_corners(cam.intrinsics, cc, scene_.target().tag.size / 2, t);
-  const double hp = 0.5 * I.tags.front()->printed_side();
-  t.visible_fraction = visible_fraction(I.top, cam, cc, t, g_wi, hp, scene_.imaging.visibility_grid,
-                                        I.motion_steps > 1 ? 0.5f : 0.0f);  // at the frame's time
+  const TagTexture& tag = *I.tags.front();  // the first target's own tag
+  project_corners(cam.intrinsics, cc, tag, t);
+  t.visible_fraction =
+      visible_fraction(I.top, cam, cc, t, g_wi, tag, scene_.imaging.visibility_grid,
+                       I.motion_steps > 1 ? 0.5f : 0.0f);  // at the frame's time
   return t;
 }
 

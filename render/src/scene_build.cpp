@@ -155,11 +155,10 @@ void Renderer::Impl::add_shape(Instance& in, const Shape& s) {
 void Renderer::Impl::add_tag(Instance& in, const TagSpec& spec, const Pose& g_ot) {
   tags.push_back(std::make_unique<TagTexture>(spec));
   const TagTexture* tex = tags.back().get();
-  const double side = tex->printed_side();
   GeomInfo info;
   info.tag = tex;
   info.to_local = g_ot.inverse();
-  add_mesh(in, transformed(make_plane(side, side), g_ot), info);
+  add_mesh(in, transformed(tex->card_mesh(), g_ot), info);
 }
 
 Instance& Renderer::Impl::new_instance(const std::string& name) {

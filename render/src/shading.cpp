@@ -60,7 +60,7 @@ void shade_surface(const Shading& sh, Packet& pk, int j) {
   n.normalize();
   const Eigen::Affine3f& wl = blurred ? moved : sh.to_local[top_id][rh.hit.geomID[j]];
   const Eigen::Vector3f pl = wl * P;
-  pk.alb[j] = float(gi.tag ? gi.tag->albedo(pl.x(), pl.y())
+  pk.alb[j] = float(gi.tag ? gi.tag->card_albedo(pl.cast<double>())
                            : gi.material.eval(pl.cast<double>(), (wl.linear() * n).cast<double>()));
   pk.gloss[j] = gi.tag ? float(gi.tag->spec().print.gloss) : 0.0f;
   pk.shininess[j] = gi.tag ? float(gi.tag->spec().print.shininess) : 1.0f;

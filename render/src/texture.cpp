@@ -2,10 +2,12 @@
 
 #include <apriltag/apriltag.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <functional>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 
 #include "netvmo/render/tag_family.hpp"
@@ -57,6 +59,16 @@ TagTexture::TagTexture(const TagSpec& spec) : spec_(spec) {
   if (spec.id < 0 || static_cast<std::uint32_t>(spec.id) >= f->ncodes)
     throw std::invalid_argument("tag id " + std::to_string(spec.id) + " out of range for " +
                                 spec.family + " (0.." + std::to_string(f->ncodes - 1) + ")");
+  total_width_ = f->total_width;
+  width_at_border_ = f->width_at_border;
+  cell_ = spec.size / width_at_border_;
+  if (!(std::abs(spec.print.bend) <= max_bend())) {
+    std::ostringstream msg;
+    msg.precision(3);
+    msg << "tag print.bend must be within +-" << max_bend() << " 1/m for this tag ("
+        << kMaxBendAngle << " rad over half its printed side)";
+    throw std::invalid_argument(msg.str());
+  }
   // image_u8_destroy is not exported by Debian's libapriltag 3.3; it frees the pixel buffer and
   // the struct, both allocated with calloc by image_u8_create_stride, so do the same here.
   auto free_image = [](image_u8_t* p) {
@@ -66,15 +78,44 @@ TagTexture::TagTexture(const TagSpec& spec) : spec_(spec) {
   std::unique_ptr<image_u8_t, decltype(free_image)> im(apriltag_to_image(f.get(), spec.id),
                                                        free_image);
   if (!im) throw std::runtime_error("apriltag_to_image failed");
-  total_width_ = f->total_width;
-  width_at_border_ = f->width_at_border;
   if (im->width != total_width_ || im->height != total_width_)
     throw std::runtime_error("apriltag_to_image returned an unexpected bitmap size");
-  cell_ = spec.size / width_at_border_;
   dark_.resize(static_cast<size_t>(total_width_ * total_width_));
   for (int r = 0; r < total_width_; ++r)
     for (int c = 0; c < total_width_; ++c)
       dark_[static_cast<size_t>(r * total_width_ + c)] = im->buf[r * im->stride + c] < 128 ? 1 : 0;
+}
+
+Vec3 TagTexture::card_point(double u, double y) const {
+  const double k = spec_.print.bend;
+  if (k == 0) return Vec3(u, y, 0);
+  return Vec3(std::sin(k * u) / k, y, -(1 - std::cos(k * u)) / k);
+}
+
+Vec3 TagTexture::card_normal(double u) const {
+  const double k = spec_.print.bend;
+  return Vec3(std::sin(k * u), 0, std::cos(k * u));
+}
+
+Mesh TagTexture::card_mesh() const {
+  const double side = printed_side(), k = std::abs(spec_.print.bend);
+  if (k == 0) return make_plane(side, side);
+  // A strip of width w leaves the cylinder by its sagitta k w^2 / 8.
+  constexpr double kSagitta = 2e-6;  // [m]
+  const int strips = std::clamp(int(std::ceil(side * std::sqrt(k / (8 * kSagitta)))), 1, 4096);
+  Mesh m;
+  const double h = side / 2;
+  for (int i = 0; i <= strips; ++i) {
+    const double u = -h + side * i / strips;
+    m.vertices.push_back(card_point(u, -h).cast<float>());
+    m.vertices.push_back(card_point(u, h).cast<float>());
+  }
+  for (int i = 0; i < strips; ++i) {
+    const auto a = std::uint32_t(2 * i), b = a + 2;  // a, b at y = -h; a + 1, b + 1 at y = h
+    m.triangles.push_back({a, b, b + 1});
+    m.triangles.push_back({a, b + 1, a + 1});
+  }
+  return m;
 }
 
 double TagTexture::spread_albedo(double x, double y) const {

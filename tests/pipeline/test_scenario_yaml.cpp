@@ -189,9 +189,11 @@ void expect_rejected(const std::string& name, const std::string& from, const std
 TEST(RenderScenario, PrintKeys) {
   const auto tag = [](const std::string& print) { return "size: 0.15, print: " + print + "}"; };
   auto s = netvmo::io::load_render_scenario(write_scenario(
-      "print.yaml", replaced(kMinimal, "size: 0.15}", tag("{ink_spread: -0.1, gloss: 0.3}"))));
+      "print.yaml",
+      replaced(kMinimal, "size: 0.15}", tag("{ink_spread: -0.1, gloss: 0.3, bend: -4}"))));
   EXPECT_DOUBLE_EQ(s.target().tag.print.ink_spread, -0.1);
   EXPECT_DOUBLE_EQ(s.target().tag.print.gloss, 0.3);
+  EXPECT_DOUBLE_EQ(s.target().tag.print.bend, -4);
   s = netvmo::io::load_render_scenario(
       write_scenario("print_preset.yaml", replaced(kMinimal, "size: 0.15}", tag("realistic"))));
   EXPECT_TRUE(s.target().tag.print == netvmo::render::PrintModel::realistic());
@@ -204,6 +206,10 @@ TEST(RenderScenario, PrintKeys) {
   expect_rejected("gloss.yaml", "size: 0.15}", tag("{gloss: -1}"), "target.tag.print.gloss");
   expect_rejected("shiny.yaml", "size: 0.15}", tag("{shininess: 0}"), "target.tag.print.shininess");
   expect_rejected("preset.yaml", "size: 0.15}", tag("glossy"), "target.tag.print");
+  // A 0.15 m tag36h11 is printed 0.225 m wide: its ends 1.5 rad round at a bend of 13.3 / m.
+  expect_rejected("bend.yaml", "size: 0.15}", tag("{bend: 13.4}"), "target.tag.print.bend");
+  EXPECT_NO_THROW(netvmo::io::load_render_scenario(
+      write_scenario("bend_max.yaml", replaced(kMinimal, "size: 0.15}", tag("{bend: -13.3}")))));
   expect_rejected("model.yaml", "{spp: 1, seed: 5}", "{spp: 1, camera_model: fancy}",
                   "imaging.camera_model");
 }

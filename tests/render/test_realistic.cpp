@@ -1,6 +1,6 @@
 // The realistic camera model (docs/realistic_camera.md), each effect against a closed form on a
 // fronto-parallel tag: ink spread moves the imaged black/white edge by ink_spread * cell px, a
-// glossy print adds its Blinn-Phong term.
+// glossy print adds its Blinn-Phong term, a bent card is imaged where its cylinder puts it.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -61,6 +61,83 @@ TEST(RealisticPrint, InkSpreadOutOfRangeIsRefused) {
   SceneDescription s = fronto_scene();
   s.target().tag.print.ink_spread = 0.6;
   EXPECT_THROW(Renderer r(s), std::invalid_argument);
+}
+
+// A sharp edge between two plateaus, from the profile p sampled at pixel centres x0, x0 + 1,
+// ...: p's first value is one plateau's level, its last the other's, and each pixel between
+// adds the fraction of the first plateau it shows. Exact for an edge sharper than the profile
+// at any sub-pixel position (the half-way crossing of edge_position is not: up to 1/6 px off).
+double sharp_edge(const std::vector<double>& p, double x0) {
+  const double first = p.front(), last = p.back();
+  double x = x0 + 0.5;
+  for (size_t i = 1; i + 1 < p.size(); ++i) x += (p[i] - last) / (first - last);
+  return x;
+}
+
+// Profiles across a vertical edge (columns u0..u1 of the mean of rows [r0, r1)) and across a
+// horizontal one (rows v0..v1 of the mean of columns [c0, c1)).
+double vertical_sharp_edge(const cv::Mat& img, int u0, int u1, int r0, int r1) {
+  std::vector<double> p;
+  for (int u = u0; u <= u1; ++u) p.push_back(column_mean(img, u, r0, r1));
+  return sharp_edge(p, u0);
+}
+double horizontal_sharp_edge(const cv::Mat& img, int v0, int v1, int c0, int c1) {
+  std::vector<double> p;
+  for (int v = v0; v <= v1; ++v) {
+    double s = 0;
+    for (int u = c0; u < c1; ++u) s += img.at<std::uint8_t>(v, u);
+    p.push_back(s / (c1 - c0));
+  }
+  return sharp_edge(p, v0);
+}
+
+// A card of curvature k, its centre 1 m in front of the camera and facing it: the point at arc
+// length a along the tag's x axis and at y lies sin(k a) / k to the side and (1 - cos(k a)) / k
+// further away (PrintModel::bend), so it is imaged at 319.5 + 600 sin(k a) / k / Z,
+// 239.5 - 600 y / Z (the tag's y axis points up the image), Z = 1 + (1 - cos(k a)) / k.
+Vec2 bent_pixel(double k, double a, double y) {
+  const double Z = 1 + (1 - std::cos(k * a)) / k;
+  return {319.5 + 600 * std::sin(k * a) / k / Z, 239.5 - 600 * y / Z};
+}
+
+TEST(RealisticPrint, BentCardIsImagedWhereTheCylinderPutsIt) {
+  for (double k : {4.0, -4.0}) {
+    SceneDescription s = fronto_scene();
+    s.target().tag.print.bend = k;
+    Renderer r(s);
+    const cv::Mat img = r.render(0, 0);
+    // The sides along y stay straight: the left one at arc length -0.1 (2.7 px inside the flat
+    // card's edge for k = 4, 0.4 px for k = -4). 4 x 4 samples per pixel: an edge is located to
+    // within 1/8 px.
+    const double left = bent_pixel(k, -0.1, 0).x();
+    EXPECT_NEAR(vertical_sharp_edge(img, int(left) - 4, int(left) + 4, 200, 280), left, 0.13)
+        << "bend " << k;
+    // The top side (y = 0.1) bows: 60 px above the centre in the middle, 59.25 px (k = 4) or
+    // 60.77 px (k = -4) at arc length -0.08 near its end.
+    EXPECT_NEAR(horizontal_sharp_edge(img, 175, 184, 318, 322), 179.5, 0.13) << "bend " << k;
+    const Vec2 end = bent_pixel(k, -0.08, 0.1);
+    const int u = int(std::lround(end.x())), v = int(end.y());
+    EXPECT_NEAR(horizontal_sharp_edge(img, v - 4, v + 4, u - 2, u + 3), end.y(), 0.13)
+        << "bend " << k;
+    // The truth's corners are the bent card's.
+    const FrameTruth t = r.truth(0, 0);
+    const double h = 0.1;
+    const Vec2 expected[4] = {bent_pixel(k, -h, -h), bent_pixel(k, h, -h), bent_pixel(k, h, h),
+                              bent_pixel(k, -h, h)};
+    for (int c = 0; c < 4; ++c) {
+      ASSERT_TRUE(t.corners[size_t(c)].has_value());
+      EXPECT_LT((*t.corners[size_t(c)] - expected[c]).norm(), 1e-6) << "corner " << c;
+    }
+    EXPECT_DOUBLE_EQ(t.visible_fraction, 1.0);
+  }
+}
+
+TEST(RealisticPrint, BendBeyondAQuarterTurnIsRefused) {
+  SceneDescription s = fronto_scene();
+  s.target().tag.print.bend = 10.1;  // 1.515 rad over half the 0.3 m printed card
+  EXPECT_THROW(Renderer r(s), std::invalid_argument);
+  s.target().tag.print.bend = -9.9;
+  EXPECT_NO_THROW(Renderer r(s));
 }
 
 TEST(RealisticPrint, GlossAddsTheBlinnPhongTerm) {

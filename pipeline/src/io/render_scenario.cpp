@@ -180,7 +180,8 @@ bool read_preset(const Value& v) {
   return p == "realistic";
 }
 
-// print: clean | realistic | {preset: clean|realistic, ink_spread, gloss, shininess}
+// print: clean | realistic | {preset: clean|realistic, ink_spread, gloss, shininess, bend}
+// (bend's range depends on the tag's size: read_tag checks it)
 render::PrintModel read_print(const Value& v, bool realistic) {
   if (v.node().IsScalar())
     return read_preset(v) ? render::PrintModel::realistic() : render::PrintModel();
@@ -197,6 +198,7 @@ render::PrintModel read_print(const Value& v, bool realistic) {
     pm.shininess = x->number();
     if (!(pm.shininess >= 1 && pm.shininess <= 10000)) x->fail("must be between 1 and 10000");
   }
+  if (const auto x = m.find("bend")) pm.bend = x->number();
   m.finish();
   return pm;
 }
@@ -295,7 +297,16 @@ render::TagSpec read_tag(const Value& v, bool realistic) {
   if (const auto p = m.find("print")) tag.print = read_print(*p, realistic);
   m.finish();
   try {
-    render::TagTexture check(tag);  // family and id range, from libapriltag itself
+    render::TagSpec flat = tag;
+    flat.print.bend = 0;
+    const render::TagTexture check(flat);  // family and id range, from libapriltag itself
+    if (!(std::abs(tag.print.bend) <= check.max_bend())) {
+      std::ostringstream msg;
+      msg.precision(3);
+      msg << "must be within +-" << check.max_bend() << " 1/m for this tag ("
+          << render::TagTexture::kMaxBendAngle << " rad over half its printed side)";
+      Value(v.node()["print"]["bend"], v.file(), v.path() + ".print.bend").fail(msg.str());
+    }
   } catch (const std::invalid_argument& e) {
     v.fail(e.what());
   }

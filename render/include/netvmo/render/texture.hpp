@@ -4,6 +4,7 @@
 // pattern; anti-aliasing comes from the renderer's supersampling.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -24,11 +25,21 @@ struct PrintModel {
   /// matte.
   double gloss = 0.0;
   double shininess = 40.0;  ///< Blinn-Phong exponent (1..10000)
+  /// Curvature of the card [1/m]: the print (quiet zone included) wrapped, without stretching,
+  /// on a cylinder whose axis is parallel to the tag's y axis through the tag's centre line, so
+  /// its sides along x bow and those along y stay straight. A point at arc length u along x
+  /// lies at (sin(k u) / k, y, -(1 - cos(k u)) / k) in the tag frame: > 0 bulges toward the
+  /// face (the ends curl away from the camera, behind the plane z = 0, where a body behind the
+  /// tag would hide them), < 0 the ends curl toward the camera (a sheet lifting off a wall).
+  /// The tag frame stays the tangent plane at the centre line. 0 = flat; |bend| times half the
+  /// printed side at most 1.5 rad.
+  double bend = 0.0;
 
-  /// A laser print on office paper: the black grows by 0.08 cell, slightly glossy.
-  static PrintModel realistic() { return {0.08, 0.04, 30.0}; }
+  /// A laser print on office paper: the black grows by 0.08 cell, slightly glossy, flat.
+  static PrintModel realistic() { return {0.08, 0.04, 30.0, 0.0}; }
   bool operator==(const PrintModel& o) const {
-    return ink_spread == o.ink_spread && gloss == o.gloss && shininess == o.shininess;
+    return ink_spread == o.ink_spread && gloss == o.gloss && shininess == o.shininess &&
+           bend == o.bend;
   }
 };
 
@@ -57,7 +68,26 @@ class TagTexture {
   double cell() const { return cell_; }
   /// Side of the whole printed square including the quiet zone [m].
   double printed_side() const { return cell_ * (total_width_ + 2 * spec_.quiet_cells); }
-  /// Albedo at tag-frame coordinates (x, y) [m]; white outside the bitmap (quiet zone).
+  /// The largest |PrintModel::bend| of this tag [1/m]: its ends 1.5 rad round (the constructor
+  /// refuses more).
+  double max_bend() const { return 2 * kMaxBendAngle / printed_side(); }
+  static constexpr double kMaxBendAngle = 1.5;  ///< [rad]
+  /// The card's point at arc length u along its x axis and at y [m], in the tag frame
+  /// (PrintModel::bend; (u, y, 0) for a flat card), and its unit normal there (out of the face).
+  Vec3 card_point(double u, double y) const;
+  Vec3 card_normal(double u) const;
+  /// The card as a triangle mesh in the tag frame: the printed square (quiet zone included); a
+  /// bent card as strips along y, each at most 2 µm from the cylinder (its sagitta).
+  Mesh card_mesh() const;
+  /// Albedo at a point of card_mesh() in the tag frame: a bent card's point is first taken back
+  /// to its arc length along x (the inverse of card_point).
+  double card_albedo(const Vec3& p) const {
+    const double k = spec_.print.bend;
+    if (k == 0) return albedo(p.x(), p.y());
+    return albedo(std::atan2(k * p.x(), 1.0 + k * p.z()) / k, p.y());
+  }
+  /// Albedo at tag-frame coordinates (x, y) [m] of the flat print; white outside the bitmap
+  /// (quiet zone).
   double albedo(double x, double y) const {
     if (spec_.print.ink_spread != 0) return spread_albedo(x, y);
     const double half = 0.5 * total_width_;
