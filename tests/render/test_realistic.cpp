@@ -66,7 +66,8 @@ TEST(RealisticPrint, InkSpreadOutOfRangeIsRefused) {
 // A sharp edge between two plateaus, from the profile p sampled at pixel centres x0, x0 + 1,
 // ...: p's first value is one plateau's level, its last the other's, and each pixel between
 // adds the fraction of the first plateau it shows. Exact for an edge sharper than the profile
-// at any sub-pixel position (the half-way crossing of edge_position is not: up to 1/6 px off).
+// at any sub-pixel position; the half-way crossing of edge_position is not where the edge
+// falls inside a pixel (up to 0.09 px off, on top of the samples' own 1/8 px).
 double sharp_edge(const std::vector<double>& p, double x0) {
   const double first = p.front(), last = p.back();
   double x = x0 + 0.5;
