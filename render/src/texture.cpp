@@ -62,13 +62,8 @@ TagTexture::TagTexture(const TagSpec& spec) : spec_(spec) {
   total_width_ = f->total_width;
   width_at_border_ = f->width_at_border;
   cell_ = spec.size / width_at_border_;
-  if (!(std::abs(spec.print.bend) <= max_bend())) {
-    std::ostringstream msg;
-    msg.precision(3);
-    msg << "tag print.bend must be within +-" << max_bend() << " 1/m for this tag ("
-        << kMaxBendAngle << " rad over half its printed side)";
-    throw std::invalid_argument(msg.str());
-  }
+  if (!(std::abs(spec.print.bend) <= max_bend()))
+    throw std::invalid_argument("tag print.bend must be " + bend_range());
   // image_u8_destroy is not exported by Debian's libapriltag 3.3; it frees the pixel buffer and
   // the struct, both allocated with calloc by image_u8_create_stride, so do the same here.
   auto free_image = [](image_u8_t* p) {
@@ -84,6 +79,14 @@ TagTexture::TagTexture(const TagSpec& spec) : spec_(spec) {
   for (int r = 0; r < total_width_; ++r)
     for (int c = 0; c < total_width_; ++c)
       dark_[static_cast<size_t>(r * total_width_ + c)] = im->buf[r * im->stride + c] < 128 ? 1 : 0;
+}
+
+std::string TagTexture::bend_range() const {
+  std::ostringstream msg;
+  msg.precision(3);
+  msg << "within +-" << max_bend() << " 1/m for this tag (" << kMaxBendAngle
+      << " rad over half its printed side)";
+  return msg.str();
 }
 
 Vec3 TagTexture::card_point(double u, double y) const {

@@ -18,6 +18,10 @@ namespace netvmo::frontend {
 
 namespace {
 
+// What a point-sampled (aliased) image adds to the thickness and bow limits [px]: its edges are
+// quantised to the pixel grid.
+constexpr double kAliasedAllowance = 0.5;
+
 using detail::edge_offset;
 using detail::edge_spread;
 using detail::inside;
@@ -441,7 +445,7 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
     out.thickness_error[ks] = end_offset(ts[ks], offsets[ks], &out.thickness_se[ks]);
   }
   out.aliased = near_side >= 16 && intermediate < 0.1 * near_side;
-  out.thickness_limit = s.border_max_thickness_error + (out.aliased ? 0.5 : 0.0);
+  out.thickness_limit = s.border_max_thickness_error + (out.aliased ? kAliasedAllowance : 0.0);
 
   // A camera's tone curve moves every edge of a blurred print alike: gamma encoding puts a
   // blurred edge a fraction of the blur toward the dark side (0.42 sigma per edge for sRGB and
@@ -629,8 +633,8 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
     out.bow = quad_bow(gray, corners, n, calib, edges);
     // A point-sampled image's edge samples are quantised to the pixel grid, and its staircase
     // bends a quadratic's ends (flat tags of moving_cameras.yaml rendered at 1 sample per pixel:
-    // up to 1.04 px): 0.5 px more, as for the thickness.
-    const double limit = s.border_max_bow + (out.aliased ? 0.5 : 0.0);
+    // up to 1.04 px): as much more as for the thickness.
+    const double limit = s.border_max_bow + (out.aliased ? kAliasedAllowance : 0.0);
     double worst_bow = 0.0;
     for (int k = 0; k < 4 && out.bow.measured; ++k) {
       const size_t ks = static_cast<size_t>(k);

@@ -300,13 +300,9 @@ render::TagSpec read_tag(const Value& v, bool realistic) {
     render::TagSpec flat = tag;
     flat.print.bend = 0;
     const render::TagTexture check(flat);  // family and id range, from libapriltag itself
-    if (!(std::abs(tag.print.bend) <= check.max_bend())) {
-      std::ostringstream msg;
-      msg.precision(3);
-      msg << "must be within +-" << check.max_bend() << " 1/m for this tag ("
-          << render::TagTexture::kMaxBendAngle << " rad over half its printed side)";
-      Value(v.node()["print"]["bend"], v.file(), v.path() + ".print.bend").fail(msg.str());
-    }
+    if (!(std::abs(tag.print.bend) <= check.max_bend()))
+      Value(v.node()["print"]["bend"], v.file(), v.path() + ".print.bend")
+          .fail("must be " + check.bend_range());
   } catch (const std::invalid_argument& e) {
     v.fail(e.what());
   }

@@ -71,6 +71,8 @@ class TagTexture {
   /// The largest |PrintModel::bend| of this tag [1/m]: its ends 1.5 rad round (the constructor
   /// refuses more).
   double max_bend() const { return 2 * kMaxBendAngle / printed_side(); }
+  /// The range of bend for this tag, as messages say it: "within +-X 1/m for this tag (...)".
+  std::string bend_range() const;
   static constexpr double kMaxBendAngle = 1.5;  ///< [rad]
   /// The card's point at arc length u along its x axis and at y [m], in the tag frame
   /// (PrintModel::bend; (u, y, 0) for a flat card), and its unit normal there (out of the face).
