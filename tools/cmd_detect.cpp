@@ -8,6 +8,7 @@
 // the exit code is 0. Dataset-level problems (network.yaml, a missing calibration, no frames for
 // a camera, an unknown camera id) stop before anything is written.
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -277,7 +278,9 @@ int run_detect_photos(DetectOptions o) {
   csv << "file,id,hamming,libapriltag_margin,narrowest_px,fully_visible,eligible,status,"
          "corner_difference_px,reason,check_e0,check_e1,check_e2,check_e3,expected_e0,"
          "expected_e1,expected_e2,expected_e3,edge_bias_x,edge_bias_y,edge_blur,scatter_x,scatter_"
-         "y,se0,se1,se2,se3,shared_deviation,bow_px,bow_se,check_reason\n";
+         "y,se0,se1,se2,se3,shared_deviation,bow_px,bow_se,apriltag_x0,apriltag_y0,apriltag_x1,"
+         "apriltag_y1,apriltag_x2,apriltag_y2,apriltag_x3,apriltag_y3,x0,y0,x1,y1,x2,y2,x3,y3,"
+         "check_reason\n";
   std::map<fs::path, io::Calibration> calibs;  // a folder's calib.yaml
   std::map<fs::path, PhotoRecall> by_folder;
   PhotoRecall total;
@@ -344,6 +347,18 @@ int run_detect_photos(DetectOptions o) {
       } else {
         csv << ",,";
       }
+      // The corners [OpenCV pixels, libapriltag's order]: libapriltag's, then the front end's
+      // (empty unless it kept the tag).
+      const auto corners = [&](const std::array<cv::Point2d, 4>& c) {
+        std::snprintf(buf, sizeof buf, "%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,", c[0].x, c[0].y,
+                      c[1].x, c[1].y, c[2].x, c[2].y, c[3].x, c[3].y);
+        csv << buf;
+      };
+      corners(t.ref.corners);
+      if (t.status == TargetStatus::detected)
+        corners(t.corners_px);
+      else
+        csv << ",,,,,,,,";
       csv << check_reason << "\n";
     }
   }

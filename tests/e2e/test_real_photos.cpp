@@ -21,6 +21,7 @@
 #include <fstream>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -102,9 +103,22 @@ TEST(RealPhotos, DeskPhotoEveryTagKeptAndPosesAgreeWithVisp) {
               1e3 * worst_dp, worst_normal);
 }
 
-// netvmo detect --photos on a folder with the desk photo: its report and photos.csv; then a JPEG
-// that cannot be decoded beside it: one line naming the file, exit 1, and the previous results
-// untouched; with --keep-going a warning and the report.
+/// A CSV line's fields (no quoting; a trailing empty field kept).
+std::vector<std::string> csv_fields(const std::string& line) {
+  std::vector<std::string> out(1);
+  for (const char ch : line)
+    if (ch == ',')
+      out.emplace_back();
+    else
+      out.back() += ch;
+  return out;
+}
+
+// netvmo detect --photos on a folder with the desk photo: its report and photos.csv, whose rows
+// carry the corners evaluate_photo gives (libapriltag's; the front end's where it kept the tag)
+// and corner_difference_px their largest distance; then a JPEG that cannot be decoded beside it:
+// one line naming the file, exit 1, and the previous results untouched; with --keep-going a
+// warning and the report.
 TEST(RealPhotos, DetectPhotosReportAndBadJpeg) {
   const fs::path photo = kVispPhotoDir / "AprilTag.pgm";
   if (!fs::exists(photo)) GTEST_SKIP() << photo << " missing (visp-images-data)";
@@ -119,6 +133,50 @@ TEST(RealPhotos, DetectPhotosReportAndBadJpeg) {
   EXPECT_NE(ok.out.find("100.0%"), std::string::npos) << ok.out;
   const std::string csv = test::slurp(dir / "out" / "photos.csv");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 13) << "a header and 12 tags";
+  {
+    const cv::Mat gray = cv::imread(photo.string(), cv::IMREAD_GRAYSCALE);
+    const auto results = evaluate_photo(gray, nominal_calibration(gray.cols, gray.rows),
+                                        DetectorSettings{}, TrackingSettings{});
+    std::istringstream lines(csv);
+    std::string line;
+    std::getline(lines, line);
+    const std::vector<std::string> header = csv_fields(line);
+    const auto field = [&header](const std::vector<std::string>& row, const std::string& name) {
+      const auto at = std::find(header.begin(), header.end(), name);
+      EXPECT_NE(at, header.end()) << "no column " << name;
+      return at == header.end() ? std::string() : row[static_cast<size_t>(at - header.begin())];
+    };
+    size_t n = 0;
+    int kept = 0;
+    while (std::getline(lines, line)) {
+      const std::vector<std::string> row = csv_fields(line);
+      ASSERT_EQ(row.size(), header.size()) << line;
+      ASSERT_LT(n, results.size());
+      const PhotoTagResult& t = results[n++];
+      EXPECT_EQ(field(row, "id"), std::to_string(t.ref.id));
+      const bool detected = t.status == TargetStatus::detected;
+      kept += detected;
+      double worst = 0.0;
+      for (size_t k = 0; k < 4; ++k) {
+        const std::string c = std::to_string(k);
+        const cv::Point2d ref(std::stod(field(row, "apriltag_x" + c)),
+                              std::stod(field(row, "apriltag_y" + c)));
+        EXPECT_LT(cv::norm(ref - t.ref.corners[k]), 1e-3) << line;
+        if (!detected) {
+          EXPECT_EQ(field(row, "x" + c) + field(row, "y" + c), "") << line;
+          continue;
+        }
+        const cv::Point2d ours(std::stod(field(row, "x" + c)), std::stod(field(row, "y" + c)));
+        EXPECT_LT(cv::norm(ours - t.corners_px[k]), 1e-3) << line;
+        worst = std::max(worst, cv::norm(ours - ref));
+      }
+      if (detected) {
+        EXPECT_NEAR(std::stod(field(row, "corner_difference_px")), worst, 2e-3) << line;
+      }
+    }
+    EXPECT_EQ(n, results.size());
+    EXPECT_EQ(kept, 12);
+  }
   test::write_text(dir / "photos" / "broken.jpg", "\xff\xd8 not a JPEG");
   const auto bad =
       test::run_netvmo("detect --photos " + (dir / "photos").string() + " --out " + out, dir, 300);
