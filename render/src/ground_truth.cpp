@@ -74,17 +74,20 @@ double visible_fraction(RTCScene top, const CameraSpec& cam, const CameraCache& 
   int seen = 0;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
-  for (int a = 0; a < n; ++a)
+  for (int a = 0; a < n; ++a) {
+    // The card's normal depends only on u (a flat card's, or a bent card's along its column).
+    const double u = -hp + (2 * hp) * (a + 0.5) / n;
+    const Vec3 normal_w = t.g_wo.linear() * tag.card_normal(u);
     for (int b = 0; b < n; ++b) {
-      const double u = -hp + (2 * hp) * (a + 0.5) / n;
       const Vec3 po = tag.card_point(u, -hp + (2 * hp) * (b + 0.5) / n);
       const Vec3 pw = t.g_wo * po;
       const Vec3 to_cam = cam_w - pw;
-      if ((t.g_wo.linear() * tag.card_normal(u)).dot(to_cam) <= 0) continue;
+      if (normal_w.dot(to_cam) <= 0) continue;
       if (!in_fov(cam.intrinsics, cc, t.g_io * po, nullptr)) continue;
       const double dist = to_cam.norm();
       if (line_of_sight(top, &ctx, cam_w, -to_cam / dist, dist, time)) ++seen;
     }
+  }
   return double(seen) / double(n * n);
 }
 
