@@ -514,6 +514,12 @@ void add_detect(CLI::App& app, int& exit_code) {
                   "distortion not calibrated; 0: off), 0 to 100")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 100.0));
+  cmd->add_option("--border-bow-correction", o->det.border_bow_correction,
+                  "Corners: where the sides bow so that a corner lies more than this many px "
+                  "from where their straight lines meet (on cells of at least 2.5 px), every "
+                  "corner is moved to where the bowed sides end (0: off), 0 to 100")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 100.0));
   cmd->add_option("--refine", o->refinement,
                   "Corner refinement of the target: none, subpix (cv::cornerSubPix) or edges "
                   "(lines fitted to the border edges)")

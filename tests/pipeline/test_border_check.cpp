@@ -7,10 +7,12 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
 
+#include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/frontend/front_end.hpp"
 #include "netvmo/pipeline/frontend/refine.hpp"
 #include "netvmo/pipeline/frontend/tag_detector.hpp"
@@ -750,14 +752,17 @@ RenderedBentCase rendered_bent_case(const io::Calibration& calib, size_t pose, d
 // The renderer's bent cards, where the truth is known: its truth corners are the synthesizer's
 // (two implementations of the same cylinder); the check measures the bow the renderer made
 // (every accepted card's corners moved by the measured shift lie within 0.35 px of the truth:
-// measured at most 0.30 px); and strongly bent cards are rejected as bowed. What it does not
-// assert, because it does not hold: gently bent cards seen far off their normal (0.5 /m at
-// 57-60 deg) are kept with a corner up to 1.1 px off, their shifts 0.8-0.99 px under
-// border_max_bow (docs/frontend.md, "What is left"); the test prints how many.
-TEST(BorderCheck, RenderedBentCardsAreTheSynthesizersAndTheirBowIsMeasured) {
+// measured at most 0.30 px); strongly bent cards are rejected as bowed; and every card kept has
+// its corners within 1 px of the print's. That needs the bow taken off: gently bent cards seen
+// far off their normal (0.5 /m at 57-60 deg) bow their sides by 0.8-0.99 px, under
+// border_max_bow, and with their corners where the straight sides meet 3 of them are kept up
+// to 1.10 px off.
+TEST(BorderCheck, RenderedBentCardsAreTheSynthesizersAndKeptOnesWithin1Px) {
   const auto calib = testing::test_calibration();
-  int kept = 0, measured = 0, bowed = 0, off = 0;
-  double worst_moved = 0.0, worst = 0.0;
+  DetectorSettings straight;  // the corners where the straight sides meet
+  straight.border_bow_correction = 0.0;
+  int kept = 0, measured = 0, bowed = 0, taken_off = 0, off_straight = 0;
+  double worst_moved = 0.0, worst = 0.0, worst_straight = 0.0;
   for (const double bend : {0.5, -0.5, 1.0, -1.0, 2.0, -2.0, 3.0, -3.0, 4.0, -4.0})
     for (size_t p = 0; p < kBentPoses.size(); ++p) {
       const auto c = rendered_bent_case(calib, p, bend);
@@ -765,13 +770,20 @@ TEST(BorderCheck, RenderedBentCardsAreTheSynthesizersAndTheirBowIsMeasured) {
       tag.bend = bend;
       EXPECT_LT(max_corner_error(c.truth, testing::project_corners(calib, tag)), 1e-9) << c.what;
       const FrameDetections d = TagDetector().detect(c.img, &calib);
+      const FrameDetections ds = TagDetector(straight).detect(c.img, &calib);
+      ASSERT_EQ(d.status, ds.status) << c.what << ": taking the bow off changed the decision";
       if (d.status == TargetStatus::border_mismatch)
         bowed += d.reason.find("bowed") != std::string::npos;
       if (d.status != TargetStatus::detected) continue;
       ++kept;
       const double e = max_corner_error(d.target()->corners, c.truth);
+      const double es = max_corner_error(ds.target()->corners, c.truth);
       worst = std::max(worst, e);
-      off += e > 1.0;
+      worst_straight = std::max(worst_straight, es);
+      off_straight += es > 1.0;
+      taken_off += max_corner_error(d.target()->corners, ds.target()->corners) > 0.0;
+      EXPECT_LE(e, 1.0) << c.what << ": kept with a corner " << e << " px off (" << es
+                        << " px where the straight sides meet)";
       // The bow of the quad the check saw: the edge-line fit's, before the edge bias is removed.
       const auto unchecked = TagDetector(with_check(false)).detect(c.img, &calib);
       ASSERT_EQ(unchecked.status, TargetStatus::detected) << c.what;
@@ -779,18 +791,21 @@ TEST(BorderCheck, RenderedBentCardsAreTheSynthesizersAndTheirBowIsMeasured) {
       if (!bow.measured) continue;
       ++measured;
       for (size_t k = 0; k < 4; ++k) {
-        const double moved = cv::norm(d.target()->corners[k] + bow.corner_shift[k] - c.truth[k]);
+        const double moved = cv::norm(ds.target()->corners[k] + bow.corner_shift[k] - c.truth[k]);
         worst_moved = std::max(worst_moved, moved);
-        EXPECT_LT(moved, 0.35) << c.what << ", corner " << k << ": " << e << " px off, shift "
+        EXPECT_LT(moved, 0.35) << c.what << ", corner " << k << ": " << es << " px off, shift "
                                << bow.corner_shift[k];
       }
     }
   std::printf(
       "%d kept (bow measured on %d; moved by it, every corner within %.2f px of the truth), %d "
-      "rejected as bowed; %d kept more than 1 px off (worst %.2f px)\n",
-      kept, measured, worst_moved, bowed, off, worst);
+      "rejected as bowed; the bow taken off %d, every kept corner within %.2f px (%d kept more "
+      "than 1 px off with the straight sides' corners, worst %.2f px)\n",
+      kept, measured, worst_moved, bowed, taken_off, worst, off_straight, worst_straight);
   EXPECT_GE(measured, 10);
   EXPECT_GT(bowed, 0);
+  EXPECT_GT(off_straight, 0) << "no card is kept off by more than 1 px without the bow taken "
+                                "off: this test shows nothing";
 }
 
 // quad_bow against the truth: on bent cards pictured in linear light (no edge bias, so the
@@ -870,6 +885,104 @@ TEST(BorderCheck, FlatTagsShowNoBow) {
         }
   std::printf("bow measured on %d flat tags, the largest %.2f px\n", measured, worst);
   EXPECT_GE(measured, 20);
+}
+
+// A camera's sharpening (an unsharp mask, as phones and webcams apply before JPEG) on flat tags
+// with small cells: the blur estimate reads the steepened edges as unblurred, so the bow is
+// measured where the data cells next to the border, white at some and black at others, move
+// the outer edge's samples through the mask's negative lobe, and flat sides look bowed (the
+// 12-14 px tags of swatbotics_clipboard/clipboard08.png, cells of 1.5-1.8 px: 0.74-0.82 px).
+// Measured over a mask of amount 2-3 and radius 1.5 px, blur 0.7-1 px, raw and JPEG 85
+// (2026-12-04): the largest bow 0.85 px on cells under 2 px, 0.67 on 2-2.5 px, 0.56 on
+// 2.5-3 px, 0.42 on 3-4 px. So the bow is taken off only on cells of at least
+// border_bow_min_cell (2.5 px), where a flat tag's stays under border_bow_correction; and no
+// flat tag here has its corners moved.
+TEST(BorderCheck, SharpenedSmallCellsLookBowed) {
+  const auto calib = testing::test_calibration();
+  DetectorSettings unchecked = with_check(false);
+  unchecked.quad_decimate = 1.0;  // tags down to 15 px
+  DetectorSettings dflt, straight;
+  dflt.quad_decimate = straight.quad_decimate = 1.0;
+  straight.border_bow_correction = 0.0;
+  int measured_small = 0, measured_large = 0, false_bows_small = 0, kept = 0, moved = 0;
+  double worst_small = 0.0, worst_large = 0.0;
+  for (const double dist : {4.0, 5.0, 6.0, 7.0, 8.0})
+    for (const int quality : {0, 85})
+      for (int p = 0; p < 8; ++p) {
+        const obs::SE3 pose =
+            testing::facing_pose(dist, 0.03 * p - 0.1, 0.02 * p - 0.05,
+                                 {0.35 * std::sin(1.3 * p), 0.5 * std::cos(0.7 * p), 0.4 * p});
+        testing::SynthSettings opt;
+        opt.black = 12.0;
+        opt.noise_sigma = 2.0;
+        opt.seed = static_cast<unsigned>(2900 + p + 10 * quality);
+        cv::Mat img = testing::render_camera_picture(calib, {{0, kSize, pose, {}}}, opt, 0.7);
+        cv::Mat f, g;
+        img.convertTo(f, CV_32F);
+        cv::GaussianBlur(f, g, cv::Size(0, 0), 1.5);
+        f = f * 3.0 - g * 2.0;  // unsharp mask, amount 2
+        f.convertTo(img, CV_8U);
+        if (quality > 0) {
+          std::vector<uchar> jpeg;
+          cv::imencode(".jpg", img, jpeg, {cv::IMWRITE_JPEG_QUALITY, quality});
+          img = cv::imdecode(jpeg, cv::IMREAD_GRAYSCALE);
+        }
+        char what[100];
+        std::snprintf(what, sizeof what, "distance %.0f m, JPEG %d, pose %d", dist, quality, p);
+        const auto a = TagDetector(unchecked).detect(img, &calib);
+        if (a.status != TargetStatus::detected) continue;
+        const auto& c = a.target()->corners;
+        double side = std::numeric_limits<double>::infinity();
+        for (size_t k = 0; k < 4; ++k) side = std::min(side, cv::norm(c[(k + 1) % 4] - c[k]));
+        const QuadBow bow = quad_bow(img, c, 8, &calib);
+        if (bow.measured) {
+          double shift = 0.0;
+          for (size_t k = 0; k < 4; ++k) shift = std::max(shift, cv::norm(bow.corner_shift[k]));
+          const bool small = side / 8.0 < DetectorSettings{}.border_bow_min_cell;
+          (small ? measured_small : measured_large) += 1;
+          double& worst = small ? worst_small : worst_large;
+          worst = std::max(worst, shift);
+          false_bows_small += small && shift > DetectorSettings{}.border_bow_correction;
+          if (!small) {
+            EXPECT_LE(shift, DetectorSettings{}.border_bow_correction)
+                << what << ": a flat tag with cells of " << side / 8.0 << " px bowed";
+          }
+        }
+        const auto d = TagDetector(dflt).detect(img, &calib);
+        const auto ds = TagDetector(straight).detect(img, &calib);
+        ASSERT_EQ(d.status, ds.status) << what;
+        if (d.status != TargetStatus::detected) continue;
+        ++kept;
+        const double move = max_corner_error(d.target()->corners, ds.target()->corners);
+        moved += move > 0.0;
+        EXPECT_EQ(move, 0.0) << what << ": a flat tag's corners moved by its bow";
+      }
+  std::printf(
+      "bow measured on %d flat sharpened tags with cells under 2.5 px (largest %.2f px, %d above "
+      "border_bow_correction) and %d with larger cells (largest %.2f px); %d kept, %d of them "
+      "moved\n",
+      measured_small, worst_small, false_bows_small, measured_large, worst_large, kept, moved);
+  EXPECT_GT(false_bows_small, 0) << "no small sharpened tag looks bowed: this test shows nothing";
+  EXPECT_GE(measured_large, 10);
+}
+
+// The bow's settings out of their range: one message naming the field.
+TEST(BorderCheck, BowSettingsOutOfRangeNamed) {
+  const auto message = [](const DetectorSettings& s) {
+    try {
+      validate(s);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  DetectorSettings s;
+  EXPECT_EQ(message(s), "");
+  s.border_bow_correction = -0.1;
+  EXPECT_NE(message(s).find("border_bow_correction"), std::string::npos) << message(s);
+  s = DetectorSettings{};
+  s.border_bow_min_cell = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_NE(message(s).find("border_bow_min_cell"), std::string::npos) << message(s);
 }
 
 }  // namespace

@@ -651,7 +651,48 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
       out.reason = buf;
     }
   }
+  // A bow that a flat tag would not show is taken off (take_off_bow()): above
+  // border_bow_correction, significant, and measured on cells wide enough that the data cells
+  // next to the border cannot fake it. Not in a point-sampled image.
+  if (out.ok && out.bow.measured && !out.aliased && s.border_bow_correction > 0.0) {
+    double narrowest = std::numeric_limits<double>::infinity();
+    for (size_t k = 0; k < 4; ++k)
+      narrowest = std::min(narrowest, cv::norm(corners[(k + 1) % 4] - corners[k]));
+    bool bowed = false;
+    for (size_t k = 0; k < 4; ++k) {
+      const double shift = cv::norm(out.bow.corner_shift[k]);
+      bowed = bowed || (shift > s.border_bow_correction &&
+                        shift > s.border_significance * out.bow.corner_se[k]);
+    }
+    out.bow_taken_off = bowed && narrowest / n >= s.border_bow_min_cell;
+  }
   return out;
+}
+
+std::array<cv::Point2d, 4> take_off_bow(const std::array<cv::Point2d, 4>& corners,
+                                        const QuadBow& bow, const io::Calibration* calib) {
+  if (!bow.measured) return corners;
+  const io::Calibration* dist = calib && calib->has_distortion() ? calib : nullptr;
+  std::vector<cv::Point2d> c(corners.begin(), corners.end());
+  if (dist) c = io::ideal_pixels(c, *dist);
+  for (size_t k = 0; k < 4; ++k) c[k] += bow.corner_shift[k];
+  if (dist) c = io::distorted_pixels(c, *dist);
+  return {c[0], c[1], c[2], c[3]};
+}
+
+CornerCovariance bow_covariance(const QuadBow& bow) {
+  CornerCovariance cov = CornerCovariance::Zero();
+  if (!bow.measured) return cov;
+  for (size_t k = 0; k < 4; ++k) {
+    const Eigen::Vector2d v(bow.corner_shift[k].x, bow.corner_shift[k].y);
+    const double len = v.norm();
+    const Eigen::Index i = static_cast<Eigen::Index>(2 * k);
+    const double var = bow.corner_se[k] * bow.corner_se[k];
+    // Along the shift where it has a direction, else the same in every direction.
+    cov.block<2, 2>(i, i) = len > 0.0 ? Eigen::Matrix2d(var * (v / len) * (v / len).transpose())
+                                      : Eigen::Matrix2d(var * Eigen::Matrix2d::Identity());
+  }
+  return cov;
 }
 
 std::array<cv::Point2d, 4> remove_edge_bias(const std::array<cv::Point2d, 4>& corners,

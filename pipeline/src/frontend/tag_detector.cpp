@@ -206,6 +206,12 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
         if (covariance) *covariance += edge_bias_covariance(corners, bc, calib);
         corners = remove_edge_bias(corners, bc, calib);
       }
+      // Where the sides bow (a bent print), the corners where the bowed edges end
+      // (DetectorSettings::border_bow_correction).
+      if (bc.ok && bc.bow_taken_off) {
+        if (covariance) *covariance += bow_covariance(bc.bow);
+        corners = take_off_bow(corners, bc.bow, calib);
+      }
       impl_->seconds.check += seconds_since(t_check);
       return CandidateCheck{bc.ok, bc.reason, std::move(covariance)};
     };

@@ -98,6 +98,9 @@ struct BorderCheck {
   /// The sides' bow and where it puts the corners (quad_bow()); measured where the other tests
   /// passed and DetectorSettings::border_max_bow > 0.
   QuadBow bow;
+  /// The check passed and the bow is to be taken off the corners (take_off_bow();
+  /// DetectorSettings::border_bow_correction, border_bow_min_cell).
+  bool bow_taken_off = false;
 };
 
 /// The tag's bitmap as libapriltag prints it (apriltag_to_image): total_width x total_width
@@ -188,5 +191,15 @@ std::array<cv::Point2d, 4> remove_edge_bias(const std::array<cv::Point2d, 4>& co
 /// value (finite differences of remove_edge_bias). Zero where the correction left the corners.
 CornerCovariance edge_bias_covariance(const std::array<cv::Point2d, 4>& corners,
                                       const BorderCheck& check, const io::Calibration* calib);
+
+/// The corners moved to where the bowed sides end: each by bow.corner_shift (quad_bow()), in
+/// undistorted pixels where `calib` has distortion. Unchanged where the bow was not measured.
+std::array<cv::Point2d, 4> take_off_bow(const std::array<cv::Point2d, 4>& corners,
+                                        const QuadBow& bow, const io::Calibration* calib = nullptr);
+
+/// The covariance take_off_bow() adds to the corners [px^2, undistorted pixels where the
+/// calibration has distortion, as refine_corners()]: each corner's shift with its standard error
+/// along it (QuadBow::corner_se; the shifts' correlation between corners is left out).
+CornerCovariance bow_covariance(const QuadBow& bow);
 
 }  // namespace netvmo::frontend
