@@ -516,10 +516,16 @@ void add_detect(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(0.0, 100.0));
   cmd->add_option("--border-bow-correction", o->det.border_bow_correction,
                   "Corners: where the sides bow so that a corner lies more than this many px "
-                  "from where their straight lines meet (on cells of at least 2.5 px), every "
-                  "corner is moved to where the bowed sides end (0: off), 0 to 100")
+                  "from where their straight lines meet (on cells of at least "
+                  "--border-bow-min-cell), every corner is moved to where the bowed sides end "
+                  "(0: off), 0 to 100")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 100.0));
+  cmd->add_option("--border-bow-min-cell", o->det.border_bow_min_cell,
+                  "Corners: the bow is taken off only where the quad's narrowest cell is at "
+                  "least this many px (on smaller cells flat tags look bowed), 0 to 1000")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1000.0));
   cmd->add_option("--refine", o->refinement,
                   "Corner refinement of the target: none, subpix (cv::cornerSubPix) or edges "
                   "(lines fitted to the border edges)")

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -892,11 +893,11 @@ TEST(BorderCheck, FlatTagsShowNoBow) {
 // measured where the data cells next to the border, white at some and black at others, move
 // the outer edge's samples through the mask's negative lobe, and flat sides look bowed (the
 // 12-14 px tags of swatbotics_clipboard/clipboard08.png, cells of 1.5-1.8 px: 0.74-0.82 px).
-// Measured over a mask of amount 2-3 and radius 1.5 px, blur 0.7-1 px, raw and JPEG 85
-// (2026-12-04): the largest bow 0.85 px on cells under 2 px, 0.67 on 2-2.5 px, 0.56 on
-// 2.5-3 px, 0.42 on 3-4 px. So the bow is taken off only on cells of at least
-// border_bow_min_cell (2.5 px), where a flat tag's stays under border_bow_correction; and no
-// flat tag here has its corners moved.
+// Measured over masks of amount 1-3 and radius 0.8-1.5 px, blur 0.4-1 px, raw and JPEG 85
+// (2026-12-04): the largest bow 0.90 px on cells under 2 px, 0.67 on 2-2.5 px, 0.56 on
+// 2.5-3 px, 0.48 on 3-6 px; rendered flat tags in sRGB 0.5-0.70 px on cells of 2.5-2.6 px. So
+// the bow is taken off only on cells of at least border_bow_min_cell (4 px), where a flat
+// tag's stays under border_bow_correction; and no flat tag here has its corners moved.
 TEST(BorderCheck, SharpenedSmallCellsLookBowed) {
   const auto calib = testing::test_calibration();
   DetectorSettings unchecked = with_check(false);
@@ -906,7 +907,7 @@ TEST(BorderCheck, SharpenedSmallCellsLookBowed) {
   straight.border_bow_correction = 0.0;
   int measured_small = 0, measured_large = 0, false_bows_small = 0, kept = 0, moved = 0;
   double worst_small = 0.0, worst_large = 0.0;
-  for (const double dist : {4.0, 5.0, 6.0, 7.0, 8.0})
+  for (const double dist : {3.0, 5.0, 6.0, 7.0, 8.0})
     for (const int quality : {0, 85})
       for (int p = 0; p < 8; ++p) {
         const obs::SE3 pose =
@@ -958,7 +959,7 @@ TEST(BorderCheck, SharpenedSmallCellsLookBowed) {
         EXPECT_EQ(move, 0.0) << what << ": a flat tag's corners moved by its bow";
       }
   std::printf(
-      "bow measured on %d flat sharpened tags with cells under 2.5 px (largest %.2f px, %d above "
+      "bow measured on %d flat sharpened tags with cells under 4 px (largest %.2f px, %d above "
       "border_bow_correction) and %d with larger cells (largest %.2f px); %d kept, %d of them "
       "moved\n",
       measured_small, worst_small, false_bows_small, measured_large, worst_large, kept, moved);

@@ -112,15 +112,17 @@ struct DetectorSettings {
   /// its standard error), every corner is moved by its QuadBow::corner_shift, to where the bowed
   /// edges end (BorderCheck::bow_taken_off). 0.7 px is border_max_bow less the shift's own error
   /// on bent cards (at most 0.30 px), so that a corner left where the straight sides meet is
-  /// within 1 px of the print's; flat tags whose cells are at least border_bow_min_cell show at
-  /// most 0.56 px of bow, also sharpened (docs/frontend.md, "Bent prints: straight sides").
+  /// within 1 px of the print's; flat tags whose cells are at least 3 px show at most 0.48 px of
+  /// bow, also sharpened (docs/frontend.md, "Bent prints: straight sides").
   /// Not in a point-sampled image (its staircase bends the sides). 0: off.
   double border_bow_correction = 0.7;
   /// The narrowest cell [px] (the quad's shortest side over the black square's cells) on which
-  /// the bow is taken off: on smaller cells a camera's sharpening, which the blur estimate reads
-  /// as no blur, lets the data cells next to the border move the outer edge's samples, and flat
-  /// tags look bowed by up to 0.9 px (BorderCheck.SharpenedSmallCellsLookBowed).
-  double border_bow_min_cell = 2.5;
+  /// the bow is taken off: on small cells a camera's sharpening or tone curve, which the blur
+  /// estimate reads as no blur, lets the data cells next to the border move the outer edge's
+  /// samples, and flat tags look bowed: up to 0.9 px on cells under 2 px (sharpened,
+  /// BorderCheck.SharpenedSmallCellsLookBowed), 0.5-0.7 px on cells of 2.5 px (rendered in
+  /// sRGB), at most 0.48 px from 3 px; 4 px keeps a cell's margin above those.
+  double border_bow_min_cell = 4.0;
   /// Report the corners of the print's cell grid (remove_edge_bias()): each side of the quad
   /// fitted to the black border's outer edges moved inward by the print's edge bias the check
   /// measured across it on the tag's own data cells (ink spread and bloom grow the black, a
