@@ -9,7 +9,7 @@
 #   bash tools/realistic_effects.sh [--netvmo PATH] [--frames N] [--out DIR] [EFFECT ...]
 #
 # EFFECT names (default: all): clean ink+0.2 ink-0.2 bent1 bent gloss srgb vignetting psf1.0
-# bloom jpeg50 blur20ms rolling30us defocus realistic (bent1, bent: the card bent to a radius of
+# bloom jpeg50 sharpen blur20ms rolling30us defocus realistic (bent1, bent: the card bent to a radius of
 # 1 m and 0.25 m, its ends curling toward the camera). Takes about a minute per effect on two
 # shared cores at the default 20 frames.
 set -euo pipefail
@@ -28,7 +28,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 [ ${#effects[@]} -gt 0 ] || effects=(clean ink+0.2 ink-0.2 bent1 bent gloss srgb vignetting psf1.0 bloom
-                                     jpeg50 blur20ms rolling30us defocus realistic)
+                                     jpeg50 sharpen blur20ms rolling30us defocus realistic)
 [ -x "$netvmo" ] || { echo "realistic_effects.sh: no netvmo at $netvmo (build it, or --netvmo PATH)" >&2; exit 1; }
 if [ -z "$out" ]; then out=$(mktemp -d); trap 'rm -rf "$out"' EXIT; fi
 mkdir -p "$out"
@@ -47,6 +47,7 @@ effect_keys() {
     psf1.0) echo "clean|{psf_sigma: 1.0}" ;;
     bloom) echo "clean|{full_well: 120, bloom: 0.5}" ;;
     jpeg50) echo "clean|{jpeg_quality: 50}" ;;
+    sharpen) echo "clean|{psf_sigma: 0.8, sharpen_amount: 1.5, sharpen_sigma: 1.0}" ;;
     blur20ms) echo "clean|{exposure_time: 0.02}" ;;
     rolling30us) echo "clean|{line_delay: 3.0e-5}" ;;
     defocus) echo "clean|{f_number: 1.4, focal_length_mm: 8, focus_distance: 1.0}" ;;

@@ -65,6 +65,7 @@ figure bloom clean "{full_well: 200, bloom: 0.5}" 0 ", exposure: 1.5"
 figure vignetting clean "{vignetting: poly, vignetting_poly: [-0.7, 0, 0]}"
 figure psf clean "{psf_sigma: 1.5}"
 figure jpeg clean "{jpeg_quality: 15}"
+figure sharpen clean "{psf_sigma: 1.0, sharpen_amount: 2.0, sharpen_sigma: 1.5}"
 figure motion_blur clean "{exposure_time: 0.02}" 1.0
 figure rolling_shutter clean "{line_delay: 1.0e-4}" 2.0
 figure defocus clean "{f_number: 1.4, focal_length_mm: 25, focus_distance: 3.0}"

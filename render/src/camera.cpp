@@ -101,7 +101,7 @@ SensorModel SensorModel::realistic() {
 
 bool SensorModel::image_effects() const {
   return gain != 1.0 || tone != Tone::Linear || full_well > 0 || vignetting != Vignetting::None ||
-         psf_sigma > 0;
+         psf_sigma > 0 || sharpen_amount > 0;
 }
 
 double SensorModel::focal_length_m(double fx) const {
@@ -122,6 +122,10 @@ void SensorModel::validate() const {
     need(std::isfinite(a), "sensor.vignetting_poly coefficients must be finite");
   need(psf_sigma >= 0 && psf_sigma <= 20, "sensor.psf_sigma must be between 0 and 20 px");
   need(jpeg_quality >= 0 && jpeg_quality <= 100, "sensor.jpeg_quality must be between 1 and 100");
+  need(sharpen_amount >= 0 && sharpen_amount <= 10,
+       "sensor.sharpen_amount must be between 0 and 10");
+  need(sharpen_sigma >= 0.1 && sharpen_sigma <= 20,
+       "sensor.sharpen_sigma must be between 0.1 and 20 px");
   need(exposure_time >= 0 && exposure_time <= 10, "sensor.exposure_time must be 0..10 s");
   need(std::abs(line_delay) <= 1e-2, "sensor.line_delay must be within +-0.01 s");
   need(f_number == 0 || (f_number >= 0.5 && f_number <= 1000),
@@ -166,6 +170,7 @@ void CameraSpec::set_resolution(int width, int height) {
   k.cx = (k.cx + 0.5) * s - 0.5;
   k.cy = (k.cy + 0.5) * s - 0.5;
   sensor.psf_sigma *= s;
+  sensor.sharpen_sigma *= s;
   sensor.pixel_pitch_um /= s;
   sensor.line_delay /= s;
 }

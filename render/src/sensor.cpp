@@ -168,6 +168,9 @@ void develop_image(const SensorModel& sm, const Imaging& im, const Intrinsics& K
   }
   if (sm.psf_sigma > 0) gaussian_blur(S, w, h, sm.psf_sigma);
   if (sm.full_well > 0) full_well(S, w, h, sm.full_well, sm.bloom);
+  // With sharpening the encoded image is kept whole for the unsharp mask, else each pixel goes
+  // straight to 8 bits.
+  std::vector<double> E(sm.sharpen_amount > 0 ? S.size() : 0);
   const int tiles_x = (w + im.tile - 1) / im.tile, tiles_y = (h + im.tile - 1) / im.tile;
   for (int tile = 0; tile < tiles_x * tiles_y; ++tile) {
     Gauss gauss(tile_seed(im.seed, camera_id, frame, tile));
@@ -180,8 +183,23 @@ void develop_image(const SensorModel& sm, const Imaging& im, const Intrinsics& K
           const double var = im.read_noise * im.read_noise + im.shot_noise * std::max(dn, 0.0);
           dn += std::sqrt(var) * gauss();
         }
-        row[x] = to_dn(255.0 * tone_curve(sm, sm.gain * dn / 255.0));
+        const double encoded = 255.0 * tone_curve(sm, sm.gain * dn / 255.0);
+        if (E.empty())
+          row[x] = to_dn(encoded);
+        else
+          E[size_t(y * w + x)] = encoded;
       }
+    }
+  }
+  if (E.empty()) return;
+  std::vector<double> G = E;
+  gaussian_blur(G, w, h, sm.sharpen_sigma);
+  const double a = sm.sharpen_amount;
+  for (int y = 0; y < h; ++y) {
+    auto* row = out.ptr<std::uint8_t>(y);
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y * w + x);
+      row[x] = to_dn(E[i] + a * (E[i] - G[i]));
     }
   }
 }

@@ -221,14 +221,17 @@ TEST(RenderScenario, SensorKeys) {
       "sensor.yaml",
       replaced(kMinimal, cam,
                with("{gain: 2, gamma: 2.4, full_well: 200, bloom: 0.5, vignetting: cos4, "
-                    "psf_sigma: 0.7, jpeg_quality: 75, exposure_time: 0.01, line_delay: 3e-5, "
-                    "f_number: 2, focus_distance: 1.5, focal_length_mm: 8}"))));
+                    "psf_sigma: 0.7, jpeg_quality: 75, sharpen_amount: 1.5, sharpen_sigma: 0.8, "
+                    "exposure_time: 0.01, line_delay: 3e-5, f_number: 2, focus_distance: 1.5, "
+                    "focal_length_mm: 8}"))));
   const auto& sm = s.cameras[0].sensor;
   EXPECT_DOUBLE_EQ(sm.gain, 2);
   EXPECT_EQ(sm.tone, netvmo::render::SensorModel::Tone::Gamma);
   EXPECT_DOUBLE_EQ(sm.gamma, 2.4);
   EXPECT_EQ(sm.vignetting, netvmo::render::SensorModel::Vignetting::Cos4);
   EXPECT_EQ(sm.jpeg_quality, 75);
+  EXPECT_DOUBLE_EQ(sm.sharpen_amount, 1.5);
+  EXPECT_DOUBLE_EQ(sm.sharpen_sigma, 0.8);
   EXPECT_DOUBLE_EQ(sm.line_delay, 3e-5);
   EXPECT_DOUBLE_EQ(sm.focal_length_m(70), 8e-3);
   EXPECT_FALSE(s.cameras[1].sensor.image_effects());
@@ -252,6 +255,9 @@ TEST(RenderScenario, SensorKeys) {
   expect_rejected("s12.yaml", cam, with("{line_delay: 1}"), k + "line_delay");
   expect_rejected("s13.yaml", cam, with("{shutter: 1}"), k + "shutter");
   expect_rejected("s14.yaml", cam, with("fancy"), "cameras[0].sensor");
+  expect_rejected("s15.yaml", cam, with("{sharpen_amount: -1}"), k + "sharpen_amount");
+  expect_rejected("s16.yaml", cam, with("{sharpen_amount: 1, sharpen_sigma: 0}"),
+                  k + "sharpen_sigma");
 }
 
 TEST(RenderScenario, LensKeys) {

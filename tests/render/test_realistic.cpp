@@ -3,7 +3,10 @@
 // glossy print adds its Blinn-Phong term, a bent card is imaged where its cylinder puts it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+
+#include <opencv2/imgproc.hpp>
 
 #include "fixtures.hpp"
 
@@ -231,6 +234,57 @@ TEST(RealisticSensor, PsfBlursAnEdgeByItsSigma) {
   const double expected = 2 * 1.2816 * std::sqrt(4.0 + 1.0 / 12);
   EXPECT_NEAR(rise_width(r.render(0, 0), int(kLeftEdge) - 8, int(kLeftEdge) + 8, 200, 280),
               expected, 0.15 * expected);
+}
+
+// An unsharp mask of amount k and sigma s_m on the encoded picture: (1) the sharpened picture is
+// the plain one's unsharp mask, DN' = DN + k (DN - G * DN), to within the two pictures' rounding
+// to 8 bits (1/2 DN each, through 1 + k and k: at most 1 + k DN); (2) on an edge blurred by the
+// PSF, whose profile is about that of a Gaussian of s^2 = psf^2 + 1/12 (with the pixel's box),
+// the mask's blur of it is one of S^2 = s^2 + s_m^2, and the sharpened profile is
+//   E'(x) = E(x) + k (W - B) (Phi(x / S) - Phi(x / s)),  E(x) = B + (W - B) (1 - Phi(x / s)),
+// x the distance past the edge into the black (W, B the white and black levels): it rises above
+// the white before the edge and dips below the black after it, by the closed form's extremes.
+// (Near the edge's middle the rendered profile is 1-2 DN off the Gaussian model, which the mask
+// doubles; the extremes lie where it is within 0.4 DN.)
+TEST(RealisticSensor, SharpeningIsTheUnsharpMaskOfTheBlurredEdge) {
+  constexpr double k = 1.0, sm = 1.5, psf = 1.5;
+  SceneDescription s = fronto_scene();
+  s.cameras[0].sensor.psf_sigma = psf;
+  Renderer plain(s);
+  s.cameras[0].sensor.sharpen_amount = k;
+  s.cameras[0].sensor.sharpen_sigma = sm;
+  Renderer sharp(s);
+  const cv::Mat a = plain.render(0, 0), b = sharp.render(0, 0);
+  // (1)
+  cv::Mat p, g;
+  a.convertTo(p, CV_64F);
+  const int rad = int(std::ceil(3.5 * sm));
+  cv::GaussianBlur(p, g, cv::Size(2 * rad + 1, 2 * rad + 1), sm, sm, cv::BORDER_REPLICATE);
+  double worst = 0.0;
+  for (int v = 0; v < b.rows; ++v)
+    for (int u = 0; u < b.cols; ++u) {
+      const double e =
+          std::clamp((1 + k) * p.at<double>(v, u) - k * g.at<double>(v, u), 0.0, 255.0);
+      worst = std::max(worst, std::abs(b.at<std::uint8_t>(v, u) - e));
+    }
+  EXPECT_LE(worst, 1 + k);
+  // (2)
+  const double W = column_mean(a, int(kLeftEdge) - 7, 200, 280);
+  const double B = column_mean(a, int(kLeftEdge) + 8, 200, 280);
+  const double sd = std::sqrt(psf * psf + 1.0 / 12), SD = std::sqrt(sd * sd + sm * sm);
+  const auto Phi = [](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
+  double peak = 0.0, dip = 255.0, model_peak = 0.0, model_dip = 255.0;
+  for (int u = int(kLeftEdge) - 7; u <= int(kLeftEdge) + 8; ++u) {
+    const double x = u - kLeftEdge;
+    const double e = B + (W - B) * (1 - Phi(x / sd)) + k * (W - B) * (Phi(x / SD) - Phi(x / sd));
+    model_peak = std::max(model_peak, e);
+    model_dip = std::min(model_dip, e);
+    peak = std::max(peak, column_mean(b, u, 200, 280));
+    dip = std::min(dip, column_mean(b, u, 200, 280));
+  }
+  EXPECT_GT(model_peak, W + 5) << "the closed form shows no overshoot at these settings";
+  EXPECT_NEAR(peak, model_peak, 1.0) << "white level " << W;
+  EXPECT_NEAR(dip, std::max(model_dip, 0.0), 1.0) << "black level " << B;
 }
 
 TEST(RealisticSensor, BloomSpillsIntoTheNeighbours) {

@@ -204,8 +204,9 @@ render::PrintModel read_print(const Value& v, bool realistic) {
 }
 
 // sensor: clean | realistic | {preset: clean|realistic, gain, tone, gamma, full_well, bloom,
-// vignetting, vignetting_poly, psf_sigma, jpeg_quality, exposure_time, line_delay, f_number,
-// focus_distance, focal_length_mm, pixel_pitch_um} (render::SensorModel)
+// vignetting, vignetting_poly, psf_sigma, jpeg_quality, sharpen_amount, sharpen_sigma,
+// exposure_time, line_delay, f_number, focus_distance, focal_length_mm, pixel_pitch_um}
+// (render::SensorModel)
 render::SensorModel read_sensor(const Value& v, bool realistic) {
   using SM = render::SensorModel;
   if (v.node().IsScalar()) return read_preset(v) ? SM::realistic() : SM();
@@ -259,6 +260,10 @@ render::SensorModel read_sensor(const Value& v, bool realistic) {
     if (sm.jpeg_quality < 0 || sm.jpeg_quality > 100)
       x->fail("must be between 1 and 100 (0 = PNG)");
   }
+  if (const auto x = m.find("sharpen_amount"))
+    sm.sharpen_amount = in_range(*x, 0, 10, "must be between 0 and 10 (0 = none)");
+  if (const auto x = m.find("sharpen_sigma"))
+    sm.sharpen_sigma = in_range(*x, 0.1, 20, "must be between 0.1 and 20 [px]");
   if (const auto x = m.find("exposure_time"))
     sm.exposure_time = in_range(*x, 0, 10, "must be between 0 and 10 [s]");
   if (const auto x = m.find("line_delay"))

@@ -71,6 +71,12 @@ struct SensorModel {
   /// JPEG quality (1..100) of the images `netvmo render` writes (cv::imencode); 0 = PNG. The
   /// renderer's own images are never compressed.
   int jpeg_quality = 0;
+  /// In-camera sharpening, as phone and webcam ISPs apply before compressing: an unsharp mask on
+  /// the encoded image (after the tone curve and the noise), DN' = DN + amount (DN - G * DN),
+  /// G a Gaussian of sharpen_sigma px (separable, edges replicated). It steepens edges and rings
+  /// beside them. 0 = none.
+  double sharpen_amount = 0.0;
+  double sharpen_sigma = 1.0;  ///< the unsharp mask's Gaussian [px]
 
   // Exposure and shutter.
   /// Exposure time [s]: the samples of a pixel are spread uniformly over it (motion blur). The
