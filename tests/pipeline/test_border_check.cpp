@@ -933,8 +933,7 @@ TEST(BorderCheck, SharpenedSmallCellsLookBowed) {
         const auto a = TagDetector(unchecked).detect(img, &calib);
         if (a.status != TargetStatus::detected) continue;
         const auto& c = a.target()->corners;
-        double side = std::numeric_limits<double>::infinity();
-        for (size_t k = 0; k < 4; ++k) side = std::min(side, cv::norm(c[(k + 1) % 4] - c[k]));
+        const double side = narrowest_side(c);
         const QuadBow bow = quad_bow(img, c, 8, &calib);
         if (bow.measured) {
           double shift = 0.0;

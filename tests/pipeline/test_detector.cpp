@@ -486,8 +486,7 @@ TEST(FrontEnd, SmallTagFoundWithinTheAcquisitionPeriod) {
     img.convertTo(img16, CV_16SC1);
     cv::Mat(img16 + noise).convertTo(img, CV_8UC1);
     const auto truth = testing::project_corners(calib, pose, size);
-    double side = 1e9;
-    for (size_t k = 0; k < 4; ++k) side = std::min(side, cv::norm(truth[k] - truth[(k + 1) % 4]));
+    const double side = narrowest_side(truth);
     EXPECT_GT(side, 17.0) << "pose " << p;
     EXPECT_LT(side, 23.0) << "pose " << p;
     if (TagDetector().detect(img).status == TargetStatus::detected) continue;  // not a miss

@@ -655,16 +655,13 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
   // border_bow_correction, significant, and measured on cells wide enough that the data cells
   // next to the border cannot fake it. Not in a point-sampled image.
   if (out.ok && out.bow.measured && !out.aliased && s.border_bow_correction > 0.0) {
-    double narrowest = std::numeric_limits<double>::infinity();
-    for (size_t k = 0; k < 4; ++k)
-      narrowest = std::min(narrowest, cv::norm(corners[(k + 1) % 4] - corners[k]));
     bool bowed = false;
     for (size_t k = 0; k < 4; ++k) {
       const double shift = cv::norm(out.bow.corner_shift[k]);
       bowed = bowed || (shift > s.border_bow_correction &&
                         shift > s.border_significance * out.bow.corner_se[k]);
     }
-    out.bow_taken_off = bowed && narrowest / n >= s.border_bow_min_cell;
+    out.bow_taken_off = bowed && narrowest_side(corners) / n >= s.border_bow_min_cell;
   }
   return out;
 }

@@ -3,7 +3,6 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <optional>
 
@@ -145,12 +144,6 @@ bool settled(const FrameDetections& d) {
   return true;
 }
 }  // namespace
-
-double narrowest_side(const std::array<cv::Point2d, 4>& c) {
-  double m = std::numeric_limits<double>::infinity();
-  for (size_t k = 0; k < 4; ++k) m = std::min(m, cv::norm(c[(k + 1) % 4] - c[k]));
-  return m;
-}
 
 void validate(const TrackingSettings& t) {
   auto bad = [](const std::string& what) { throw InputError("tracking settings: " + what); };

@@ -13,7 +13,6 @@ namespace {
 
 using detail::edge_offset;
 using detail::edge_spread;
-using detail::min_side;
 
 // One edge's total-least-squares line: through `mean` along unit `dir`, with the first-order
 // variances of its two parameters from the scatter of its samples about it (s^2 = sum r^2 /
@@ -82,7 +81,7 @@ std::array<double, 4> border_widths(const std::array<cv::Point2d, 4>& c, int n) 
 class SideSampler {
  public:
   SideSampler(const cv::Mat& g, const std::array<cv::Point2d, 4>& c, int border_cells)
-      : g_(g), c_(c), cell_(min_side(c) / border_cells) {
+      : g_(g), c_(c), cell_(narrowest_side(c) / border_cells) {
     w_ = std::clamp(std::min(0.45 * cell_, cell_ - 1.2), 1.0, 4.0);
     widths_ = border_widths(c, border_cells);
     for (const auto& p : c) centroid_ += 0.25 * p;
@@ -239,7 +238,7 @@ bool refine_edge_lines(const cv::Mat& g, std::array<cv::Point2d, 4>& c, int bord
 }
 
 void refine_subpix(const cv::Mat& g, std::array<cv::Point2d, 4>& c, int border_cells) {
-  const double cell = min_side(c) / border_cells;
+  const double cell = narrowest_side(c) / border_cells;
   const int win = std::clamp(static_cast<int>(std::lround(0.5 * cell)), 2, 6);
   std::vector<cv::Point2f> pts;
   for (const auto& p : c) pts.emplace_back(static_cast<float>(p.x), static_cast<float>(p.y));

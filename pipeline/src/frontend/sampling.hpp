@@ -22,12 +22,6 @@ inline double sample_bilinear(const cv::Mat& g, double x, double y) {
          ay * ((1 - ax) * r1[x0] + ax * r1[x0 + 1]);
 }
 
-inline double min_side(const std::array<cv::Point2d, 4>& c) {
-  double m = 1e300;
-  for (int k = 0; k < 4; ++k) m = std::min(m, cv::norm(c[(k + 1) % 4] - c[k]));
-  return m;
-}
-
 /// Sub-pixel position of the dark-to-bright step along the outward normal n through p: the
 /// centroid of the intensity differences in a window re-centred on the estimate (exact for a
 /// pixel-integrated straight step edge sampled with bilinear interpolation). Returns false if the

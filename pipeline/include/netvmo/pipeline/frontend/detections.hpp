@@ -3,7 +3,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
+#include <limits>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
@@ -15,6 +17,13 @@ namespace netvmo::frontend {
 
 /// Covariance of a quad's four corners [px^2], ordered (x0, y0, ..., x3, y3) as the corners.
 using CornerCovariance = Eigen::Matrix<double, 8, 8>;
+
+/// Length of the shortest side of a quad [px] (the "narrowest side" of a projected tag).
+inline double narrowest_side(const std::array<cv::Point2d, 4>& corners) {
+  double m = std::numeric_limits<double>::infinity();
+  for (size_t k = 0; k < 4; ++k) m = std::min(m, cv::norm(corners[(k + 1) % 4] - corners[k]));
+  return m;
+}
 
 /// One decoded tag.
 struct TagDetection {

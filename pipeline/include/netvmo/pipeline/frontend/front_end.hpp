@@ -82,9 +82,6 @@ obs::FeatureModel tag_points(const io::TargetConfig& target, const std::vector<i
 /// single-tag target, else tag_points(target, o.slots).
 obs::FeatureModel observation_model(const io::TargetConfig& target, const Observation& o);
 
-/// Length of the shortest side of a quad [px] (the "narrowest side" of a projected tag).
-double narrowest_side(const std::array<cv::Point2d, 4>& corners);
-
 /// Tracking and acquisition: how each frame is searched (FrontEnd::observe with a TrackState).
 /// With several targets "the target" below is every target: the window covers every tag
 /// accepted in the last frame, and the whole image is searched whenever the window misses any
