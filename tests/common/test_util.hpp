@@ -7,23 +7,69 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
 #include <sstream>
 #include <string>
+#include <system_error>
+#include <vector>
 
 #include "netvmo/pipeline/error.hpp"
 
 namespace netvmo::test {
 
-/// An empty scratch folder under the system's temporary directory, unique per process.
-inline std::filesystem::path scratch_dir(const std::string& name) {
+/// The scratch folders a test program made: removed when it ends with every test passed, kept
+/// for a look (and named on stderr) when one failed. One instance per program, appended to
+/// GoogleTest's listeners, which own it, on first use.
+class ScratchFolders : public ::testing::EmptyTestEventListener {
+ public:
+  static ScratchFolders& instance() {
+    static ScratchFolders* const self = [] {
+      auto* l = new ScratchFolders;
+      ::testing::UnitTest::GetInstance()->listeners().Append(l);
+      return l;
+    }();
+    return *self;
+  }
+  void add(const std::filesystem::path& d) {
+    if (std::find(dirs_.begin(), dirs_.end(), d) == dirs_.end()) dirs_.push_back(d);
+  }
+  void OnTestProgramEnd(const ::testing::UnitTest& unit_test) override {
+    for (const auto& d : dirs_) {
+      if (!unit_test.Passed()) {
+        std::fprintf(stderr, "scratch folder kept: %s\n", d.c_str());
+        continue;
+      }
+      std::error_code ec;
+      std::filesystem::remove_all(d, ec);
+      if (ec)
+        std::fprintf(stderr, "scratch folder %s not removed: %s\n", d.c_str(),
+                     ec.message().c_str());
+    }
+  }
+
+ private:
+  ScratchFolders() = default;
+  std::vector<std::filesystem::path> dirs_;
+};
+
+/// An empty folder under the system's temporary directory, unique per process (so concurrent
+/// test runs never collide); its caller removes it. For programs without GoogleTest.
+inline std::filesystem::path make_scratch_dir(const std::string& name) {
   const auto d = std::filesystem::temp_directory_path() /
                  ("netvmo_test_" + name + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(d);
   std::filesystem::create_directories(d);
+  return d;
+}
+
+/// make_scratch_dir() in a test program: removed when the program passes (ScratchFolders).
+inline std::filesystem::path scratch_dir(const std::string& name) {
+  const auto d = make_scratch_dir(name);
+  ScratchFolders::instance().add(d);
   return d;
 }
 

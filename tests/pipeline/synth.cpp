@@ -367,8 +367,7 @@ TempDirs g_temp_dirs;
 }  // namespace
 
 fs::path fresh_dir(const std::string& name) {
-  // per process, so concurrent test runs (ctest -j, other checkouts) never collide
-  const fs::path d = test::scratch_dir(name);
+  const fs::path d = test::make_scratch_dir(name);
   g_temp_dirs.dirs.push_back(d);
   return d;
 }
