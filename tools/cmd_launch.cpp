@@ -28,19 +28,16 @@ using nlohmann::json;
 
 namespace {
 
-std::string num(double v) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.17g", v);
-  return b;
-}
-
 // The node's share of the run options (outputs and frame limits are the launcher's).
 std::vector<std::string> forwarded(const RunCliOptions& o) {
-  std::vector<std::string> a = {
-      "--ke",       num(o.k_e),      "--ks",     num(o.k_s), "--error",
-      o.error,      "--init",        o.init,     "--rounds", std::to_string(o.rounds),
-      "--decimate", num(o.decimate), "--refine", o.refine,   "--estimator",
-      o.estimator};
+  std::vector<std::string> a = {"--ke",        io::exact_text(o.k_e),
+                                "--ks",        io::exact_text(o.k_s),
+                                "--error",     o.error,
+                                "--init",      o.init,
+                                "--rounds",    std::to_string(o.rounds),
+                                "--decimate",  io::exact_text(o.decimate),
+                                "--refine",    o.refine,
+                                "--estimator", o.estimator};
   if (o.keep_going) a.push_back("--keep-going");
   for (auto& s : search_arguments(o.tracking)) a.push_back(std::move(s));
   return a;

@@ -1,5 +1,6 @@
 #include "netvmo/pipeline/io/atomic_file.hpp"
 
+#include <cstdio>
 #include <system_error>
 
 #include "netvmo/pipeline/error.hpp"
@@ -46,6 +47,12 @@ void ensure_directory(const fs::path& dir) {
   if (ec || !fs::is_directory(dir))
     throw InputError(dir.string() + ": cannot create output directory" +
                      (ec ? ": " + ec.message() : std::string()));
+}
+
+std::string exact_text(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
 }
 
 }  // namespace netvmo::io

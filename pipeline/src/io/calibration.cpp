@@ -480,15 +480,10 @@ void save_calibration_opencv(const fs::path& path, const Calibration& c) {
 
 void save_calibration_ros(const fs::path& path, const Calibration& c,
                           const std::string& camera_name) {
-  const auto num = [](double v) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%.17g", v);
-    return std::string(b);
-  };
   const auto matrix = [&](const char* key, int rows, int cols, const std::vector<double>& v) {
     std::string s = std::string(key) + ":\n  rows: " + std::to_string(rows) +
                     "\n  cols: " + std::to_string(cols) + "\n  data: [";
-    for (size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + num(v[i]);
+    for (size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + exact_text(v[i]);
     return s + "]\n";
   };
   const cv::Matx33d& K = c.K;

@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/io/atomic_file.hpp"
 
 namespace netvmo::io {
 namespace fs = std::filesystem;
@@ -277,7 +278,7 @@ std::string format_detection_row(const DetectionRow& r) {
 }
 
 std::string format_timestamp_row(int camera, int frame, double t) {
-  return std::to_string(camera) + "," + std::to_string(frame) + "," + fmt("%.17g", t);
+  return std::to_string(camera) + "," + std::to_string(frame) + "," + exact_text(t);
 }
 
 std::string format_camera_pose_row(int camera, int frame, double t, const obs::SE3& g_wi) {

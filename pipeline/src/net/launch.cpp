@@ -24,12 +24,6 @@ using nlohmann::json;
 
 namespace {
 
-std::string num(double v) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.17g", v);
-  return b;
-}
-
 std::string last_line(const fs::path& log) {
   std::ifstream f(log);
   std::string line, last;
@@ -97,7 +91,7 @@ std::vector<std::string> node_argv(const LaunchSettings& s, int camera_id,
                                    "--domain",
                                    std::to_string(s.domain),
                                    "--timeout",
-                                   num(s.node_timeout)};
+                                   io::exact_text(s.node_timeout)};
   if (s.frames > 0 || !s.live)
     for (auto a : {std::string("--frames"), std::to_string(s.frames)}) argv.push_back(a);
   if (!s.security.empty())
@@ -107,19 +101,20 @@ std::vector<std::string> node_argv(const LaunchSettings& s, int camera_id,
       argv.push_back(a);
   if (s.live)
     for (auto a :
-         {std::string("--live"), std::string("--duration"), num(s.live->duration_s),
-          std::string("--idle"), num(s.live->idle_s), std::string("--lag"), num(s.live->lag_s)})
+         {std::string("--live"), std::string("--duration"), io::exact_text(s.live->duration_s),
+          std::string("--idle"), io::exact_text(s.live->idle_s), std::string("--lag"),
+          io::exact_text(s.live->lag_s)})
       argv.push_back(a);
   for (const auto& a : s.run_arguments) argv.push_back(a);
   if (s.async)
-    for (auto a :
-         {std::string("--mode"), std::string("async"), std::string("--speed"), num(s.speed),
-          std::string("--stale"), num(s.stale), std::string("--drop"), num(s.drop),
-          std::string("--delay"), num(s.delay), std::string("--seed"), std::to_string(s.seed),
-          std::string("--start-file"), (nodes_dir / "start.txt").string()})
+    for (auto a : {std::string("--mode"), std::string("async"), std::string("--speed"),
+                   io::exact_text(s.speed), std::string("--stale"), io::exact_text(s.stale),
+                   std::string("--drop"), io::exact_text(s.drop), std::string("--delay"),
+                   io::exact_text(s.delay), std::string("--seed"), std::to_string(s.seed),
+                   std::string("--start-file"), (nodes_dir / "start.txt").string()})
       argv.push_back(a);
   if (const auto c = s.clock_offsets.find(camera_id); c != s.clock_offsets.end())
-    for (auto a : {std::string("--clock-offset"), num(c->second)}) argv.push_back(a);
+    for (auto a : {std::string("--clock-offset"), io::exact_text(c->second)}) argv.push_back(a);
   return argv;
 }
 
@@ -160,7 +155,7 @@ LaunchOutcome run_launch(const io::NetworkConfig& net, const LaunchSettings& s,
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
     outcome.start_epoch = epoch_seconds() + kLaunchStartMargin;
-    io::write_file_atomic(start_file, num(outcome.start_epoch) + "\n");
+    io::write_file_atomic(start_file, io::exact_text(outcome.start_epoch) + "\n");
     plan.kill_at += outcome.start_epoch - epoch_seconds();  // supervision starts now
     if (s.live)
       std::printf(
@@ -217,7 +212,7 @@ void check_launch(const LaunchOutcome& outcome, const io::NetworkConfig& net,
   if (!stopped.empty()) {
     std::string ids;
     for (int id : stopped) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
-    throw std::runtime_error("timeout after " + num(s.timeout) +
+    throw std::runtime_error("timeout after " + io::exact_text(s.timeout) +
                              " s: stopped the nodes of cameras " + ids + "; see " +
                              (keep_failed() / "nodes").string());
   }

@@ -31,23 +31,14 @@ constexpr const char* kHeader =
     "frame,t,delta,read_failed,status,tag_id,hamming,margin,c0x,c0y,c1x,c1y,c2x,c2y,c3x,c3y,"
     "f0,f1,f2,f3,f4,f5,f6,f7,pnp,pnp_pose[12],initialized,est_w[12],indep,indep_w[12]";
 
-void put_pose(std::string& s, const SE3& g) {
-  char b[40];
-  for (int r = 0; r < 3; ++r) {
-    std::snprintf(b, sizeof b, ",%.17g", g.translation()(r));
-    s += b;
-  }
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) {
-      std::snprintf(b, sizeof b, ",%.17g", g.linear()(r, c));
-      s += b;
-    }
+void put(std::string& s, double v) {
+  (s += ',') += io::exact_text(v);
 }
 
-void put(std::string& s, double v) {
-  char b[40];
-  std::snprintf(b, sizeof b, ",%.17g", v);
-  s += b;
+void put_pose(std::string& s, const SE3& g) {
+  for (int r = 0; r < 3; ++r) put(s, g.translation()(r));
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) put(s, g.linear()(r, c));
 }
 
 std::string frame_row(int k, double t, const frontend::Observation& cam,

@@ -75,11 +75,7 @@ void write_inputs_cache(const fs::path& file, const sources::NetworkSource& sour
   f << cache_header(source, options, in.frames.size()) << '\n';
   f << "frame,camera_index,delta,f0,f1,f2,f3,f4,f5,f6,f7,pnp,px,py,pz,r00,r01,r02,r10,r11,r12,"
        "r20,r21,r22\n";
-  char b[64];
-  const auto num = [&](double v) {
-    std::snprintf(b, sizeof b, ",%.17g", v);
-    f << b;
-  };
+  const auto num = [&](double v) { f << ',' << io::exact_text(v); };
   for (size_t k = 0; k < in.frames.size(); ++k)
     for (size_t i = 0; i < in.frames[k].size(); ++i) {
       const auto& z = in.frames[k][i];

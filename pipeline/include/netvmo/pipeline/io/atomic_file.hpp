@@ -37,4 +37,8 @@ void write_file_atomic(const std::filesystem::path& path, const std::string& con
 /// Creates a directory (and parents); throws InputError naming it if that fails.
 void ensure_directory(const std::filesystem::path& dir);
 
+/// `v` as text that reads back as the same double (printf's %.17g): the numbers of CSV rows,
+/// calibration files and command lines that another process reads.
+std::string exact_text(double v);
+
 }  // namespace netvmo::io
