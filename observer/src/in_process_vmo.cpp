@@ -73,11 +73,11 @@ bool InProcessVmo::supports(const CameraObserver& camera) {
   return &camera.estimator() == &estimators().find("vmo");
 }
 
-void InProcessVmo::for_each(WorkerPool* pool, const std::function<void(int)>& f) const {
+void InProcessVmo::for_each(WorkerPool* pool, int count, const std::function<void(int)>& f) const {
   if (pool)
-    pool->for_each(n_, pool->size(), f);
+    pool->for_each(count, pool->size(), f);
   else
-    for (int i = 0; i < n_; ++i) f(i);
+    for (int i = 0; i < count; ++i) f(i);
 }
 
 bool InProcessVmo::gather(const CameraObserver& c, int p) {
@@ -135,13 +135,65 @@ bool InProcessVmo::step(int p, int cur, const Measurement& z, double h, bool pub
     g_bar_[k] = kernel::integrate(g_bar_[k], still, u_[k], h, &unit);
   }
   if (!publish) return true;
-  auto& next = pub_[1 - cur][k];
-  next = kernel::compose(g_wi_[k], g_bar_[k]);
+  pub_[1 - cur][k] = kernel::compose(g_wi_[k], g_bar_[k]);
+  return publish_message(k, cur, unit);
+}
+
+bool InProcessVmo::publish_message(size_t k, int cur, bool unit) {
+  const auto& next = pub_[1 - cur][k];
   pub_init_[1 - cur][k] = init_[k];
   // CameraObserver::receive's check, which accepts every finite product of a camera pose with
   // room and a rotation fresh from the quaternion (kernel::check_has_room).
   if (unit && wi_room_[k]) return kernel::finite(next);
   return kernel::check_pose(next) == MessageVerdict::accepted;
+}
+
+bool InProcessVmo::step_pair(int p, int cur, const std::vector<Measurement>& z, double h,
+                             bool publish) {
+  const auto k = static_cast<size_t>(p), k1 = k + 1;
+  const auto lane_fits = [&](size_t c) { return init_[c] && (!sees_[c] || pose_visual_[c]); };
+  if (!lane_fits(k) || !lane_fits(k1)) {  // step() for each (both run)
+    const bool first = step(p, cur, z[static_cast<size_t>(order_[k])], h, publish);
+    const bool second = step(p + 1, cur, z[static_cast<size_t>(order_[k1])], h, publish);
+    return first && second;
+  }
+  // step()'s initialised branch, both cameras at once (Vmo::step: (eq:EsRRBM) with
+  // (eq:input_f-)).
+  const auto& P = pub_[cur];
+  const auto& P_init = pub_init_[cur];
+  kernel::PoseSum nb[2];
+  for (size_t l = 0; l < 2; ++l)
+    for (int a = offset_[k + l]; a < offset_[k + l + 1]; ++a) {
+      const auto j = static_cast<size_t>(nbr_[static_cast<size_t>(a)]);
+      if (P_init[j]) nb[l].add(P[j]);
+    }
+  auto mutual = kernel::mutual_sum(
+      kernel::pack(P[k], P[k1]), kernel::pack(nb[0].sum, nb[1].sum),
+      kernel::X2{static_cast<double>(nb[0].count), static_cast<double>(nb[1].count)});
+  const auto none = kernel::mask2(nb[0].count == 0, nb[1].count == 0);  // mutual term zero
+  for (int r = 0; r < 6; ++r) mutual(r) = kernel::select(none, kernel::X2{0.0, 0.0}, mutual(r));
+  const auto g_bar = kernel::pack(g_bar_[k], g_bar_[k1]);
+  const auto sees = kernel::mask2(sees_[k] != 0, sees_[k1] != 0);
+  // Where one of the two does not see, it takes its own estimate as the measured pose: its lane's
+  // visual error is computed and not used.
+  const auto u =
+      !sees_[k] && !sees_[k1]
+          ? kernel::vmo_input(*s_, mutual, mutual, sees)
+          : kernel::vmo_input(
+                *s_, mutual,
+                kernel::pose_error(g_bar, kernel::pack(sees_[k] ? g_io_[k] : g_bar_[k],
+                                                       sees_[k1] ? g_io_[k1] : g_bar_[k1])),
+                sees);
+  kernel::unpack(u, u_[k], u_[k1]);
+  auto g = kernel::right_step(g_bar, u, h);  // static cameras (run())
+  const kernel::X2 n = kernel::orthonormalise(g.R);
+  kernel::unpack(g, g_bar_[k], g_bar_[k1]);
+  if (!publish) return true;
+  kernel::unpack(kernel::compose(kernel::pack(g_wi_[k], g_wi_[k1]), g), pub_[1 - cur][k],
+                 pub_[1 - cur][k1]);
+  const bool first = publish_message(k, cur, n[0] >= 1.0 && kernel::finite(g_bar_[k]));
+  const bool second = publish_message(k1, cur, n[1] >= 1.0 && kernel::finite(g_bar_[k1]));
+  return first && second;
 }
 
 void InProcessVmo::keep(int cur) {
@@ -185,7 +237,7 @@ int InProcessVmo::run(std::vector<CameraObserver>& cams, const std::vector<Measu
   int done = 0, cur = 0;
   // The rounds run over positions p (breadth_first_order); the passes that touch the cameras
   // themselves (gather, write_back) over cameras i, which are large: in memory order.
-  for_each(pool, [&](int i) {
+  for_each(pool, n_, [&](int i) {
     const auto p = position_[static_cast<size_t>(i)];
     auto& c = cams[static_cast<size_t>(i)];
     c.set_measurement(z[static_cast<size_t>(i)]);
@@ -193,11 +245,11 @@ int InProcessVmo::run(std::vector<CameraObserver>& cams, const std::vector<Measu
   });
   const auto write_back_all = [&](int done_rounds) {
     keep(cur);
-    for_each(pool,
+    for_each(pool, n_,
              [&](int i) { write_back(cams, position_[static_cast<size_t>(i)], done_rounds); });
   };
   if (check_stored)  // CameraObserver::receive's out-of-order test on the first round's messages
-    for_each(pool, [&](int p) {
+    for_each(pool, n_, [&](int p) {
       const auto k = static_cast<size_t>(p);
       const auto& latest = cams[static_cast<size_t>(order_[k])].latest();
       for (int a = offset_[k]; a < offset_[k + 1]; ++a) {
@@ -217,12 +269,20 @@ int InProcessVmo::run(std::vector<CameraObserver>& cams, const std::vector<Measu
     write_back_all(done);
     return 0;
   }
+  // Each round runs over pairs of positions (step_pair), the last position of an odd count alone.
+  const auto round = [&](bool publish) {
+    for_each(pool, (n_ + 1) / 2, [&](int q) {
+      const int p = 2 * q;
+      const bool ok =
+          p + 1 < n_
+              ? step_pair(p, cur, z, h, publish)
+              : step(p, cur, z[static_cast<size_t>(order_[static_cast<size_t>(p)])], h, publish);
+      if (!ok) refused.store(true, std::memory_order_relaxed);
+    });
+  };
   try {
     while (done + 1 < rounds) {
-      for_each(pool, [&](int p) {
-        if (!step(p, cur, z[static_cast<size_t>(order_[static_cast<size_t>(p)])], h, true))
-          refused.store(true, std::memory_order_relaxed);
-      });
+      round(true);
       ++done;
       if (refused) {  // the next round runs the per-camera way
         write_back_all(done);
@@ -232,9 +292,7 @@ int InProcessVmo::run(std::vector<CameraObserver>& cams, const std::vector<Measu
     }
     // The last round publishes nothing, so the neighbours' messages it reads (buffer cur) stay
     // as they are for the write-back after it.
-    for_each(pool, [&](int p) {
-      step(p, cur, z[static_cast<size_t>(order_[static_cast<size_t>(p)])], h, false);
-    });
+    round(false);
     write_back_all(++done);
     return done;
   } catch (...) {

@@ -58,13 +58,23 @@ class InProcessVmo {
   void fill(int position, std::vector<std::optional<EstimateMessage>>& slots) const;
 
  private:
-  void for_each(WorkerPool* pool, const std::function<void(int)>& f) const;
+  /// f(0), ..., f(count - 1), on the pool's threads when there is one.
+  void for_each(WorkerPool* pool, int count, const std::function<void(int)>& f) const;
   /// Loads camera c into position p and publishes its first estimate; false when the pose would
   /// be refused.
   bool gather(const CameraObserver& c, int p);
   /// One round of the camera at position p: reads buffer `cur`, writes buffer 1 - cur (when
   /// `publish`); false when the published pose would be refused.
   bool step(int p, int cur, const Measurement& z, double h, bool publish);
+  /// One round of the cameras at positions p and p + 1 (z by camera): both at once, one per lane
+  /// of the kernel's two-camera arithmetic (kernel::Pose2), when both are initialised and see
+  /// through a pose model or not at all (the usual case); otherwise each by step(). The same bits
+  /// either way; false when either published pose would be refused.
+  bool step_pair(int p, int cur, const std::vector<Measurement>& z, double h, bool publish);
+  /// Writes the camera at position k's message of the round into buffer 1 - cur and checks it as
+  /// its receivers would (`unit`: its rotation is fresh from kernel::orthonormalise with
+  /// |q|^2 >= 1 and the pose finite); false when it would be refused.
+  bool publish_message(size_t k, int cur, bool unit);
   /// Writes the camera at position p back after `done` rounds, its neighbours' messages
   /// deferred to the kept ones (keep()).
   void write_back(std::vector<CameraObserver>& cams, int p, int done);

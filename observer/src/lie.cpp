@@ -1,5 +1,7 @@
 #include "netvmo/observer/lie.hpp"
 
+#include "lanes.hpp"
+
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
@@ -64,36 +66,7 @@ SE3 exp_se3(const Vec6& V) {
 }
 
 void exp_se3(const Vec6& V, Mat3& R, Vec3& p) {
-  // R = I + a W + a2 W^2 (as exp_so3) and p = J v with the left Jacobian J = I + b W + c W^2,
-  // W = hat(w), written out with W^2 = w w^T - |w|^2 I, W v = w x v, W^2 v = w x (w x v).
-  const Vec3 v = V.head<3>();
-  const Vec3 w = V.tail<3>();
-  const double t2 = w.squaredNorm();
-  double a, a2, c;                       // b = a2
-  if (t2 < kSmallAngle * kSmallAngle) {  // Taylor series in t2 (Horner form)
-    a = 1.0 - t2 * (1.0 / 6.0 - t2 * (1.0 / 120.0));
-    a2 = 0.5 - t2 * (1.0 / 24.0 - t2 * (1.0 / 720.0));
-    c = 1.0 / 6.0 - t2 * (1.0 / 120.0);
-  } else {
-    const double t = std::sqrt(t2), s = std::sin(t), co = std::cos(t);
-    const double inv_t = 1.0 / t, inv_t2 = inv_t * inv_t;
-    a = s * inv_t;
-    a2 = (1.0 - co) * inv_t2;
-    c = (t - s) * (inv_t2 * inv_t);
-  }
-  const double x = w(0), y = w(1), z = w(2);
-  const double xx = x * x, yy = y * y, zz = z * z, xy = x * y, xz = x * z, yz = y * z;
-  R(0, 0) = 1.0 - a2 * (yy + zz);
-  R(1, 1) = 1.0 - a2 * (xx + zz);
-  R(2, 2) = 1.0 - a2 * (xx + yy);
-  R(0, 1) = a2 * xy - a * z;
-  R(1, 0) = a2 * xy + a * z;
-  R(0, 2) = a2 * xz + a * y;
-  R(2, 0) = a2 * xz - a * y;
-  R(1, 2) = a2 * yz - a * x;
-  R(2, 1) = a2 * yz + a * x;
-  const Vec3 wv = w.cross(v);
-  p = v + a2 * wv + c * w.cross(wv);
+  kernel::exp_se3(V, R, p);  // written once for one camera and two (lanes.hpp)
 }
 
 Vec6 log_se3(const SE3& g) {
