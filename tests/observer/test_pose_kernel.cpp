@@ -126,8 +126,9 @@ TEST(PoseKernel, TwoCamerasAtOnceGiveEachCameraItsOwnBits) {
     const double n0 = kernel::orthonormalise(xo.R), n1 = kernel::orthonormalise(yo.R);
     kernel::unpack(g, x, y);
     differs += !same_bits(x, xo) + !same_bits(y, yo);
-    differs += std::memcmp(&n[0], &n0, sizeof(double)) != 0;
-    differs += std::memcmp(&n[1], &n1, sizeof(double)) != 0;
+    const double lane0 = n[0], lane1 = n[1];
+    differs += std::memcmp(&lane0, &n0, sizeof(double)) != 0;
+    differs += std::memcmp(&lane1, &n1, sizeof(double)) != 0;
   }
   EXPECT_EQ(differs, 0);
   // The cases above happened: lanes on different branches and the exponential's series.
