@@ -6,9 +6,10 @@
 // round every camera reads its neighbours' estimates of the previous round directly from a
 // contiguous array of world-frame poses (12 doubles each; CSR adjacency, no message copies), steps,
 // and writes its own next estimate into the other half of a double buffer, so a round is one pass
-// over the cameras and one barrier. Every published pose is checked once (CameraObserver's check,
-// which each of its receivers would apply alike; for a pose fresh from the Euler step, whose
-// rotation is a unit quaternion's, a finiteness test gives the same verdict, see
+// over the cameras and one barrier; the pass steps two neighbouring positions at once, one per
+// lane of the kernel's two-camera arithmetic (step_pair). Every published pose is checked once
+// (CameraObserver's check, which each of its receivers would apply alike; for a pose fresh from the
+// Euler step, whose rotation is a unit quaternion's, a finiteness test gives the same verdict, see
 // kernel::check_has_room). At the end of the frame the cameras' state and round counters are
 // written back exactly as the per-camera exchange leaves them, and their latest neighbour
 // messages are kept here and written into each camera when first read (fill(),
