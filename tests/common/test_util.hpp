@@ -40,7 +40,9 @@ class ScratchFolders : public ::testing::EmptyTestEventListener {
   void OnTestProgramEnd(const ::testing::UnitTest& unit_test) override {
     for (const auto& d : dirs_) {
       if (!unit_test.Passed()) {
-        std::fprintf(stderr, "scratch folder kept: %s\n", d.c_str());
+        std::error_code ec;
+        if (std::filesystem::exists(d, ec))  // (a test may have removed its own)
+          std::fprintf(stderr, "scratch folder kept: %s\n", d.c_str());
         continue;
       }
       std::error_code ec;
