@@ -52,15 +52,15 @@ struct VecX2 {
 using Vec3x2 = VecX2<3>;
 using Vec6x2 = VecX2<6>;
 
-/// Below this angle |w| the closed forms of the exponential lose digits to cancellation; Taylor
-/// series instead.
-constexpr double kExpSmallAngle = 1e-4;
+/// Below this angle the closed forms of exp and log (here and lie.cpp) lose digits to
+/// cancellation; Taylor series instead.
+constexpr double kSmallAngle = 1e-4;
 
 /// The coefficients of exp_se3 below from t2 = |w|^2: R = I + a W + a2 W^2 (exp_so3) and the
 /// left Jacobian J = I + a2 W + c W^2, W = hat(w): a = sin t / t, a2 = (1 - cos t) / t^2,
-/// c = (t - sin t) / t^3, t = |w| (Taylor series in t2, Horner form, below kExpSmallAngle).
+/// c = (t - sin t) / t^3, t = |w| (Taylor series in t2, Horner form, below kSmallAngle).
 inline void exp_coefficients(double t2, double& a, double& a2, double& c) {
-  if (t2 < kExpSmallAngle * kExpSmallAngle) {
+  if (t2 < kSmallAngle * kSmallAngle) {
     a = 1.0 - t2 * (1.0 / 6.0 - t2 * (1.0 / 120.0));
     a2 = 0.5 - t2 * (1.0 / 24.0 - t2 * (1.0 / 720.0));
     c = 1.0 / 6.0 - t2 * (1.0 / 120.0);

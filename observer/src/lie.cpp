@@ -7,10 +7,9 @@
 #include <cmath>
 
 namespace netvmo::obs {
+using kernel::kSmallAngle;  // lanes.hpp
 namespace {
 constexpr double kPi = 3.14159265358979323846;
-// Below this angle the closed forms lose digits to cancellation; use Taylor series instead.
-constexpr double kSmallAngle = 1e-4;
 // Within this distance of pi, sin(theta) is too small to recover the axis from sk(R).
 constexpr double kNearPi = 1e-3;
 }  // namespace

@@ -111,7 +111,7 @@ TEST(PoseKernel, TwoCamerasAtOnceGiveEachCameraItsOwnBits) {
     // right_step (the exponential: one lane's rotation below the series' angle in some pairs)
     const double h = 1.0 / 420.0;
     const Vec6 u0 = poses.twist(trial % 3 == 0 ? 1e-3 : 10.0), u1 = poses.twist(10.0);
-    series_lanes += (h * u0.tail<3>()).norm() < kernel::kExpSmallAngle;
+    series_lanes += (h * u0.tail<3>()).norm() < kernel::kSmallAngle;
     Pose2 g = kernel::right_step(ab, pack(u0, u1), h);
     kernel::unpack(g, x, y);
     differs +=
