@@ -79,6 +79,11 @@ void add_search_options(CLI::App& cmd, frontend::TrackingSettings& t) {
                  "side is below this [px] (0: never)")
       ->check(CLI::Range(0.0, 1e6))
       ->capture_default_str();
+  cmd.add_option("--window-max-decimate", t.window_max_decimate,
+                 "Search the tracking window decimated in proportion to the last tag's "
+                 "narrowest side, up to this (the detector's decimation or less: never above it)")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
   cmd.add_option("--change-pixels", t.change_pixels,
                  "A camera that does not see the target skips the whole-image search while fewer "
                  "than this many pixels changed by more than 24 gray levels (beyond a 1-pixel "
@@ -95,9 +100,10 @@ void add_search_options(CLI::App& cmd, frontend::TrackingSettings& t) {
 std::vector<std::string> search_arguments(const frontend::TrackingSettings& t) {
   char b[40];
   std::snprintf(b, sizeof b, "%.17g", t.full_res_below_px);
-  std::vector<std::string> a = {"--acquire-every",  std::to_string(t.acquire_every),
-                                "--full-res-below", b,
-                                "--change-pixels",  std::to_string(t.change_pixels)};
+  std::vector<std::string> a = {"--acquire-every",       std::to_string(t.acquire_every),
+                                "--full-res-below",      b,
+                                "--window-max-decimate", std::to_string(t.window_max_decimate),
+                                "--change-pixels",       std::to_string(t.change_pixels)};
   if (!t.enabled) a.push_back("--no-track");
   if (!t.shadow_retry) a.push_back("--no-shadow-retry");
   return a;

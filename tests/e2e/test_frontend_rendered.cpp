@@ -171,12 +171,16 @@ TEST(FrontEndOnRenderedImages, DetectionAgreesWithGeometricVisibility) {
 TEST(FrontEndOnRenderedImages, TrackingWindowFindsTheTagWithFullFrameCorners) {
   // While a camera keeps the tag, the window around the last corners finds it (no full-frame
   // fallback), with the corners a full-frame search gives (to 1e-4 px: libapriltag fits in
-  // shifted coordinates); losing the tag resets the state.
+  // shifted coordinates) when both search at the same decimation (window_max_decimate = the
+  // detector's; a larger tag's window is otherwise decimated further, test
+  // FrontEnd.WindowDecimatedInProportionToTheTag); losing the tag resets the state.
   auto scene = io::load_render_scenario(kSource / "datasets/paper5_render.yaml");
   render::Renderer r(scene);
   frontend::DetectorSettings ds;
   ds.target_id = scene.target().tag.id;
-  frontend::FrontEnd tracked(ds), full(ds, frontend::TrackingSettings{false});
+  frontend::TrackingSettings same_decimation;
+  same_decimation.window_max_decimate = static_cast<int>(ds.quad_decimate);
+  frontend::FrontEnd tracked(ds, same_decimation), full(ds, frontend::TrackingSettings{false});
   const auto calib = io::scene_calibration(scene.cameras[0]);
   frontend::TrackState track;
   for (int k = 0; k < 4; ++k) {
@@ -185,6 +189,7 @@ TEST(FrontEndOnRenderedImages, TrackingWindowFindsTheTagWithFullFrameCorners) {
     const auto b = full.observe(img, calib);
     ASSERT_TRUE(a.delta && b.delta) << "frame " << k;
     EXPECT_EQ(track.frames_since_full, k) << "frame " << k << ": the window search failed";
+    EXPECT_EQ(track.window_decimate, k == 0 ? 0.0 : ds.quad_decimate) << "frame " << k;
     for (size_t c = 0; c < 4; ++c) EXPECT_LT(cv::norm(a.corners_px[c] - b.corners_px[c]), 1e-4);
   }
   const auto blind = tracked.observe(r.render(3, 0), calib, nullptr, &track);  // camera 4: no tag

@@ -151,9 +151,17 @@ void validate(const TrackingSettings& t) {
   if (t.window_pad < 0) bad("window_pad must be >= 0");
   if (t.full_frame_every < 1) bad("full_frame_every must be >= 1");
   if (!(t.full_res_below_px >= 0.0)) bad("full_res_below_px must be >= 0");
+  if (t.window_max_decimate < 1) bad("window_max_decimate must be >= 1");
   if (t.acquire_every < 0) bad("acquire_every must be >= 0 (0: no acquisition pass)");
   if (t.change_dn < 0 || t.change_dn > 255) bad("change_dn must be 0..255");
   if (t.change_pixels < 0) bad("change_pixels must be >= 0 (0: always search)");
+}
+
+double window_decimate(double side, double quad_decimate, const TrackingSettings& t) {
+  if (side < t.full_res_below_px) return 1.0;
+  if (!(t.full_res_below_px > 0.0) || t.window_max_decimate <= quad_decimate) return quad_decimate;
+  const double d = std::floor(quad_decimate * side / t.full_res_below_px);
+  return std::clamp(d, quad_decimate, static_cast<double>(t.window_max_decimate));
 }
 
 FrontEnd::FrontEnd(DetectorSettings settings, TrackingSettings tracking)
@@ -199,6 +207,7 @@ std::vector<Observation> FrontEnd::observe_targets(const cv::Mat& gray,
                                                    FrameDetections* all, TrackState* track) {
   FrameDetections dets;
   unsigned searches = 0, found_by = 0;
+  double window_d = 0.0;  // TrackState::window_decimate
   if (gray.empty()) {
     dets.status = TargetStatus::no_image;
     dets.reason = "no image (camera blind in this frame)";
@@ -236,8 +245,9 @@ std::vector<Observation> FrontEnd::observe_targets(const cv::Mat& gray,
       double side = narrowest_side(last[0]);
       for (const auto& c : last) side = std::min(side, narrowest_side(c));
       SearchSettings opt;
-      if (side < tracking_.full_res_below_px) opt.decimate = 1.0;
+      opt.decimate = window_decimate(side, detector_.settings().quad_decimate, tracking_);
       search(kSearchWindow, w, opt);
+      if (searches & kSearchWindow) window_d = opt.decimate;
       if (tracking_.shadow_retry) {
         // White level over 4 bit cells of the last tag: wider than its dark runs, narrower than
         // a shadow band across it (a wider closing fills the band in).
@@ -294,6 +304,7 @@ std::vector<Observation> FrontEnd::observe_targets(const cv::Mat& gray,
   if (track) {
     track->searches = searches;
     track->found_by = found_by;
+    track->window_decimate = window_d;
     track->last_all.clear();
     for (const auto& t : dets.tags)
       if (t.index >= 0) track->last_all.push_back(dets.all[static_cast<size_t>(t.index)].corners);

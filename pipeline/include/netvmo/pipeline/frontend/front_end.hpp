@@ -90,8 +90,9 @@ obs::FeatureModel observation_model(const io::TargetConfig& target, const Observ
 /// change_pixels); the acquisition pass runs only while no target is seen.
 ///  - While a camera keeps detecting the target, the next frame is searched first in a window
 ///    around the last corners, at full resolution (decimate 1) when the last tag's narrowest
-///    side was below `full_res_below_px`; if that fails and `shadow_retry`, the window again on
-///    a locally normalised copy (normalize_illumination(), for a hard shadow edge across the
+///    side was below `full_res_below_px`, else decimated in proportion to that side up to
+///    `window_max_decimate` (window_decimate()); if that fails and `shadow_retry`, the window again
+///    on a locally normalised copy (normalize_illumination(), for a hard shadow edge across the
 ///    tag). Only when those fail (or every `full_frame_every` frames, then after the full frame)
 ///    is the whole image searched at the settings' decimation.
 ///  - Acquisition: while the camera has no target (no detection in the previous frame), every
@@ -111,6 +112,13 @@ struct TrackingSettings {
   /// (0: never). 40 px covers the sizes decimate 2 misses (docs/frontend.md, "Small tags: recall
   /// against tag size").
   double full_res_below_px = 40.0;
+  /// Above full_res_below_px the window is decimated as far as keeps the last tag's narrowest
+  /// side as many decimated pixels as a side of full_res_below_px keeps at the detector's
+  /// decimation (20 at the defaults), up to this (window_decimate()); set to the detector's
+  /// decimation or less, the window is never decimated more than the whole image. The window
+  /// grows with the tag, so its search then costs about the same whatever the tag's size
+  /// (docs/frontend.md, "The window's decimation").
+  int window_max_decimate = 4;
   /// Full-resolution acquisition pass every this many blind frames (0: never). 10 adds one
   /// full-resolution search per 10 frames of a camera that sees nothing (docs/frontend.md, "Small
   /// tags: recall against tag size", ms/frame).
@@ -132,6 +140,12 @@ struct TrackingSettings {
 };
 /// Checks a TrackingSettings; throws InputError naming the field.
 void validate(const TrackingSettings& t);
+
+/// The decimation of the tracking window's search when the last tag's narrowest side is `side`
+/// px and the detector's decimation `quad_decimate`: 1 below t.full_res_below_px; else the whole
+/// number floor(quad_decimate x side / full_res_below_px), at least quad_decimate and at most
+/// t.window_max_decimate (quad_decimate where that is below it or full_res_below_px is 0).
+double window_decimate(double side, double quad_decimate, const TrackingSettings& t);
 
 /// An image kept to tell whether a later one is still the same scene: each pixel's 3x3
 /// neighbourhood's least and greatest value, so that a shift of the image by up to a pixel (a
@@ -167,6 +181,9 @@ struct TrackState {
   unsigned searches = 0;
   /// The search that found the target in the last frame (one bit as above), 0 when none.
   unsigned found_by = 0;
+  /// The decimation the last frame's window was searched at (window_decimate()), 0 when its
+  /// window was not searched.
+  double window_decimate = 0.0;
 };
 inline constexpr unsigned kSearchWindow = 1, kSearchNormalizedWindow = 2, kSearchFullFrame = 4,
                           kSearchAcquisition = 8, kSkippedFullFrame = 16, kSkippedAcquisition = 32;
