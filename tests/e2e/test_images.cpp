@@ -256,6 +256,19 @@ TEST_F(SmallDataset, FrontEndThreadsAndSkippedSearchesChangeNothing) {
         EXPECT_EQ(r.frames[k][i].status, ref.frames[k][i].status);
       }
   }
+  // The workers' front ends are built in parallel: a setting they reject is the run's error
+  // on any number of them.
+  for (const int workers : {1, 2, 3}) {
+    auto o = quiet_options();
+    o.workers = workers;
+    o.tracking.window_max_decimate = 0;
+    try {
+      run::run_images(*source, o);
+      ADD_FAILURE() << workers << " workers: no error";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("window_max_decimate"), std::string::npos) << e.what();
+    }
+  }
 }
 
 // The overlays: by default the mosaic alone (its tiles 320 px wide), with camera_videos each

@@ -6,6 +6,7 @@
 #include <condition_variable>
 #include <cstdio>
 #include <exception>
+#include <future>
 #include <limits>
 #include <mutex>
 #include <thread>
@@ -126,7 +127,14 @@ struct Pipeline {
     // Cameras run in parallel; each worker owns a detector whose libapriltag threads share the
     // remaining cores.
     ds.nthreads = std::max(1, ds.nthreads / workers);
-    for (int w = 0; w < workers; ++w) front_ends.emplace_back(ds, options.tracking);
+    // Each detector builds libapriltag's decoding table (~45 ms here for tag36h11 correcting 2
+    // bits, ~3 % of a 150-frame 1280x720 run per detector): the workers' are built in parallel.
+    std::vector<std::future<frontend::FrontEnd>> built;
+    for (int w = 1; w < workers; ++w)
+      built.push_back(
+          std::async(std::launch::async, [&] { return frontend::FrontEnd(ds, options.tracking); }));
+    front_ends.emplace_back(ds, options.tracking);
+    for (auto& f : built) front_ends.push_back(f.get());
   }
   static std::vector<obs::SE3> believed_at_start(const sources::NetworkSource& p) {
     std::vector<obs::SE3> g;
