@@ -14,8 +14,8 @@
 #
 # Builds what it runs (Release), prints the machine and the date first, and after each section
 # the share of the machine's CPU time that a virtual machine's host took for other work (steal,
-# /proc/stat): where it is large, every figure is slower and two threads gain less. Takes ~15
-# minutes the first time (the renders), ~4 minutes after.
+# /proc/stat): where it is large, every figure is slower and two threads gain less. Takes ~8
+# minutes the first time (the renders), ~2 minutes after.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build}
