@@ -6,9 +6,9 @@
 #include <condition_variable>
 #include <cstdio>
 #include <exception>
-#include <future>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "netvmo/pipeline/error.hpp"
@@ -129,12 +129,9 @@ struct Pipeline {
     ds.nthreads = std::max(1, ds.nthreads / workers);
     // Each detector builds libapriltag's decoding table (~45 ms here for tag36h11 correcting 2
     // bits, ~3 % of a 150-frame 1280x720 run per detector): the workers' are built in parallel.
-    std::vector<std::future<frontend::FrontEnd>> built;
-    for (int w = 1; w < workers; ++w)
-      built.push_back(
-          std::async(std::launch::async, [&] { return frontend::FrontEnd(ds, options.tracking); }));
-    front_ends.emplace_back(ds, options.tracking);
-    for (auto& f : built) front_ends.push_back(f.get());
+    std::vector<std::optional<frontend::FrontEnd>> built(static_cast<size_t>(workers));
+    in_parallel([&](int w) { built[static_cast<size_t>(w)].emplace(ds, options.tracking); });
+    for (auto& f : built) front_ends.push_back(std::move(*f));
   }
   static std::vector<obs::SE3> believed_at_start(const sources::NetworkSource& p) {
     std::vector<obs::SE3> g;
@@ -185,13 +182,24 @@ struct Pipeline {
       result.seconds_stages += front_ends[static_cast<size_t>(w)].detector().seconds();
     }
   }
-  // Runs f(w) for every worker w, worker 0 on the calling thread.
+  // Runs f(w) for every worker w, worker 0 on the calling thread; once all have returned,
+  // rethrows the error of the lowest worker that threw.
   template <class F>
   void in_parallel(F&& f) const {
+    std::vector<std::exception_ptr> failed(static_cast<size_t>(workers));
+    const auto run = [&](int w) {
+      try {
+        f(w);
+      } catch (...) {
+        failed[static_cast<size_t>(w)] = std::current_exception();
+      }
+    };
     std::vector<std::thread> pool;
-    for (int w = 1; w < workers; ++w) pool.emplace_back(f, w);
-    f(0);
+    for (int w = 1; w < workers; ++w) pool.emplace_back(run, w);
+    run(0);
     for (auto& t : pool) t.join();
+    for (const auto& e : failed)
+      if (e) std::rethrow_exception(e);
   }
 
   sources::NetworkSource& source;
