@@ -514,6 +514,12 @@ void add_detect(CLI::App& app, int& exit_code) {
                   "distortion not calibrated; 0: off), 0 to 100")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 100.0));
+  cmd->add_option("--border-realign-max", o->det.border_realign_max,
+                  "Border check: a quad whose sides fail on their thickness alone is kept with "
+                  "those sides halfway to their border's inner edge where the check passes there "
+                  "and no corner moves by more than this many px (0: off), 0 to 100")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 100.0));
   cmd->add_option("--border-bow-correction", o->det.border_bow_correction,
                   "Corners: where the sides bow so that a corner lies more than this many px "
                   "from where their straight lines meet (on cells of at least "

@@ -245,10 +245,11 @@ PhotoRecall recall_over(const fs::path& dir, std::vector<std::string>* losses = 
 }
 
 // Recall against libapriltag on every eligible tag of the corpus, with every loss listed.
-// The figure the front end reaches (docs/frontend.md) is asserted not to fall: 96.7 % of the
-// 395 eligible tags (382) measured when the shared border deviation and the significance test
-// were introduced (92.4 % before; the goal, 99 %, is not reached: the losses are listed); no
-// kept tag's corners more than 1.6 px from libapriltag's.
+// The figure the front end reaches (docs/frontend.md) is asserted not to fall: 98.2 % of the
+// 395 eligible tags (388) measured when a side off its inner edge alone was first kept halfway
+// (97.0 % before, 92.4 % before the shared border deviation and the significance test; the goal,
+// 99 %, is not reached: the losses are listed); no kept tag's corners more than 1.6 px from
+// libapriltag's.
 TEST(RealPhotos, Corpus) {
   const fs::path dir = corpus_dir();
   if (!fs::is_directory(dir))
@@ -256,15 +257,16 @@ TEST(RealPhotos, Corpus) {
                  << "(datasets/real_photos/MANIFEST.md) and point NETVMO_REAL_PHOTOS at it";
   const PhotoRecall total = recall_over(dir);
   ASSERT_GT(total.eligible, 0);
-  EXPECT_GE(total.kept, 382);
+  EXPECT_GE(total.kept, 388);
   for (double d : total.corner_differences) EXPECT_LT(d, 1.65);
 }
 
 // The part of the corpus this repository holds (datasets/real_photos/photos: 29 photos of 8 sets
 // from 5 repositories, chosen by set and file name, not by result; MANIFEST.md, "In this
 // repository"), so every CI run judges the front end on real photos. libapriltag finds 206
-// eligible tags there; the front end keeps 201 (97.6 %; 192 before the shared border deviation
-// and the significance test, 202 before the straight-sides test) and may not keep fewer (the
+// eligible tags there; the front end keeps 203 (98.5 %; 201 before a side off its inner edge
+// alone was kept halfway, 192 before the shared border deviation and the significance test, 202
+// before the straight-sides test) and may not keep fewer (the
 // goal, 99 %, is not reached: every loss is printed with its reason). The straight-sides test
 // rejects one of them, and only that one: id 3 of swatbotics_hallway/IMG_0613.jpg, a curled
 // sheet whose bowed sides put a corner 2.3 px from where its straight sides meet.
@@ -275,7 +277,7 @@ TEST(RealPhotos, PhotosInTheRepository) {
   const PhotoRecall total = recall_over(dir, &losses);
   EXPECT_EQ(total.photos, 29);
   EXPECT_EQ(total.eligible, 206) << "libapriltag's own eligible tags";
-  EXPECT_GE(total.kept, 201);
+  EXPECT_GE(total.kept, 203);
   for (const std::string& loss : losses) {
     if (loss.find("bowed") != std::string::npos) {
       EXPECT_EQ(loss.rfind("swatbotics_hallway/IMG_0613.jpg id 3: ", 0), 0u) << loss;

@@ -169,6 +169,9 @@ cv::Mat render_tags(const Calibration& calib, const std::vector<SynthTag>& tags,
     if (p.origin.z() > 0) prep.push_back(std::move(p));
   }
   const double wq = opt.quiet_zone_cells;
+  // A border other than one cell wide on some edge: the ring painted here, not from the bitmap.
+  bool uneven = opt.border_width != 1.0;
+  for (double w : opt.border_width_per_edge) uneven = uneven || w != 1.0;
   cv::Mat out(calib.height, calib.width, CV_8UC1);
   std::mt19937_64 rng(opt.seed);
   std::normal_distribution<double> noise(0.0, opt.noise_sigma > 0 ? opt.noise_sigma : 1.0);
@@ -205,8 +208,17 @@ cv::Mat render_tags(const Calibration& calib, const std::vector<SynthTag>& tags,
             const double in =
                 std::min(std::min(cx, cy), std::min(p.bm.total - cx, p.bm.total - cy)) -
                 p.bm.border;
-            if (opt.border_width != 1.0 && in >= 0.0 && in < std::max(1.0, opt.border_width))
-              value = in < opt.border_width ? opt.black : opt.white;
+            // Into the black square from its top, right, bottom and left edges [cells].
+            const std::array<double, 4> from{cy - p.bm.border, p.bm.total - p.bm.border - cx,
+                                             p.bm.total - p.bm.border - cy, cx - p.bm.border};
+            bool ring = false, inked = false;
+            for (size_t e = 0; e < 4; ++e) {
+              const double w = opt.border_width * opt.border_width_per_edge[e];
+              ring = ring || (in >= 0.0 && from[e] < std::max(1.0, w));
+              inked = inked || (in >= 0.0 && from[e] < w);
+            }
+            if (uneven && ring)
+              value = inked ? opt.black : opt.white;
             else if (cx >= 0 && cy >= 0 && cx < p.bm.total && cy < p.bm.total)
               value = printed_white(p.bm.bits, cx, cy, opt.ink_spread) ? opt.white : opt.black;
             else

@@ -53,6 +53,11 @@ struct SynthSettings {
   /// the data cells left in place (1: as the bitmap; a border wider than 1 covers the data
   /// cells next to it).
   double border_width = 1.0;
+  /// Width of the printed black border per edge of the bitmap [cells]: its top (row 0, the
+  /// tag's +y), right (+x), bottom and left edges, multiplying border_width there: a print whose
+  /// border is thinner or thicker on one side only (a trimmed or misregistered print), its outer
+  /// edge and the data cells where the bitmap puts them.
+  std::array<double, 4> border_width_per_edge{1.0, 1.0, 1.0, 1.0};
   /// render_camera_picture: motion over the exposure [px], the image displacement of the scene
   /// during the exposure (a line kernel in linear light, before the tone curve); 0: none.
   cv::Point2d motion_blur{0.0, 0.0};

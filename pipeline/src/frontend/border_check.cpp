@@ -726,6 +726,79 @@ std::array<cv::Point2d, 4> remove_edge_bias(const std::array<cv::Point2d, 4>& co
   return {out[0], out[1], out[2], out[3]};
 }
 
+std::optional<std::array<cv::Point2d, 4>> realign_sides(const std::array<cv::Point2d, 4>& corners,
+                                                        const BorderCheck& check, int border_cells,
+                                                        const DetectorSettings& s, double fraction,
+                                                        const io::Calibration* calib) {
+  if (!check.checked || check.ok || border_cells < 2) return std::nullopt;
+  const double n = border_cells;
+  // remove_edge_bias() moves each side inward by its side_edge_bias: the same operation.
+  BorderCheck moved;
+  int failing = 0;
+  for (size_t k = 0; k < 4; ++k) {
+    moved.side_edge_bias[k] = {0.0, 0.0};
+    if (check.outside[k] > 0 || check.failed[k] > s.border_max_failed_fraction * check.samples[k])
+      return std::nullopt;
+    const double residual = check.thickness_error[k] - check.expected_thickness_error[k];
+    if (std::isnan(residual) || !(std::abs(residual) > check.side_limit[k])) continue;
+    const double cell = cv::norm(corners[(k + 1) % 4] - corners[k]) / n;
+    if (std::abs(residual) > s.border_max_edge_bias * cell) return std::nullopt;
+    // A thinner border (residual < 0) puts the inner edge closer to the side than one cell: the
+    // side belongs further out, which is inward by a negative amount.
+    const double shift = fraction * residual * n / (n - 1.0);
+    moved.side_edge_bias[k] = {shift, shift};
+    ++failing;
+  }
+  // One side off alone, every other measured side within half its error. Where several sides
+  // fail or deviate alike (a print's border thinner than its cells on every side, and one side
+  // moved out), which of them is off is not determined by the check, and a quad realigned on
+  // the wrong one can pass as well.
+  if (failing != 1) return std::nullopt;
+  double worst = 0.0, others = 0.0;
+  for (size_t k = 0; k < 4; ++k) {
+    const double r = std::abs(check.thickness_error[k] - check.expected_thickness_error[k]);
+    if (std::isnan(r)) continue;
+    if (moved.side_edge_bias[k][0] != 0.0)
+      worst = r;
+    else
+      others = std::max(others, r);
+  }
+  if (others > 0.5 * worst) return std::nullopt;
+  const auto out = remove_edge_bias(corners, moved, calib);
+  if (out == corners) return std::nullopt;  // the sides did not intersect
+  return out;
+}
+
+CornerCovariance undecided_covariance(const std::array<cv::Point2d, 4>& a,
+                                      const std::array<cv::Point2d, 4>& b) {
+  Eigen::Matrix<double, 8, 1> v;
+  for (size_t c = 0; c < 4; ++c) {
+    v(static_cast<Eigen::Index>(2 * c)) = 0.5 * (b[c].x - a[c].x);
+    v(static_cast<Eigen::Index>(2 * c + 1)) = 0.5 * (b[c].y - a[c].y);
+  }
+  return v * v.transpose();
+}
+
+std::optional<Realigned> realign_and_check(const cv::Mat& gray,
+                                           const std::array<cv::Point2d, 4>& corners,
+                                           const BorderCheck& check, const cv::Mat& pattern,
+                                           int border_cells, const DetectorSettings& s,
+                                           const io::Calibration* calib) {
+  if (!(s.border_realign_max > 0.0)) return std::nullopt;
+  const auto inner = realign_sides(corners, check, border_cells, s, 1.0, calib);
+  if (!inner) return std::nullopt;
+  for (size_t k = 0; k < 4; ++k)
+    if (cv::norm((*inner)[k] - corners[k]) > s.border_realign_max) return std::nullopt;
+  // Checked again without a shared deviation: it could take the moved side's error off the
+  // others.
+  DetectorSettings strict = s;
+  strict.border_shared_deviation = false;
+  BorderCheck again = check_border(gray, *inner, pattern, border_cells, strict, calib);
+  const auto half = realign_sides(corners, check, border_cells, s, 0.5, calib);
+  if (!again.ok || !half) return std::nullopt;
+  return Realigned{*half, *inner, std::move(again), undecided_covariance(corners, *inner)};
+}
+
 CornerCovariance edge_bias_covariance(const std::array<cv::Point2d, 4>& corners,
                                       const BorderCheck& check, const io::Calibration* calib) {
   CornerCovariance cov = CornerCovariance::Zero();

@@ -57,6 +57,8 @@ void validate(const DetectorSettings& s) {
     bad("border_max_bow must be in 0..100 (px; 0: off)");
   if (!(s.border_bow_correction >= 0.0 && s.border_bow_correction <= 100.0))
     bad("border_bow_correction must be in 0..100 (px; 0: off)");
+  if (!(s.border_realign_max >= 0.0 && s.border_realign_max <= 100.0))
+    bad("border_realign_max must be in 0..100 (px; 0: off)");
   if (!(s.border_bow_min_cell >= 0.0 && s.border_bow_min_cell <= 1000.0))
     bad("border_bow_min_cell must be in 0..1000 (px)");
   if (!(s.edge_bias_deadband >= 0.0)) bad("edge_bias_deadband must be >= 0");

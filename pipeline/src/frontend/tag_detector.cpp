@@ -184,13 +184,22 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
       BorderCheck bc = s.border_check
                            ? check_border(*g, corners, pattern, border_cells(), s, calib, &edges)
                            : BorderCheck{};
+      const std::array<cv::Point2d, 4> fitted = corners;
+      // Sides off their border's inner edge alone: kept halfway between the two explanations,
+      // where the check passes on the inner edge (DetectorSettings::border_realign_max).
+      if (!bc.ok)
+        if (auto r = realign_and_check(*g, corners, bc, pattern, border_cells(), s, calib)) {
+          if (covariance) *covariance += r->covariance;
+          corners = r->corners;
+          bc = std::move(r->check);
+        }
       if (bc.ok && opt.normalized) {
         // Corners must not depend on the illumination correction: where a shadow boundary runs
         // along a border edge, the fits on the image and on its normalised copy disagree.
         std::array<cv::Point2d, 4> plain = found;
         refine_corners(*original, plain, s.refinement, border_cells(), calib);
         double moved = 0.0;
-        for (size_t k = 0; k < 4; ++k) moved = std::max(moved, cv::norm(plain[k] - corners[k]));
+        for (size_t k = 0; k < 4; ++k) moved = std::max(moved, cv::norm(plain[k] - fitted[k]));
         if (moved > kMaxNormalizedDisagreement) {
           bc.ok = false;
           std::snprintf(buf, sizeof buf,

@@ -5,6 +5,7 @@
 #include <array>
 #include <limits>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 
 #include "netvmo/pipeline/frontend/detector_settings.hpp"
@@ -181,6 +182,55 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
 std::array<cv::Point2d, 4> remove_edge_bias(const std::array<cv::Point2d, 4>& corners,
                                             const BorderCheck& check,
                                             const io::Calibration* calib = nullptr);
+
+/// The corners with the one side that failed check_border() on its thickness alone moved toward
+/// its border's inner edge: by `fraction` of the way to one cell (as the moved quad maps it)
+/// outside the inner edge the check measured next to the white data cells, after the print's
+/// model (the residual thickness_error - expected_thickness_error, r; moving a side out by x
+/// grows the cell across it by x / n, so the side moves by fraction x r n / (n - 1)), in
+/// undistorted pixels where `calib` has distortion. Empty unless exactly one side failed, and on
+/// thickness alone, every other measured side's residual is at most half of that side's (where
+/// several sides deviate, which one is off is not determined: a quad realigned on the wrong one
+/// can pass the check as well), no side failed its contrast test or has quiet-zone samples
+/// outside the image, and the residual is at most DetectorSettings::border_max_edge_bias of the
+/// side's cell.
+std::optional<std::array<cv::Point2d, 4>> realign_sides(const std::array<cv::Point2d, 4>& corners,
+                                                        const BorderCheck& check, int border_cells,
+                                                        const DetectorSettings& s,
+                                                        double fraction = 1.0,
+                                                        const io::Calibration* calib = nullptr);
+
+/// A quad's corners undecided between `a` and `b` (realign_sides() at fraction 0 and 1): the
+/// covariance of taking their midpoint when either is the truth with equal weight, v v^T with v
+/// the stacked half differences (b - a) / 2 [px^2]: the sides' two explanations move both
+/// corners of a side together.
+CornerCovariance undecided_covariance(const std::array<cv::Point2d, 4>& a,
+                                      const std::array<cv::Point2d, 4>& b);
+
+/// A quad kept by realign_and_check().
+struct Realigned {
+  /// The side that failed on its thickness alone halfway between its outer edge and one cell
+  /// outside its inner edge (realign_sides() at 0.5).
+  std::array<cv::Point2d, 4> corners;
+  std::array<cv::Point2d, 4> inner;  ///< that side on its inner edge (realign_sides() at 1)
+  BorderCheck check;                 ///< check_border() of `inner`: passed
+  CornerCovariance covariance;       ///< undecided_covariance() of the fitted and `inner` corners
+};
+
+/// A side off its border's inner edge, undecided (DetectorSettings::border_realign_max). Where
+/// `check` (check_border() of `corners`) failed on the thickness of one side alone
+/// (realign_sides()), that side is moved onto its inner edge and the check is run on that quad
+/// again, with border_shared_deviation off (it could take the moved side's error off the
+/// others); where it passes and no corner moved by more than border_realign_max, the quad with
+/// the side halfway. Either the side was off the print (an occluder's outline, a wrong quad: the
+/// inner edge is right) or the print's border is thinner or thicker there (the outer edge is
+/// right); halfway, a corner is off by at most half its movement either way. Empty otherwise,
+/// or with border_realign_max 0.
+std::optional<Realigned> realign_and_check(const cv::Mat& gray,
+                                           const std::array<cv::Point2d, 4>& corners,
+                                           const BorderCheck& check, const cv::Mat& pattern,
+                                           int border_cells, const DetectorSettings& s,
+                                           const io::Calibration* calib = nullptr);
 
 /// The covariance remove_edge_bias() adds to the corners [px^2, undistorted pixels where `calib`
 /// has distortion, as refine_corners()], to first order: each side end's value is linear in

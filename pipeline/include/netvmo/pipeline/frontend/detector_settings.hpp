@@ -123,6 +123,19 @@ struct DetectorSettings {
   /// BorderCheck.SharpenedSmallCellsLookBowed), 0.5-0.7 px on cells of 2.5 px (rendered in
   /// sRGB), at most 0.48 px from 3 px; 4 px keeps a cell's margin above those.
   double border_bow_min_cell = 4.0;
+  /// A side off its border's inner edge, undecided [px of corner movement; 0: off]. Where the
+  /// check fails on the thickness of one side alone (every side's contrast passes, every other
+  /// side deviates by at most half as much), either that side is off the print (an occluder's
+  /// outline, a wrong quad: the inner edge is right) or the print's border is thinner or thicker
+  /// there (a trimmed or misregistered print: the outer edge is right); one picture cannot tell
+  /// them apart. The side is moved onto its inner edge (one cell outside it, realign_sides())
+  /// and the check run again on that quad: where it passes and no corner moves by more than
+  /// this, the tag is kept with the side halfway between the two, so a corner is off by at most
+  /// half its movement whichever is true, and the two explanations' spread is added to the
+  /// corners' covariance. 1 px keeps a corner within 0.5 px of either (docs/frontend.md, "A side
+  /// between two edges"; at 1.5 px halfway corners reached 1.5 px from the truth on synthesized
+  /// pictures whose fitted quad was itself pulled by a dark surround).
+  double border_realign_max = 1.0;
   /// Report the corners of the print's cell grid (remove_edge_bias()): each side of the quad
   /// fitted to the black border's outer edges moved inward by the print's edge bias the check
   /// measured across it on the tag's own data cells (ink spread and bloom grow the black, a
