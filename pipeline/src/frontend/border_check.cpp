@@ -731,39 +731,37 @@ std::optional<std::array<cv::Point2d, 4>> realign_sides(const std::array<cv::Poi
                                                         const DetectorSettings& s, double fraction,
                                                         const io::Calibration* calib) {
   if (!check.checked || check.ok || border_cells < 2) return std::nullopt;
-  const double n = border_cells;
-  // remove_edge_bias() moves each side inward by its side_edge_bias: the same operation.
-  BorderCheck moved;
-  int failing = 0;
+  // Each side's error after the print's model; the one side that fails on it.
+  std::array<double, 4> residual{};
+  int failing = -1;
   for (size_t k = 0; k < 4; ++k) {
-    moved.side_edge_bias[k] = {0.0, 0.0};
     if (check.outside[k] > 0 || check.failed[k] > s.border_max_failed_fraction * check.samples[k])
       return std::nullopt;
-    const double residual = check.thickness_error[k] - check.expected_thickness_error[k];
-    if (std::isnan(residual) || !(std::abs(residual) > check.side_limit[k])) continue;
-    const double cell = cv::norm(corners[(k + 1) % 4] - corners[k]) / n;
-    if (std::abs(residual) > s.border_max_edge_bias * cell) return std::nullopt;
-    // A thinner border (residual < 0) puts the inner edge closer to the side than one cell: the
-    // side belongs further out, which is inward by a negative amount.
-    const double shift = fraction * residual * n / (n - 1.0);
-    moved.side_edge_bias[k] = {shift, shift};
-    ++failing;
+    residual[k] = std::abs(check.thickness_error[k] - check.expected_thickness_error[k]);
+    if (!(residual[k] > check.side_limit[k])) continue;  // passes, or not measured (NaN)
+    if (failing >= 0) return std::nullopt;
+    failing = static_cast<int>(k);
   }
+  if (failing < 0) return std::nullopt;
   // One side off alone, every other measured side within half its error. Where several sides
   // fail or deviate alike (a print's border thinner than its cells on every side, and one side
   // moved out), which of them is off is not determined by the check, and a quad realigned on
   // the wrong one can pass as well.
-  if (failing != 1) return std::nullopt;
-  double worst = 0.0, others = 0.0;
-  for (size_t k = 0; k < 4; ++k) {
-    const double r = std::abs(check.thickness_error[k] - check.expected_thickness_error[k]);
-    if (std::isnan(r)) continue;
-    if (moved.side_edge_bias[k][0] != 0.0)
-      worst = r;
-    else
-      others = std::max(others, r);
-  }
-  if (others > 0.5 * worst) return std::nullopt;
+  const size_t f = static_cast<size_t>(failing);
+  for (size_t k = 0; k < 4; ++k)
+    if (k != f && residual[k] > 0.5 * residual[f]) return std::nullopt;
+  const double n = border_cells;
+  const double cell = cv::norm(corners[(f + 1) % 4] - corners[f]) / n;
+  if (residual[f] > s.border_max_edge_bias * cell) return std::nullopt;
+  // remove_edge_bias() moves each side inward by its side_edge_bias: the same operation. A
+  // thinner border (signed residual < 0) puts the inner edge closer to the side than one cell:
+  // the side belongs further out, which is inward by a negative amount. Moving it out by x
+  // grows the cell across it by x / n, so the inner edge one cell inside moves by x (1 - 1/n).
+  BorderCheck moved;
+  for (auto& side : moved.side_edge_bias) side = {0.0, 0.0};
+  const double shift =
+      fraction * (check.thickness_error[f] - check.expected_thickness_error[f]) * n / (n - 1.0);
+  moved.side_edge_bias[f] = {shift, shift};
   const auto out = remove_edge_bias(corners, moved, calib);
   if (out == corners) return std::nullopt;  // the sides did not intersect
   return out;
@@ -794,8 +792,9 @@ std::optional<Realigned> realign_and_check(const cv::Mat& gray,
   DetectorSettings strict = s;
   strict.border_shared_deviation = false;
   BorderCheck again = check_border(gray, *inner, pattern, border_cells, strict, calib);
+  if (!again.ok) return std::nullopt;
   const auto half = realign_sides(corners, check, border_cells, s, 0.5, calib);
-  if (!again.ok || !half) return std::nullopt;
+  if (!half) return std::nullopt;
   return Realigned{*half, *inner, std::move(again), undecided_covariance(corners, *inner)};
 }
 
