@@ -8,10 +8,12 @@
 #
 #   bash tools/realistic_effects.sh [--netvmo PATH] [--frames N] [--out DIR] [EFFECT ...]
 #
-# EFFECT names (default: all): clean ink+0.2 ink-0.2 bent1 bent gloss srgb vignetting psf1.0
-# bloom jpeg50 sharpen blur20ms rolling30us defocus realistic (bent1, bent: the card bent to a radius of
-# 1 m and 0.25 m, its ends curling toward the camera). Takes about a minute per effect on two
-# shared cores at the default 20 frames.
+# EFFECT names (default: all): clean ink+0.2 ink-0.2 side0.95 side1.05 side0.85 side1.15 bent1
+# bent gloss srgb vignetting psf1.0 bloom jpeg50 sharpen blur20ms rolling30us defocus realistic
+# (side0.95, side0.85: the border that many cells wide on the bottom side; side1.05, side1.15:
+# on the right side; bent1, bent: the card bent to a radius of 1 m and 0.25 m, its ends curling
+# toward the camera). Takes about a minute per effect on two shared cores at the default 20
+# frames.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 netvmo=build/netvmo
@@ -23,11 +25,11 @@ while [ $# -gt 0 ]; do
     --netvmo) netvmo=$2; shift 2 ;;
     --frames) frames=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
-    -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
     *) effects+=("$1"); shift ;;
   esac
 done
-[ ${#effects[@]} -gt 0 ] || effects=(clean ink+0.2 ink-0.2 bent1 bent gloss srgb vignetting psf1.0 bloom
+[ ${#effects[@]} -gt 0 ] || effects=(clean ink+0.2 ink-0.2 side0.95 side1.05 side0.85 side1.15 bent1 bent gloss srgb vignetting psf1.0 bloom
                                      jpeg50 sharpen blur20ms rolling30us defocus realistic)
 [ -x "$netvmo" ] || { echo "realistic_effects.sh: no netvmo at $netvmo (build it, or --netvmo PATH)" >&2; exit 1; }
 if [ -z "$out" ]; then out=$(mktemp -d); trap 'rm -rf "$out"' EXIT; fi
@@ -39,6 +41,10 @@ effect_keys() {
     clean) echo "clean|clean" ;;
     ink+0.2) echo "{ink_spread: 0.2}|clean" ;;
     ink-0.2) echo "{ink_spread: -0.2}|clean" ;;
+    side0.95) echo "{border_width: [1, 1, 0.95, 1]}|clean" ;;
+    side1.05) echo "{border_width: [1, 1.05, 1, 1]}|clean" ;;
+    side0.85) echo "{border_width: [1, 1, 0.85, 1]}|clean" ;;
+    side1.15) echo "{border_width: [1, 1.15, 1, 1]}|clean" ;;
     bent1) echo "{bend: -1}|clean" ;;
     bent) echo "{bend: -4}|clean" ;;
     gloss) echo "{gloss: 0.3, shininess: 20}|clean" ;;

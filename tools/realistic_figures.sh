@@ -58,6 +58,7 @@ figure() {  # $1 effect, $2 print, $3 sensor, [$4 velocity, $5 imaging extras, $
 mkdir -p docs/figures
 figure ink_spread "{ink_spread: 0.3}" clean
 figure ink_shrink "{ink_spread: -0.3}" clean
+figure border_side "{border_width: [1, 1.4, 1, 0.6]}" clean
 figure bent "{bend: -8}" clean
 figure gloss "{gloss: 0.6, shininess: 8}" clean 0 "" "[0, 0, 1]"
 figure srgb clean "{tone: srgb}"

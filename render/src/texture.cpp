@@ -55,6 +55,10 @@ TagTexture::TagTexture(const TagSpec& spec) : spec_(spec) {
     throw std::invalid_argument("tag print.gloss must be between 0 and 1");
   if (!(spec.print.shininess >= 1 && spec.print.shininess <= 10000))
     throw std::invalid_argument("tag print.shininess must be between 1 and 10000");
+  for (const double w : spec.print.border_width)
+    if (!(w >= 0.5 && w <= 1.5))
+      throw std::invalid_argument("tag print.border_width must be between 0.5 and 1.5 cells");
+  even_border_ = spec.print.even_border();
   const TagFamilyPtr f = create_tag_family(spec.family);
   if (spec.id < 0 || static_cast<std::uint32_t>(spec.id) >= f->ncodes)
     throw std::invalid_argument("tag id " + std::to_string(spec.id) + " out of range for " +
@@ -121,23 +125,43 @@ Mesh TagTexture::card_mesh() const {
   return m;
 }
 
+int TagTexture::grid_cell(double f, size_t a, size_t b, double& lo, double& hi) const {
+  // The border's outer edges lie on grid lines o and total - o; its inner edges, one cell in,
+  // move to o + width (side a) and total - o - width (side b).
+  const int o = (total_width_ - width_at_border_) / 2;
+  const auto& w = spec_.print.border_width;
+  auto line = [&](int k) {
+    if (k == o + 1) return o + w[a];
+    if (k == total_width_ - o - 1) return total_width_ - o - w[b];
+    return double(k);
+  };
+  int i = static_cast<int>(std::floor(f));
+  // A moved line is at most half a cell from its place, so the cell is at most one off.
+  if (f < line(i)) --i;
+  if (f >= line(i + 1)) ++i;
+  lo = line(i);
+  hi = line(i + 1);
+  return i;
+}
+
 double TagTexture::spread_albedo(double x, double y) const {
   const double f = spec_.print.ink_spread, d = std::abs(f);
   const double half = 0.5 * total_width_;
   const double fc = x / cell_ + half, fr = half - y / cell_;
-  const double cf = std::floor(fc), rf = std::floor(fr);
-  const int c = static_cast<int>(cf), r = static_cast<int>(rf);
-  const double u = fc - cf, v = fr - rf;  // position inside the cell, [0, 1)
+  double c0, c1, r0, r1;  // the cell's grid lines [cells of the bitmap]
+  const int c = grid_cell(fc, 3, 1, c0, c1), r = grid_cell(fr, 0, 2, r0, r1);
+  const double u = fc - c0, v = fr - r0;  // position inside the cell [cells]
   const bool me = dark_or_white(r, c);
   // A point takes the other colour when a cell of the spreading colour (black for f > 0, white
-  // for f < 0) lies within d cells of it; |f| <= 0.5 keeps that to the 8 neighbours.
+  // for f < 0) lies within d cells of it; |f| <= 0.5 and cells at least 0.5 wide (border_width)
+  // keep that to the 8 neighbours.
   const bool spreading_dark = f > 0;
   if (me == spreading_dark) return me ? spec_.black_albedo : spec_.white_albedo;
   for (int dr = -1; dr <= 1; ++dr)
     for (int dc = -1; dc <= 1; ++dc) {
       if ((dr == 0 && dc == 0) || dark_or_white(r + dr, c + dc) != spreading_dark) continue;
-      const double ex = dc < 0 ? u : (dc > 0 ? 1 - u : 0);
-      const double ey = dr < 0 ? v : (dr > 0 ? 1 - v : 0);
+      const double ex = dc < 0 ? u : (dc > 0 ? (c1 - c0) - u : 0);
+      const double ey = dr < 0 ? v : (dr > 0 ? (r1 - r0) - v : 0);
       if (ex * ex + ey * ey < d * d)
         return spreading_dark ? spec_.black_albedo : spec_.white_albedo;
     }

@@ -849,15 +849,15 @@ TEST(BorderCheck, BentCardWithCornersOffRejectedMildBendKept) {
   EXPECT_GE(kept, 4) << "the mildly bent cards (2/m at poses 0 and 1) are lost";
 }
 
-// The same bent cards rendered by the Embree renderer (render::PrintModel::bend: the card's
-// mesh wrapped on the cylinder, its texture looked up by arc length), a camera with the test
-// calibration at the origin, gamma 2.2, PSF 0.6 px, sensor noise.
-struct RenderedBentCase {
+// A tag printed as `print` at g_co, rendered by the Embree renderer: a camera with the test
+// calibration at the origin, gamma 2.2, PSF 0.6 px, sensor noise seeded by `seed`.
+struct RenderedCase {
   std::string what;
   cv::Mat img;
   std::array<cv::Point2d, 4> truth;
 };
-RenderedBentCase rendered_bent_case(const io::Calibration& calib, size_t pose, double bend) {
+RenderedCase rendered_case(const io::Calibration& calib, const obs::SE3& g_co,
+                           const render::PrintModel& print, unsigned seed, std::string what) {
   render::SceneDescription s;
   render::CameraSpec cam;
   cam.intrinsics.width = calib.width;
@@ -871,19 +871,26 @@ RenderedBentCase rendered_bent_case(const io::Calibration& calib, size_t pose, d
   s.cameras.push_back(cam);
   s.target().tag.id = 0;
   s.target().tag.size = kSize;
-  s.target().tag.print.bend = bend;
-  s.target().motion = render::Trajectory::fixed(kBentPoses[pose]);  // the camera is at the origin
+  s.target().tag.print = print;
+  s.target().motion = render::Trajectory::fixed(g_co);  // the camera is at the origin
   s.lights.front().direction = render::Vec3(0.3, 0.2, 1.0);
   s.imaging.spp = 9;
-  s.imaging.seed = 40 + pose;  // the sensor's noise
+  s.imaging.seed = seed;  // the sensor's noise
   render::Renderer r(s);
-  RenderedBentCase out{
-      "rendered, bend " + std::to_string(bend) + "/m, pose " + std::to_string(pose),
-      r.render(0, 0),
-      {}};
+  RenderedCase out{std::move(what), r.render(0, 0), {}};
   const render::FrameTruth t = r.truth(0, 0);
   for (size_t k = 0; k < 4; ++k) out.truth[k] = cv::Point2d(t.corners[k]->x(), t.corners[k]->y());
   return out;
+}
+
+// The bent cards of kBentPoses rendered (render::PrintModel::bend: the card's mesh wrapped on
+// the cylinder, its texture looked up by arc length).
+RenderedCase rendered_bent_case(const io::Calibration& calib, size_t pose, double bend) {
+  render::PrintModel print;
+  print.bend = bend;
+  return rendered_case(
+      calib, kBentPoses[pose], print, static_cast<unsigned>(40 + pose),
+      "rendered, bend " + std::to_string(bend) + "/m, pose " + std::to_string(pose));
 }
 
 // The renderer's bent cards, where the truth is known: its truth corners are the synthesizer's
@@ -952,6 +959,83 @@ TEST(BorderCheck, RenderedBentCardsAreTheSynthesizersAndKeptOnesWithin1Px) {
   EXPECT_GT(bowed, 0);
   EXPECT_GT(off_straight, 0) << "no card is kept off by more than 1 px without the bow taken "
                                 "off: this test shows nothing";
+}
+
+// The rotation series' failure made by the renderer (render::PrintModel::border_width): one
+// side's black border thinner or thicker than the cells inside it, the grid line along its inner
+// edge moved, the outer edge and so the truth's corners where the tag's size puts them (0.05
+// and 0.1 cell: 0.6-2 px on the 12-20 px cells of kBentPoses). Without realign_and_check() the
+// check rejects such tags as a border thinner or thicker than one cell; with it every tag kept
+// has its corners within 1 px of the truth, and a tag is rejected where realigning the side
+// would move a corner by more than border_realign_max or, seen far off its normal, where a side
+// next to the realigned one has no clean inner edge on the realigned quad.
+TEST(BorderCheck, RenderedBorderThinOrThickOnOneSideKeptHalfway) {
+  const auto calib = testing::test_calibration();
+  const DetectorSettings dflt;
+  DetectorSettings off = dflt;
+  off.border_realign_max = 0.0;
+  const cv::Mat pattern = tag_pattern("tag36h11", 0);
+  int pictures = 0, rejected_without = 0, named = 0, kept = 0, kept_realigned = 0, over_cap = 0,
+      unmeasured = 0;
+  double worst = 0.0;
+  for (size_t p = 0; p < kBentPoses.size(); ++p)
+    for (size_t side = 0; side < 4; ++side)
+      for (const double width : {0.9, 0.95, 1.05, 1.1}) {
+        render::PrintModel print;
+        print.border_width[side] = width;
+        const auto c =
+            rendered_case(calib, kBentPoses[p], print, static_cast<unsigned>(60 + p),
+                          "rendered, pose " + std::to_string(p) + ", border " +
+                              std::to_string(width) + " cell on side " + std::to_string(side));
+        ++pictures;
+        const auto without = TagDetector(off).detect(c.img, &calib);
+        if (without.status == TargetStatus::border_mismatch) {
+          ++rejected_without;
+          named += without.reason.find(width < 1 ? "thinner" : "thicker") != std::string::npos;
+        }
+        const auto a = TagDetector(dflt).detect(c.img, &calib);
+        if (a.status != TargetStatus::detected) {
+          const auto fit = TagDetector(with_check(false)).detect(c.img, &calib);
+          ASSERT_EQ(fit.status, TargetStatus::detected) << c.what;
+          const auto& q = fit.target()->corners;
+          const BorderCheck bc = check_border(c.img, q, pattern, 8, dflt, &calib);
+          const auto inner = realign_sides(q, bc, 8, dflt, 1.0, &calib);
+          ASSERT_TRUE(inner) << c.what << ": " << a.reason << "; " << describe(bc);
+          if (max_corner_error(*inner, q) > dflt.border_realign_max) {
+            ++over_cap;
+            continue;
+          }
+          // Otherwise the second check failed because a side measured on the fitted quad has
+          // no clean inner edge on the realigned one (held, with the others, to the fixed
+          // limit): the only other way this test has seen a tag lost.
+          DetectorSettings strict = dflt;
+          strict.border_shared_deviation = false;
+          const BorderCheck again = check_border(c.img, *inner, pattern, 8, strict, &calib);
+          ASSERT_FALSE(again.ok) << c.what;
+          bool lost_side = false;
+          for (size_t k = 0; k < 4; ++k)
+            lost_side = lost_side || (!std::isnan(bc.thickness_error[k]) &&
+                                      std::isnan(again.thickness_error[k]));
+          EXPECT_TRUE(lost_side) << c.what << ": " << a.reason
+                                 << "; realigned: " << describe(again);
+          unmeasured += lost_side;
+          continue;
+        }
+        ++kept;
+        kept_realigned += without.status != TargetStatus::detected;
+        const double e = max_corner_error(a.target()->corners, c.truth);
+        worst = std::max(worst, e);
+        EXPECT_LT(e, 1.0) << c.what;
+      }
+  std::printf(
+      "%d pictures: %d rejected without the realignment (%d naming the side's border thinner or "
+      "thicker), %d kept with it (%d of them realigned), corners within %.2f px; rejected with "
+      "it: %d moving a corner by more than border_realign_max, %d with a side unmeasured on the "
+      "realigned quad\n",
+      pictures, rejected_without, named, kept, kept_realigned, worst, over_cap, unmeasured);
+  EXPECT_GE(named, 8) << "the renderer's one-sided border no longer fails the check: the test "
+                         "shows nothing";
+  EXPECT_GE(kept_realigned, 8);
 }
 
 // quad_bow against the truth: on bent cards pictured in linear light (no edge bias, so the

@@ -2,6 +2,7 @@
 // key path for an unknown key, a non-number and a missing value.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <filesystem>
 #include <fstream>
 
@@ -194,6 +195,10 @@ TEST(RenderScenario, PrintKeys) {
   EXPECT_DOUBLE_EQ(s.target().tag.print.ink_spread, -0.1);
   EXPECT_DOUBLE_EQ(s.target().tag.print.gloss, 0.3);
   EXPECT_DOUBLE_EQ(s.target().tag.print.bend, -4);
+  EXPECT_TRUE(s.target().tag.print.even_border());
+  s = netvmo::io::load_render_scenario(write_scenario(
+      "border.yaml", replaced(kMinimal, "size: 0.15}", tag("{border_width: [1.2, 1, 0.75, 1]}"))));
+  EXPECT_TRUE((s.target().tag.print.border_width == std::array<double, 4>{1.2, 1, 0.75, 1}));
   s = netvmo::io::load_render_scenario(
       write_scenario("print_preset.yaml", replaced(kMinimal, "size: 0.15}", tag("realistic"))));
   EXPECT_TRUE(s.target().tag.print == netvmo::render::PrintModel::realistic());
@@ -206,6 +211,10 @@ TEST(RenderScenario, PrintKeys) {
   expect_rejected("gloss.yaml", "size: 0.15}", tag("{gloss: -1}"), "target.tag.print.gloss");
   expect_rejected("shiny.yaml", "size: 0.15}", tag("{shininess: 0}"), "target.tag.print.shininess");
   expect_rejected("preset.yaml", "size: 0.15}", tag("glossy"), "target.tag.print");
+  expect_rejected("border.yaml", "size: 0.15}", tag("{border_width: [1, 1, 0.4, 1]}"),
+                  "target.tag.print.border_width");
+  expect_rejected("border3.yaml", "size: 0.15}", tag("{border_width: [1, 1, 1]}"),
+                  "target.tag.print.border_width");
   // A 0.15 m tag36h11 is printed 0.225 m wide: its ends 1.5 rad round at a bend of 13.3 / m.
   expect_rejected("bend.yaml", "size: 0.15}", tag("{bend: 13.4}"), "target.tag.print.bend");
   EXPECT_NO_THROW(netvmo::io::load_render_scenario(

@@ -1,6 +1,7 @@
 // The realistic camera model (docs/realistic_camera.md), each effect against a closed form on a
 // fronto-parallel tag: ink spread moves the imaged black/white edge by ink_spread * cell px, a
-// glossy print adds its Blinn-Phong term, a bent card is imaged where its cylinder puts it.
+// border's width moves its inner edge, a glossy print adds its Blinn-Phong term, a bent card is
+// imaged where its cylinder puts it.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -134,6 +135,70 @@ TEST(RealisticPrint, BentCardIsImagedWhereTheCylinderPutsIt) {
     }
     EXPECT_DOUBLE_EQ(t.visible_fraction, 1.0);
   }
+}
+
+// The fronto-parallel tag's bitmap cell (r, c) covers u in 244.5 + 15 [c, c + 1] and v in
+// 164.5 + 15 [r, r + 1] (10 cells of 15 px, centred on the principal point).
+double column_u(double fc) {
+  return 244.5 + kCellPx * fc;
+}
+double row_v(double fr) {
+  return 164.5 + kCellPx * fr;
+}
+
+// Where a side's border is `w` cells wide, the grid line along its inner edge (bitmap line 2 on
+// the left and the top, 8 on the right) lies w cells from the outer edge (line 1, 9): measured
+// across the border next to a white data cell, the black ends at 244.5 + 15 (1 + w). The outer
+// edge, the truth's corners and the other sides do not move; ink spread acts on the moved grid.
+TEST(RealisticPrint, BorderWidthMovesTheInnerEdgeOfItsSideOnly) {
+  SceneDescription s = fronto_scene();
+  s.target().tag.print.border_width = {1.3, 1.0, 1.0, 0.7};  // top, right, bottom, left
+  const TagTexture tex(s.target().tag);
+  int left_row = -1, right_row = -1, top_col = -1;  // a white data cell next to each border
+  for (int k = 2; k < 8; ++k) {
+    if (left_row < 0 && !tex.dark(k, 2)) left_row = k;
+    if (right_row < 0 && !tex.dark(k, 7)) right_row = k;
+    if (top_col < 0 && !tex.dark(2, k)) top_col = k;
+  }
+  ASSERT_GE(left_row, 0);
+  ASSERT_GE(right_row, 0);
+  ASSERT_GE(top_col, 0);
+  auto rows = [](int r) { return std::pair{int(row_v(r)) + 4, int(row_v(r + 1)) - 3}; };
+  Renderer r(s);
+  const cv::Mat img = r.render(0, 0);
+  const auto [l0, l1] = rows(left_row);
+  const double left_inner = column_u(1 + 0.7);  // 270.0
+  // 4 x 4 samples per pixel: an edge is located to within 1/8 px.
+  EXPECT_NEAR(edge_position(img, int(left_inner) - 6, int(left_inner) + 6, l0, l1), left_inner,
+              0.13);
+  EXPECT_NEAR(left_edge(img), kLeftEdge, 0.05);  // the outer edge stays
+  const auto [r0, r1] = rows(right_row);
+  const double right_inner = column_u(8);  // 364.5, the right side is one cell wide
+  EXPECT_NEAR(edge_position(img, int(right_inner) - 6, int(right_inner) + 6, r0, r1), right_inner,
+              0.13);
+  const double top_inner = row_v(1 + 1.3);  // 199.0
+  const int c0 = int(column_u(top_col)) + 4, c1 = int(column_u(top_col + 1)) - 3;
+  EXPECT_NEAR(horizontal_sharp_edge(img, int(top_inner) - 6, int(top_inner) + 6, c0, c1), top_inner,
+              0.13);
+  const FrameTruth t = r.truth(0, 0);
+  ASSERT_TRUE(t.corners[0].has_value());
+  EXPECT_LT((*t.corners[0] - Vec2(column_u(1), row_v(9))).norm(), 1e-6);  // bottom left
+
+  // Ink spread of 0.2 cell on the moved grid: both edges of the left border move 3 px into the
+  // white.
+  s.target().tag.print.ink_spread = 0.2;
+  const cv::Mat inked = Renderer(s).render(0, 0);
+  EXPECT_NEAR(edge_position(inked, int(left_inner) - 6 + 3, int(left_inner) + 6 + 3, l0, l1),
+              left_inner + 0.2 * kCellPx, 0.13);
+  EXPECT_NEAR(left_edge(inked), kLeftEdge - 0.2 * kCellPx, 0.13);
+}
+
+TEST(RealisticPrint, BorderWidthOutOfRangeIsRefused) {
+  SceneDescription s = fronto_scene();
+  s.target().tag.print.border_width = {1.0, 1.0, 1.6, 1.0};
+  EXPECT_THROW(Renderer r(s), std::invalid_argument);
+  s.target().tag.print.border_width = {0.5, 1.5, 1.0, 1.0};
+  EXPECT_NO_THROW(Renderer r(s));
 }
 
 TEST(RealisticPrint, BendBeyondAQuarterTurnIsRefused) {

@@ -180,7 +180,8 @@ bool read_preset(const Value& v) {
   return p == "realistic";
 }
 
-// print: clean | realistic | {preset: clean|realistic, ink_spread, gloss, shininess, bend}
+// print: clean | realistic | {preset: clean|realistic, ink_spread, gloss, shininess, bend,
+// border_width}
 // (bend's range depends on the tag's size: read_tag checks it)
 render::PrintModel read_print(const Value& v, bool realistic) {
   if (v.node().IsScalar())
@@ -199,6 +200,14 @@ render::PrintModel read_print(const Value& v, bool realistic) {
     if (!(pm.shininess >= 1 && pm.shininess <= 10000)) x->fail("must be between 1 and 10000");
   }
   if (const auto x = m.find("bend")) pm.bend = x->number();
+  if (const auto x = m.find("border_width")) {
+    const auto w = x->vec<4>();
+    for (int i = 0; i < 4; ++i) {
+      if (!(w[i] >= 0.5 && w[i] <= 1.5))
+        x->fail("must be four widths [top, right, bottom, left] between 0.5 and 1.5 cells");
+      pm.border_width[size_t(i)] = w[i];
+    }
+  }
   m.finish();
   return pm;
 }

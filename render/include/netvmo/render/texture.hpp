@@ -4,6 +4,7 @@
 // pattern; anti-aliasing comes from the renderer's supersampling.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -34,13 +35,21 @@ struct PrintModel {
   /// The tag frame stays the tangent plane at the centre line. 0 = flat; |bend| times half the
   /// printed side at most 1.5 rad.
   double bend = 0.0;
+  /// Width of the printed black border on each side [cells]: top (the tag's +y), right (+x),
+  /// bottom, left. The border's outer edge stays where the tag's size puts it (so the corners
+  /// do not move); the grid line along its inner edge moves, across the whole print, so the
+  /// cells next to it grow or shrink: a bitmap scaled by nearest neighbour to a non-integer
+  /// number of device pixels per cell, or a misregistered print. 0.5..1.5 each; 1 = ideal.
+  std::array<double, 4> border_width{1.0, 1.0, 1.0, 1.0};
 
   /// A laser print on office paper: the black grows by 0.08 cell, slightly glossy, flat.
-  static PrintModel realistic() { return {0.08, 0.04, 30.0, 0.0}; }
+  static PrintModel realistic() { return {0.08, 0.04, 30.0, 0.0, {1.0, 1.0, 1.0, 1.0}}; }
   bool operator==(const PrintModel& o) const {
     return ink_spread == o.ink_spread && gloss == o.gloss && shininess == o.shininess &&
-           bend == o.bend;
+           bend == o.bend && border_width == o.border_width;
   }
+  /// Whether every side's border is one cell wide.
+  bool even_border() const { return border_width == std::array<double, 4>{1.0, 1.0, 1.0, 1.0}; }
 };
 
 /// One printed AprilTag. Defaults: tag36h11 id 0, 0.2 m.
@@ -91,7 +100,7 @@ class TagTexture {
   /// Albedo at tag-frame coordinates (x, y) [m] of the flat print; white outside the bitmap
   /// (quiet zone).
   double albedo(double x, double y) const {
-    if (spec_.print.ink_spread != 0) return spread_albedo(x, y);
+    if (spec_.print.ink_spread != 0 || !even_border_) return spread_albedo(x, y);
     const double half = 0.5 * total_width_;
     const double fc = x / cell_ + half, fr = half - y / cell_;
     if (fc < 0 || fr < 0) return spec_.white_albedo;
@@ -106,14 +115,21 @@ class TagTexture {
   bool dark(int r, int c) const { return dark_[static_cast<size_t>(r * total_width_ + c)] != 0; }
 
  private:
-  /// albedo() with PrintModel::ink_spread: the black dilated (eroded) by a disc.
+  /// albedo() with PrintModel::ink_spread (the black dilated or eroded by a disc) on the grid
+  /// of PrintModel::border_width.
   double spread_albedo(double x, double y) const;
+  /// The cell of the printed grid holding bitmap coordinate f along one axis (columns: a = 3,
+  /// the left side, b = 1, the right; rows: a = 0, the top, b = 2, the bottom): its index and
+  /// its lower and upper grid lines, the lines along the border's inner edges moved by
+  /// PrintModel::border_width.
+  int grid_cell(double f, size_t a, size_t b, double& lo, double& hi) const;
   /// dark(r, c), false (white) outside the bitmap.
   bool dark_or_white(int r, int c) const {
     return r >= 0 && c >= 0 && r < total_width_ && c < total_width_ && dark(r, c);
   }
 
   TagSpec spec_;
+  bool even_border_ = true;
   int total_width_ = 0, width_at_border_ = 0;
   double cell_ = 0;
   std::vector<std::uint8_t> dark_;
