@@ -6,26 +6,31 @@
 # visible tags accepted (netvmo detect's recall against truth.csv), the front end's rejection
 # reasons, and the RMS / max corner error of accepted corners against the projected truth.
 #
-#   bash tools/realistic_effects.sh [--netvmo PATH] [--frames N] [--out DIR] [EFFECT ...]
+#   bash tools/realistic_effects.sh [--netvmo PATH] [--frames N] [--out DIR]
+#                                   [--spp N] [--sampling grid|jittered] [EFFECT ...]
 #
 # EFFECT names (default: all): clean ink+0.2 ink-0.2 side0.95 side1.05 side0.85 side1.15 bent1
 # bent gloss srgb vignetting psf1.0 bloom jpeg50 sharpen blur20ms rolling30us defocus realistic
 # (side0.95, side0.85: the border that many cells wide on the bottom side; side1.05, side1.15:
 # on the right side; bent1, bent: the card bent to a radius of 1 m and 0.25 m, its ends curling
-# toward the camera). Takes about a minute per effect on two shared cores at the default 20
-# frames.
+# toward the camera). --spp, --sampling: imaging.spp and imaging.sampling of the scenes (default
+# 9, grid). Takes about a minute per effect on two shared cores at the default 20 frames.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 netvmo=build/netvmo
 frames=20
 out=""
+sampling=grid
+spp=9
 effects=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --netvmo) netvmo=$2; shift 2 ;;
     --frames) frames=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
-    -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
+    --sampling) sampling=$2; shift 2 ;;
+    --spp) spp=$2; shift 2 ;;
+    -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
     *) effects+=("$1"); shift ;;
   esac
 done
@@ -66,7 +71,7 @@ scenario() {  # $1 print, $2 sensor
   cat <<YAML
 fps: 30
 frames: $frames
-imaging: {spp: 9, seed: 3, ambient: 0.3, background: 0.6, noise: true}
+imaging: {spp: $spp, seed: 3, ambient: 0.3, background: 0.6, noise: true, sampling: $sampling}
 lights:
   - {type: directional, direction: [0.3, 0.8, -1.0], intensity: 0.8, shadows: true}
 target:

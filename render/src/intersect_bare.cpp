@@ -45,8 +45,9 @@ std::uint64_t row_hits(const Renderer::Impl& I, const CameraSpec& cam, const Pos
         xn = cc.table[ti];
         yn = cc.table[ti + 1];
       } else {
-        xn = float((col + I.offsets[size_t(s)].x() - Kc.cx) / Kc.fx);
-        yn = float((row + I.offsets[size_t(s)].y() - Kc.cy) / Kc.fy);
+        const Eigen::Vector2f o = pixel_sample(I.offsets[size_t(s)], cc.jitter_key, col, row);
+        xn = float((col + o.x() - Kc.cx) / Kc.fx);
+        yn = float((row + o.y() - Kc.cy) / Kc.fy);
       }
       n += hits(I.top, ctx, O, R * Eigen::Vector3f(xn, yn, 1.0f));
     }

@@ -62,7 +62,7 @@ struct FrameJob {
       focus = float(sm.focus_distance);
       std::uint64_t h = im.seed ^ 0x5bd1e9955bd1e995ULL;
       jitter_seed =
-          mix(mix(h) ^ (std::uint64_t(std::uint32_t(camera_id)) << 32 | std::uint32_t(frame)));
+          mix64(mix64(h) ^ (std::uint64_t(std::uint32_t(camera_id)) << 32 | std::uint32_t(frame)));
       if (timed && cam.moving())  // the camera's own pose at the motion steps
         for (int k = 0; k < I.motion_steps; ++k) {
           const Pose g = cam.true_pose(t + (2.0 * k / (I.motion_steps - 1) - 1.0) * half_window);
@@ -70,13 +70,6 @@ struct FrameJob {
           cam_O.push_back(g.translation().cast<float>());
         }
     }
-  }
-
-  static std::uint64_t mix(std::uint64_t z) {  // splitmix64's finalizer
-    z += 0x9e3779b97f4a7c15ULL;
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
   }
 
   const Renderer::Impl& impl;
@@ -180,8 +173,9 @@ bool tile_sample(const FrameJob& f, const TileRect& t, int idx, int& cin, int& r
 // where the distortion model is invertible (the sample stays black).
 bool camera_ray(const FrameJob& f, int col, int row, int s, float& xn, float& yn) {
   if (f.cc.table.empty()) {
-    xn = (float(col) + f.impl.offsets[size_t(s)].x() - f.cx) / f.fx;
-    yn = (float(row) + f.impl.offsets[size_t(s)].y() - f.cy) / f.fy;
+    const Eigen::Vector2f o = pixel_sample(f.impl.offsets[size_t(s)], f.cc.jitter_key, col, row);
+    xn = (float(col) + o.x() - f.cx) / f.fx;
+    yn = (float(row) + o.y() - f.cy) / f.fy;
     return true;
   }
   const size_t ti = ray_table_index(row, col, s, f.width, f.spp);
@@ -202,7 +196,7 @@ double radical_inverse(unsigned i, unsigned base) {
 void realistic_lane(const FrameJob& f, int col, int row, int s, float xn, float yn, Packet& pk,
                     int j) {
   const std::uint64_t h =
-      FrameJob::mix(f.jitter_seed ^ (std::uint64_t(row) * 0x100000001b3ULL + std::uint64_t(col)));
+      mix64(f.jitter_seed ^ (std::uint64_t(row) * 0x100000001b3ULL + std::uint64_t(col)));
   auto rot = [&](double u, int k) {
     const double o = double((h >> (21 * k)) & 0x1FFFFF) / 2097152.0;
     const double v = u + o;

@@ -17,7 +17,8 @@ Renderer::Renderer(SceneDescription scene)
   I.build(scene_);
   I.offsets = sample_offsets(scene_.imaging.spp);
   for (const auto& cam : scene_.cameras) {
-    I.cams.push_back(make_camera_cache(cam.intrinsics, I.offsets));
+    I.cams.push_back(
+        make_camera_cache(cam.intrinsics, I.offsets, pixel_jitter_key(scene_.imaging, cam.id)));
     I.radiance.push_back(std::make_unique<RadianceCache>());
   }
   set_frame(0);

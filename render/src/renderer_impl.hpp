@@ -92,6 +92,9 @@ struct CameraCache {
   std::vector<float> table;
   // Bounding box of the undistorted normalized coordinates of the image border.
   double xmin = 0, xmax = 0, ymin = 0, ymax = 0;
+  // pixel_jitter_key() of the camera: 0 (Imaging::Sampling::Grid) leaves every pixel's samples
+  // at the pattern's offsets.
+  std::uint64_t jitter_key = 0;
 };
 
 struct Renderer::Impl {
@@ -139,8 +142,23 @@ struct Renderer::Impl {
 // Camera rays (camera_rays.cpp).
 /// Sample offsets relative to the pixel centre, in [-0.5, 0.5)^2.
 std::vector<Eigen::Vector2f> sample_offsets(int spp);
-/// FOV bounds and, with distortion, the undistorted ray of every (pixel, sample).
-CameraCache make_camera_cache(const Intrinsics& Kc, const std::vector<Eigen::Vector2f>& offsets);
+/// Imaging::Sampling::Jittered: the key of a camera's pixel shifts (the scene's seed and the
+/// camera's id); 0 for Imaging::Sampling::Grid, whose pixels are not shifted.
+std::uint64_t pixel_jitter_key(const Imaging& im, int camera_id);
+/// Sample offset `o` of pixel (col, row) shifted toroidally within the pixel by the pixel's own
+/// offset in [0, 1)^2, drawn from `key` (pixel_jitter_key); `o` itself for key 0.
+Eigen::Vector2f pixel_sample(const Eigen::Vector2f& o, std::uint64_t key, int col, int row);
+/// FOV bounds and, with distortion, the undistorted ray of every (pixel, sample), its samples
+/// shifted by pixel_sample() with `jitter_key`.
+CameraCache make_camera_cache(const Intrinsics& Kc, const std::vector<Eigen::Vector2f>& offsets,
+                              std::uint64_t jitter_key);
+/// splitmix64's finalizer: a well-mixed 64-bit hash of z.
+inline std::uint64_t mix64(std::uint64_t z) {
+  z += 0x9e3779b97f4a7c15ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
 /// Index of (row, col, sample) in CameraCache::table.
 inline size_t ray_table_index(int row, int col, int sample, int width, int spp) {
   return ((size_t(row) * size_t(width) + size_t(col)) * size_t(spp) + size_t(sample)) * 2;

@@ -55,6 +55,7 @@ TEST(RenderScenario, MinimalLoads) {
   EXPECT_EQ(s.frames, 3);
   EXPECT_EQ(s.imaging.spp, 1);
   EXPECT_EQ(s.imaging.seed, 5u);
+  EXPECT_EQ(s.imaging.sampling, netvmo::render::Imaging::Sampling::Grid);
   ASSERT_EQ(s.edges.size(), 1u);
   EXPECT_EQ(s.target().motion.kind, netvmo::render::Trajectory::Kind::Twist);
 }
@@ -221,6 +222,12 @@ TEST(RenderScenario, PrintKeys) {
       write_scenario("bend_max.yaml", replaced(kMinimal, "size: 0.15}", tag("{bend: -13.3}")))));
   expect_rejected("model.yaml", "{spp: 1, seed: 5}", "{spp: 1, camera_model: fancy}",
                   "imaging.camera_model");
+  s = netvmo::io::load_render_scenario(write_scenario(
+      "jittered.yaml",
+      replaced(kMinimal, "{spp: 1, seed: 5}", "{spp: 1, seed: 5, sampling: jittered}")));
+  EXPECT_EQ(s.imaging.sampling, netvmo::render::Imaging::Sampling::Jittered);
+  expect_rejected("sampling.yaml", "{spp: 1, seed: 5}", "{spp: 1, sampling: random}",
+                  "imaging.sampling");
 }
 
 TEST(RenderScenario, SensorKeys) {

@@ -405,6 +405,15 @@ bool read_imaging(const Value& v, render::Imaging& im) {
     if (s < 0 || s != std::floor(s) || s > 9.0e15) x->fail("must be a non-negative integer");
     im.seed = std::uint64_t(s);
   }
+  if (const auto x = m.find("sampling")) {
+    const std::string name = x->string();
+    if (name == "grid")
+      im.sampling = render::Imaging::Sampling::Grid;
+    else if (name == "jittered")
+      im.sampling = render::Imaging::Sampling::Jittered;
+    else
+      x->fail("unknown sampling '" + name + "' (use grid or jittered)");
+  }
   if (const auto x = m.find("exposure")) im.exposure = positive(*x);
   if (const auto x = m.find("background")) im.background = x->number();
   if (const auto x = m.find("ambient")) im.ambient = x->number();

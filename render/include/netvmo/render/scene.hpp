@@ -72,6 +72,15 @@ struct Light {
 struct Imaging {
   int spp = 4;  ///< samples per pixel; perfect squares use an n x n stratified
                 ///< grid, other counts a Hammersley pattern
+  /// Where each pixel's samples lie. Grid: the pattern of `spp` at the same offsets in every
+  /// pixel, so an edge along the pixel rows or columns is quantised alike over its whole
+  /// length (to 1/n px with an n x n grid; a sensor integrating over its pixels makes no such
+  /// error). Jittered: each pixel's pattern shifted toroidally within the pixel by the pixel's
+  /// own offset, drawn from (seed, camera id, pixel) and the same in every frame: the samples
+  /// stay one per stratum, and the quantisation becomes a noise that averages out along an
+  /// edge. Grid is the default: the project's renderings and the figures measured on them.
+  enum class Sampling { Grid, Jittered };
+  Sampling sampling = Sampling::Grid;
   double exposure = 1.0;
   double background = 0.55;  ///< radiance of rays that hit nothing
   double ambient = 0.3;      ///< ambient light level
