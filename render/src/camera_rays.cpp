@@ -40,21 +40,35 @@ void fov_bounds(const Intrinsics& Kc, CameraCache& cc) {
   }
 }
 
-// Undistorted normalized coordinates of every (pixel, sample); NaN where the distortion model
-// cannot be inverted.
+// The pixel's own shift of the sample pattern, in [0, 1)^2, drawn from `key`
+// (pixel_jitter_key(), non-zero).
+Eigen::Vector2f pixel_shift(std::uint64_t key, int col, int row) {
+  const std::uint64_t h =
+      mix64(key ^ (std::uint64_t(std::uint32_t(row)) << 32 | std::uint32_t(col)));
+  // Two 24-bit fractions of the pixel; float keeps 24 bits.
+  return {float(h >> 40) * (1.0f / 16777216.0f),
+          float((h >> 16) & 0xFFFFFF) * (1.0f / 16777216.0f)};
+}
+
+// Undistorted normalized coordinates of every (pixel, sample), the samples shifted per pixel for
+// a non-zero `jitter_key`; NaN where the distortion model cannot be inverted.
 std::vector<float> ray_table(const Intrinsics& Kc, const std::vector<Eigen::Vector2f>& offsets,
                              std::uint64_t jitter_key) {
   const int spp = int(offsets.size());
   std::vector<float> table(size_t(Kc.width) * size_t(Kc.height) * size_t(spp) * 2);
   for (int r = 0; r < Kc.height; ++r)
-    for (int col = 0; col < Kc.width; ++col)
+    for (int col = 0; col < Kc.width; ++col) {
+      const Eigen::Vector2f shift =
+          jitter_key ? pixel_shift(jitter_key, col, r) : Eigen::Vector2f::Zero();
       for (int s = 0; s < spp; ++s) {
-        const Eigen::Vector2f o = pixel_sample(offsets[size_t(s)], jitter_key, col, r);
+        const Eigen::Vector2f o =
+            jitter_key ? shifted_sample(offsets[size_t(s)], shift) : offsets[size_t(s)];
         const auto x = Kc.unproject(Vec2(col + o.x(), r + o.y()));
         const size_t i = ray_table_index(r, col, s, Kc.width, spp);
         table[i] = x ? float(x->x()) : std::numeric_limits<float>::quiet_NaN();
         table[i + 1] = x ? float(x->y()) : std::numeric_limits<float>::quiet_NaN();
       }
+    }
   return table;
 }
 
@@ -81,27 +95,20 @@ std::uint64_t pixel_jitter_key(const Imaging& im, int camera_id) {
   return k ? k : 1;
 }
 
-Eigen::Vector2f pixel_sample(const Eigen::Vector2f& o, std::uint64_t key, int col, int row) {
-  if (key == 0) return o;
-  const std::uint64_t h =
-      mix64(key ^ (std::uint64_t(std::uint32_t(row)) << 32 | std::uint32_t(col)));
-  // Two 24-bit fractions of the pixel; float keeps 24 bits.
-  const float sx = float(h >> 40) * (1.0f / 16777216.0f);
-  const float sy = float((h >> 16) & 0xFFFFFF) * (1.0f / 16777216.0f);
-  auto wrap = [](float v) {  // v + 0.5 taken into [0, 1), back to [-0.5, 0.5)
-    v += 0.5f;
-    v -= std::floor(v);
-    return v - 0.5f;
-  };
-  return {wrap(o.x() + sx), wrap(o.y() + sy)};
-}
-
 CameraCache make_camera_cache(const Intrinsics& Kc, const std::vector<Eigen::Vector2f>& offsets,
                               std::uint64_t jitter_key) {
   CameraCache cc;
   fov_bounds(Kc, cc);
-  cc.jitter_key = jitter_key;
-  if (Kc.has_distortion()) cc.table = ray_table(Kc, offsets, jitter_key);
+  cc.width = Kc.width;
+  cc.spp = int(offsets.size());
+  cc.fx = float(Kc.fx), cc.fy = float(Kc.fy), cc.cx = float(Kc.cx), cc.cy = float(Kc.cy);
+  if (Kc.has_distortion()) {
+    cc.table = ray_table(Kc, offsets, jitter_key);
+  } else if (jitter_key) {
+    cc.shift.reserve(size_t(Kc.width) * size_t(Kc.height));
+    for (int r = 0; r < Kc.height; ++r)
+      for (int col = 0; col < Kc.width; ++col) cc.shift.push_back(pixel_shift(jitter_key, col, r));
+  }
   return cc;
 }
 

@@ -30,26 +30,16 @@ bool hits(RTCScene top, RTCIntersectContext* ctx, const Eigen::Vector3f& O,
 }
 
 // The hits of every sample of one image row.
-std::uint64_t row_hits(const Renderer::Impl& I, const CameraSpec& cam, const Pose& g_wc,
-                       const CameraCache& cc, int row, RTCIntersectContext* ctx) {
-  const Intrinsics& Kc = cam.intrinsics;
-  const int W = Kc.width, spp = int(I.offsets.size());
+std::uint64_t row_hits(const Renderer::Impl& I, const CameraCache& cc, const Pose& g_wc, int row,
+                       RTCIntersectContext* ctx) {
   const Eigen::Matrix3f R = g_wc.linear().cast<float>();
   const Eigen::Vector3f O = g_wc.translation().cast<float>();
   std::uint64_t n = 0;
-  for (int col = 0; col < W; ++col)
-    for (int s = 0; s < spp; ++s) {
+  for (int col = 0; col < cc.width; ++col)
+    for (int s = 0; s < cc.spp; ++s) {
       float xn, yn;
-      if (!cc.table.empty()) {
-        const size_t ti = ray_table_index(row, col, s, W, spp);
-        xn = cc.table[ti];
-        yn = cc.table[ti + 1];
-      } else {
-        const Eigen::Vector2f o = pixel_sample(I.offsets[size_t(s)], cc.jitter_key, col, row);
-        xn = float((col + o.x() - Kc.cx) / Kc.fx);
-        yn = float((row + o.y() - Kc.cy) / Kc.fy);
-      }
-      n += hits(I.top, ctx, O, R * Eigen::Vector3f(xn, yn, 1.0f));
+      if (primary_ray(cc, I.offsets, col, row, s, xn, yn))
+        n += hits(I.top, ctx, O, R * Eigen::Vector3f(xn, yn, 1.0f));
     }
   return n;
 }
@@ -69,7 +59,7 @@ std::uint64_t Renderer::intersect_bare(int ci, int frame, int threads) {
     rtcInitIntersectContext(&ctx);
     std::uint64_t local = 0;
     for (int row = next_row++; row < cam.intrinsics.height; row = next_row++)
-      local += row_hits(I, cam, g_wc, cc, row, &ctx);
+      local += row_hits(I, cc, g_wc, row, &ctx);
     total += local;
   });
   return total;

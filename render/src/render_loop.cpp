@@ -47,7 +47,6 @@ struct FrameJob {
     R = g_wc.linear().cast<float>();
     O = g_wc.translation().cast<float>();
     const Intrinsics& Kc = cam.intrinsics;
-    fx = float(Kc.fx), fy = float(Kc.fy), cx = float(Kc.cx), cy = float(Kc.cy);
     // The realistic camera's rays: each sample at its own time in the exposure (and its row's
     // rolling-shutter offset) and through its own point of the lens aperture.
     const SensorModel& sm = cam.sensor;
@@ -93,7 +92,6 @@ struct FrameJob {
   Pose g_wc;
   Eigen::Matrix3f R;  // camera -> world
   Eigen::Vector3f O;  // camera centre
-  float fx = 0, fy = 0, cx = 0, cy = 0;
   // Realistic rays (SensorModel): per-lane time (motion blur, rolling shutter) and lens point.
   bool timed = false, lens = false;
   double exposure_time = 0, line_delay = 0, row_mid = 0, half_window = 0;
@@ -167,21 +165,6 @@ bool tile_sample(const FrameJob& f, const TileRect& t, int idx, int& cin, int& r
   cin = (blk % t.bxn) * f.block + pib % f.block;
   rin = (blk / t.bxn) * f.block + pib / f.block;
   return cin < t.w && rin < t.h;
-}
-
-// Undistorted normalized coordinates of sample s of pixel (col, row); false outside the region
-// where the distortion model is invertible (the sample stays black).
-bool camera_ray(const FrameJob& f, int col, int row, int s, float& xn, float& yn) {
-  if (f.cc.table.empty()) {
-    const Eigen::Vector2f o = pixel_sample(f.impl.offsets[size_t(s)], f.cc.jitter_key, col, row);
-    xn = (float(col) + o.x() - f.cx) / f.fx;
-    yn = (float(row) + o.y() - f.cy) / f.fy;
-    return true;
-  }
-  const size_t ti = ray_table_index(row, col, s, f.width, f.spp);
-  xn = f.cc.table[ti];
-  yn = f.cc.table[ti + 1];
-  return std::isfinite(xn);
 }
 
 double radical_inverse(unsigned i, unsigned base) {
@@ -260,7 +243,7 @@ void primary_lane(const FrameJob& f, const TileRect& t, int idx, int j, Packet& 
   if (!tile_sample(f, t, idx, cin, rin, s)) return;
   pk.pix[j] = rin * t.w + cin;
   float xn, yn;
-  if (!camera_ray(f, t.x0 + cin, t.y0 + rin, s, xn, yn)) return;
+  if (!primary_ray(f.cc, f.impl.offsets, t.x0 + cin, t.y0 + rin, s, xn, yn)) return;
   pb.xmin = std::min(pb.xmin, xn);
   pb.xmax = std::max(pb.xmax, xn);
   pb.ymin = std::min(pb.ymin, yn);
@@ -295,7 +278,8 @@ bool rays_may_hit(const FrameJob& f, const TileRect& t, int base, const MovedBod
   for (int idx = base; idx < base + kPacket; ++idx) {
     int cin, rin, s;
     float xn, yn;
-    if (tile_sample(f, t, idx, cin, rin, s) && camera_ray(f, t.x0 + cin, t.y0 + rin, s, xn, yn) &&
+    if (tile_sample(f, t, idx, cin, rin, s) &&
+        primary_ray(f.cc, f.impl.offsets, t.x0 + cin, t.y0 + rin, s, xn, yn) &&
         ray_may_hit(b, xn, yn))
       return true;
   }

@@ -90,11 +90,13 @@ struct RadianceCache {
 struct CameraCache {
   // Undistorted normalized coordinates per (pixel, sample) when the camera has distortion.
   std::vector<float> table;
+  // Imaging::Sampling::Jittered without distortion: each pixel's shift of the sample pattern
+  // (pixel_shift()), row-major; empty otherwise (the table holds the shifted samples already).
+  std::vector<Eigen::Vector2f> shift;
+  int width = 0, spp = 0;
+  float fx = 1, fy = 1, cx = 0, cy = 0;  // the pinhole in the kernel's single precision
   // Bounding box of the undistorted normalized coordinates of the image border.
   double xmin = 0, xmax = 0, ymin = 0, ymax = 0;
-  // pixel_jitter_key() of the camera: 0 (Imaging::Sampling::Grid) leaves every pixel's samples
-  // at the pattern's offsets.
-  std::uint64_t jitter_key = 0;
 };
 
 struct Renderer::Impl {
@@ -145,11 +147,8 @@ std::vector<Eigen::Vector2f> sample_offsets(int spp);
 /// Imaging::Sampling::Jittered: the key of a camera's pixel shifts (the scene's seed and the
 /// camera's id); 0 for Imaging::Sampling::Grid, whose pixels are not shifted.
 std::uint64_t pixel_jitter_key(const Imaging& im, int camera_id);
-/// Sample offset `o` of pixel (col, row) shifted toroidally within the pixel by the pixel's own
-/// offset in [0, 1)^2, drawn from `key` (pixel_jitter_key); `o` itself for key 0.
-Eigen::Vector2f pixel_sample(const Eigen::Vector2f& o, std::uint64_t key, int col, int row);
-/// FOV bounds and, with distortion, the undistorted ray of every (pixel, sample), its samples
-/// shifted by pixel_sample() with `jitter_key`.
+/// The rays of a camera, built once: FOV bounds; with distortion, the undistorted ray of every
+/// (pixel, sample); without, with a non-zero `jitter_key`, every pixel's shift.
 CameraCache make_camera_cache(const Intrinsics& Kc, const std::vector<Eigen::Vector2f>& offsets,
                               std::uint64_t jitter_key);
 /// splitmix64's finalizer: a well-mixed 64-bit hash of z.
@@ -162,6 +161,36 @@ inline std::uint64_t mix64(std::uint64_t z) {
 /// Index of (row, col, sample) in CameraCache::table.
 inline size_t ray_table_index(int row, int col, int sample, int width, int spp) {
   return ((size_t(row) * size_t(width) + size_t(col)) * size_t(spp) + size_t(sample)) * 2;
+}
+/// Sample offset `o` (in [-0.5, 0.5)^2) moved by `shift` (in [0, 1)^2) toroidally within its
+/// pixel: the pattern keeps one sample per stratum.
+inline Eigen::Vector2f shifted_sample(const Eigen::Vector2f& o, const Eigen::Vector2f& shift) {
+  auto wrap = [](float v) {  // v + 0.5 taken into [0, 1), back to [-0.5, 0.5)
+    v += 0.5f;
+    v -= std::floor(v);
+    return v - 0.5f;
+  };
+  return {wrap(o.x() + shift.x()), wrap(o.y() + shift.y())};
+}
+/// The primary ray of sample s of pixel (col, row), in undistorted normalized coordinates
+/// (xn, yn): from the camera's ray table with distortion, false where the model cannot be
+/// inverted (the sample stays black); else through the pinhole, the pattern's offset moved by
+/// the pixel's shift when the sampling is jittered. Rendering and the bare intersection
+/// benchmark both take their rays here.
+inline bool primary_ray(const CameraCache& cc, const std::vector<Eigen::Vector2f>& offsets, int col,
+                        int row, int s, float& xn, float& yn) {
+  if (!cc.table.empty()) {
+    const size_t ti = ray_table_index(row, col, s, cc.width, cc.spp);
+    xn = cc.table[ti];
+    yn = cc.table[ti + 1];
+    return std::isfinite(xn);
+  }
+  Eigen::Vector2f o = offsets[size_t(s)];
+  if (!cc.shift.empty())
+    o = shifted_sample(o, cc.shift[size_t(row) * size_t(cc.width) + size_t(col)]);
+  xn = (float(col) + o.x() - cc.cx) / cc.fx;
+  yn = (float(row) + o.y() - cc.cy) / cc.fy;
+  return true;
 }
 
 // The shading kernel (shading.cpp).

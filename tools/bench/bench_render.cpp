@@ -2,7 +2,8 @@
 // second at 1 and 4 samples per pixel, tile-parallel over all cores with Embree ray packets and
 // shading (texture, ambient + directional light with shadow rays, noise); compared with a bare
 // one-ray-at-a-time rtcIntersect1 loop over the same primary rays with no shading; the same on
-// the moving scene datasets/moving_target.yaml, with and without radiance reuse.
+// the moving scene datasets/moving_target.yaml, with and without radiance reuse; grid against
+// jittered pixel sampling at 9 samples per pixel.
 #include <benchmark/benchmark.h>
 
 #include <memory>
@@ -47,6 +48,31 @@ void BM_RenderFrame(benchmark::State& state) {
 BENCHMARK(BM_RenderFrame)
     ->ArgsProduct({{1, 4}, {0, 4}})
     ->ArgNames({"spp", "cam"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// Pixel sampling (imaging.sampling): the same frame at 9 samples per pixel with the grid pattern
+// (arg 0, the anchor) and jittered per pixel (arg 1); camera 1 (index 0) is a pinhole camera,
+// camera 2 (index 1) has lens distortion (its rays come from the per-camera table).
+void BM_RenderFrameSampling(benchmark::State& state) {
+  auto scene = netvmo::io::load_render_scenario(NETVMO_SOURCE_DIR "/datasets/paper5_render.yaml");
+  scene.imaging.spp = 9;
+  scene.imaging.reuse_radiance = false;
+  scene.imaging.sampling = state.range(0) ? netvmo::render::Imaging::Sampling::Jittered
+                                          : netvmo::render::Imaging::Sampling::Grid;
+  Renderer r(scene);
+  const int cam = int(state.range(1));
+  r.render(cam, 0);
+  for (auto _ : state) {
+    cv::Mat img = r.render(cam, 0);
+    benchmark::DoNotOptimize(img.data);
+  }
+  state.counters["primary_rays/s"] = benchmark::Counter(
+      double(640 * 480) * 9 * double(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_RenderFrameSampling)
+    ->ArgsProduct({{0, 1}, {0, 1}})
+    ->ArgNames({"jittered", "cam"})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
