@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
@@ -487,6 +488,135 @@ TEST(BorderCheck, InkSpreadAndMotionBlurKeptWrongSideRejected) {
       realigned.inner);
   EXPECT_GT(fixed_rejects, 0) << "the fixed limit kept every tag: the test shows nothing";
   EXPECT_GT(wrong_quads, 100);
+}
+
+/// `raw` (a camera with lens distortion) rectified as an image pipeline does it: the pinhole
+/// camera of the same focal lengths magnified by `m`, its image `m` times as large, each pixel
+/// taken from the raw image by cv::remap with `interpolation`.
+struct Rectified {
+  io::Calibration calib;
+  cv::Mat image;
+};
+Rectified rectify(const cv::Mat& raw, const io::Calibration& calib, double m, int interpolation) {
+  Rectified r;
+  r.calib.width = static_cast<int>(std::lround(calib.width * m));
+  r.calib.height = static_cast<int>(std::lround(calib.height * m));
+  r.calib.K = cv::Matx33d(calib.K(0, 0) * m, 0, (calib.K(0, 2) + 0.5) * m - 0.5, 0,
+                          calib.K(1, 1) * m, (calib.K(1, 2) + 0.5) * m - 0.5, 0, 0, 1);
+  cv::Mat mx, my;
+  cv::initUndistortRectifyMap(cv::Mat(calib.K), calib.distortion(), cv::Mat(), cv::Mat(r.calib.K),
+                              cv::Size(r.calib.width, r.calib.height), CV_32FC1, mx, my);
+  cv::remap(raw, r.image, mx, my, interpolation, cv::BORDER_CONSTANT, cv::Scalar(0));
+  return r;
+}
+
+// The rotation series of the corpus (docs/frontend.md, "Resampled images"): a wide-angle
+// camera's frames rectified to a pinhole at a magnification of about 1.65, the nearest
+// source pixel taken for each output pixel. That moves each edge of the print by up to half a
+// source pixel, independently at the border's outer and inner edges and alike along a side that
+// runs along the source's rows or columns. Made here: a tag pictured through lens distortion (k1
+// -0.12 and -0.3), blurred, with the tone curve, noise and JPEG at quality 80, then rectified at
+// magnifications 1, 1.3 and 1.65, by nearest neighbour and bilinearly. Every correct quad the
+// front end keeps has its corners within 1 px of the rectified camera's truth. Bilinear: every
+// quad of the same pictures with one side moved 1 or 1.5 px (a corner more than 1 px off) is
+// rejected, or kept halfway back within 1 px. Nearest neighbour: the check's own measurements
+// are off by as much as such a move, and it keeps some of those quads; they are counted and
+// printed, the limit docs/frontend.md states, not asserted away.
+TEST(BorderCheck, RectifiedImagesKeptWithin1PxWrongSideRejectedUnlessNearestNeighbour) {
+  const std::vector<obs::SE3> poses = {
+      testing::facing_pose(1.4, 0.35, 0.2, {0.2, -0.1, 0.5}),
+      testing::facing_pose(1.6, -0.4, -0.25, {-0.2, 0.5, -1.0}),
+      testing::facing_pose(1.2, 0.3, -0.2, {0.7, 0.1, 0.3}),     // 41 degrees off the normal
+      testing::facing_pose(1.3, -0.3, 0.2, {0.15, -0.85, 2.0}),  // 50 degrees
+  };
+  const DetectorSettings dflt = with_check(true);
+  const cv::Mat pattern = tag_pattern("tag36h11", 0);
+  struct Count {
+    int pictures = 0, kept = 0;
+    double worst = 0.0;  ///< of the kept correct quads' corners [px]
+    int wrong = 0;       ///< quads with a side moved
+    int wrong_kept = 0;  ///< of them kept (as they are or halfway back), a corner > 1 px off
+    double wrong_worst = 0.0;
+  };
+  Count counts[2];  // nearest, bilinear
+  Realignments realigned;
+  for (const double k1 : {-0.12, -0.3})
+    for (size_t p = 0; p < poses.size(); ++p) {
+      io::Calibration raw = testing::test_calibration();
+      raw.dist = {k1, 0.05, 4e-4, -3e-4, 0.0};
+      testing::SynthSettings opt;
+      opt.black = 12.0;
+      opt.noise_sigma = 2.0;
+      opt.seed = static_cast<unsigned>(900 + p);
+      cv::Mat picture = testing::render_camera_picture(raw, {{0, kSize, poses[p], {}}}, opt, 0.6);
+      std::vector<uchar> jpeg;
+      cv::imencode(".jpg", picture, jpeg, {cv::IMWRITE_JPEG_QUALITY, 80});
+      picture = cv::imdecode(jpeg, cv::IMREAD_GRAYSCALE);
+      for (const double m : {1.0, 1.3, 1.65})
+        for (const int interpolation : {cv::INTER_NEAREST, cv::INTER_LINEAR}) {
+          const bool nearest = interpolation == cv::INTER_NEAREST;
+          char what[96];
+          std::snprintf(what, sizeof what, "k1 %.2f, pose %zu, magnification %.2f, %s", k1, p, m,
+                        nearest ? "nearest" : "bilinear");
+          const Rectified r = rectify(picture, raw, m, interpolation);
+          const auto truth = testing::project_corners(r.calib, poses[p], kSize);
+          const auto a = TagDetector(with_check(false)).detect(r.image, &r.calib);
+          if (a.status != TargetStatus::detected) {
+            std::printf("%s: not decoded\n", what);
+            continue;
+          }
+          const auto& c = a.target()->corners;
+          if (max_corner_error(c, truth) >= 1.0) {  // no correct quad to check
+            std::printf("%s: the edge fit's corners %.2f px off\n", what,
+                        max_corner_error(c, truth));
+            continue;
+          }
+          Count& n = counts[nearest ? 0 : 1];
+          ++n.pictures;
+          const auto b = TagDetector(dflt).detect(r.image, &r.calib);
+          if (b.status == TargetStatus::detected) {
+            ++n.kept;
+            const double e = max_corner_error(b.target()->corners, truth);
+            n.worst = std::max(n.worst, e);
+            EXPECT_LT(e, 1.0) << what;
+          } else {
+            std::printf("%s: rejected, %s\n", what, b.reason.c_str());
+          }
+          const BorderCheck bd = check_border(r.image, c, pattern, 8, dflt, &r.calib);
+          if (!nearest)  // each rejected, or realigned within 1 px and nearer the correct quad
+            expect_moved_sides_rejected(r.image, c, truth, pattern, dflt, r.calib, what, &bd,
+                                        &realigned);
+          for (size_t k = 0; k < 4; ++k) {
+            if (std::isnan(bd.thickness_error[k])) continue;
+            for (double d : {-1.5, -1.0, 1.0, 1.5}) {
+              const auto w = testing::move_side(c, k, d);
+              if (max_corner_error(w, truth) <= 1.0) continue;
+              ++n.wrong;
+              const BorderCheck bw = check_border(r.image, w, pattern, 8, dflt, &r.calib);
+              double e = bw.ok ? max_corner_error(remove_edge_bias(w, bw, &r.calib), truth) : 0.0;
+              if (!bw.ok)
+                if (const auto rr = realign_and_check(r.image, w, bw, pattern, 8, dflt, &r.calib))
+                  e = max_corner_error(remove_edge_bias(rr->corners, rr->check, &r.calib), truth);
+              if (e > 1.0) {
+                ++n.wrong_kept;
+                n.wrong_worst = std::max(n.wrong_worst, e);
+              }
+            }
+          }
+        }
+    }
+  for (int i = 0; i < 2; ++i)
+    std::printf(
+        "%s: %d of %d correct quads kept (corners within %.2f px); of %d quads with a side "
+        "moved, %d kept with a corner more than 1 px off (up to %.2f px)\n",
+        i == 0 ? "nearest" : "bilinear", counts[i].kept, counts[i].pictures, counts[i].worst,
+        counts[i].wrong, counts[i].wrong_kept, counts[i].wrong_worst);
+  std::printf("bilinear: %d moved quads kept halfway back (corners within %.2f px)\n",
+              realigned.kept, realigned.worst);
+  for (const Count& n : counts) {
+    EXPECT_GT(n.pictures, 16);
+    EXPECT_GT(n.wrong, 100);
+  }
 }
 
 // The real photos' other failure made by the synthesizer: a print whose black border is
