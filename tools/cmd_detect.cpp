@@ -212,6 +212,10 @@ int run_detect(DetectOptions o) {
   progress.finish();
   csv.commit();
   out.commit();  // complete, even when frames were unreadable (reported below)
+  for (size_t c = 0; c < ds.cameras.size(); ++c)
+    if (tracks[c].resampling)
+      if (auto w = frontend::resampling_warning(ds.cameras[c].id, *tracks[c].resampling))
+        std::fprintf(stderr, "netvmo detect: warning: %s\n", w->c_str());
 
   std::printf(
       "netvmo detect: %s -> %s (%d frames, target %s id %d%s)\n", o.dataset.c_str(),

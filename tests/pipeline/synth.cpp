@@ -333,6 +333,19 @@ Calibration test_calibration(bool distortion) {
   return c;
 }
 
+Rectified rectify(const cv::Mat& raw, const Calibration& calib, double m, int interpolation) {
+  Rectified r;
+  r.calib.width = static_cast<int>(std::lround(calib.width * m));
+  r.calib.height = static_cast<int>(std::lround(calib.height * m));
+  r.calib.K = cv::Matx33d(calib.K(0, 0) * m, 0, (calib.K(0, 2) + 0.5) * m - 0.5, 0,
+                          calib.K(1, 1) * m, (calib.K(1, 2) + 0.5) * m - 0.5, 0, 0, 1);
+  cv::Mat mx, my;
+  cv::initUndistortRectifyMap(cv::Mat(calib.K), calib.distortion(), cv::Mat(), cv::Mat(r.calib.K),
+                              cv::Size(r.calib.width, r.calib.height), CV_32FC1, mx, my);
+  cv::remap(raw, r.image, mx, my, interpolation, cv::BORDER_CONSTANT, cv::Scalar(0));
+  return r;
+}
+
 obs::SE3 facing_pose(double distance, double dx, double dy, const obs::Vec3& tilt) {
   obs::SE3 g = obs::SE3::Identity();
   g.linear() = obs::exp_so3(obs::Vec3(M_PI, 0, 0)) * obs::exp_so3(tilt);

@@ -132,4 +132,15 @@ std::vector<std::vector<std::array<cv::Point2d, 4>>> write_synth_dataset(
 /// A fresh empty temporary directory for a test (removed first if it exists).
 std::filesystem::path fresh_dir(const std::string& name);
 
+/// `raw`, an image of camera `calib` (with lens distortion), rectified as an image pipeline does
+/// it: to the pinhole camera of the same focal lengths magnified by `m` (principal point scaled
+/// with the pixel centres), its image `m` times as large, each pixel taken from `raw` by
+/// cv::initUndistortRectifyMap and cv::remap with `interpolation` (cv::INTER_NEAREST,
+/// cv::INTER_LINEAR, ...).
+struct Rectified {
+  io::Calibration calib;
+  cv::Mat image;
+};
+Rectified rectify(const cv::Mat& raw, const io::Calibration& calib, double m, int interpolation);
+
 }  // namespace netvmo::testing

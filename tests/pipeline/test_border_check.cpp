@@ -9,7 +9,6 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
-#include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
@@ -490,26 +489,6 @@ TEST(BorderCheck, InkSpreadAndMotionBlurKeptWrongSideRejected) {
   EXPECT_GT(wrong_quads, 100);
 }
 
-/// `raw` (a camera with lens distortion) rectified as an image pipeline does it: the pinhole
-/// camera of the same focal lengths magnified by `m`, its image `m` times as large, each pixel
-/// taken from the raw image by cv::remap with `interpolation`.
-struct Rectified {
-  io::Calibration calib;
-  cv::Mat image;
-};
-Rectified rectify(const cv::Mat& raw, const io::Calibration& calib, double m, int interpolation) {
-  Rectified r;
-  r.calib.width = static_cast<int>(std::lround(calib.width * m));
-  r.calib.height = static_cast<int>(std::lround(calib.height * m));
-  r.calib.K = cv::Matx33d(calib.K(0, 0) * m, 0, (calib.K(0, 2) + 0.5) * m - 0.5, 0,
-                          calib.K(1, 1) * m, (calib.K(1, 2) + 0.5) * m - 0.5, 0, 0, 1);
-  cv::Mat mx, my;
-  cv::initUndistortRectifyMap(cv::Mat(calib.K), calib.distortion(), cv::Mat(), cv::Mat(r.calib.K),
-                              cv::Size(r.calib.width, r.calib.height), CV_32FC1, mx, my);
-  cv::remap(raw, r.image, mx, my, interpolation, cv::BORDER_CONSTANT, cv::Scalar(0));
-  return r;
-}
-
 // The rotation series of the corpus (docs/frontend.md, "Resampled images"): a wide-angle
 // camera's frames rectified to a pinhole at a magnification of about 1.65, the nearest
 // source pixel taken for each output pixel. That moves each edge of the print by up to half a
@@ -558,7 +537,7 @@ TEST(BorderCheck, RectifiedImagesKeptWithin1PxWrongSideRejectedUnlessNearestNeig
           char what[96];
           std::snprintf(what, sizeof what, "k1 %.2f, pose %zu, magnification %.2f, %s", k1, p, m,
                         nearest ? "nearest" : "bilinear");
-          const Rectified r = rectify(picture, raw, m, interpolation);
+          const testing::Rectified r = testing::rectify(picture, raw, m, interpolation);
           const auto truth = testing::project_corners(r.calib, poses[p], kSize);
           const auto a = TagDetector(with_check(false)).detect(r.image, &r.calib);
           if (a.status != TargetStatus::detected) {

@@ -384,6 +384,9 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   csv.commit();
   links.commit();
   if (live) frames = k;
+  if (track.resampling)
+    if (auto w = frontend::resampling_warning(o.camera_id, *track.resampling))
+      summary.warnings.push_back(*w);
   summary.frames = frames;
   summary.stats = transport.stats();
   summary.stats.dropped = faulty.dropped();

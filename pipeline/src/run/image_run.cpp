@@ -175,6 +175,14 @@ struct Pipeline {
       for (size_t j = 0; j < targets.size(); ++j) result.target(j).frames.push_back(cams[j]);
     progress.update(k + 1);
   }
+  // Every camera whose first image looks resampled by nearest neighbour: a warning each, in
+  // camera order.
+  void add_resampling_warnings(ImageRunResult& result) const {
+    for (size_t i = 0; i < n; ++i)
+      if (const auto& r = tracks[i].resampling)
+        if (auto w = frontend::resampling_warning(source.network().cameras[i].id, *r))
+          result.warnings.push_back(*w);
+  }
   // The front end's time by stage, summed over the workers, into the result.
   void add_stage_seconds(ImageRunResult& result) const {
     for (int w = 0; w < workers; ++w) {
@@ -510,6 +518,7 @@ ImageRunResult run_images(sources::NetworkSource& source, const ImageRunSettings
   if (own_clocks) {
     run_union(p, hook, result);
     histories();
+    p.add_resampling_warnings(result);
     return result;
   }
   int frames = source.frame_count();
@@ -552,6 +561,7 @@ ImageRunResult run_images(sources::NetworkSource& source, const ImageRunSettings
   result.seconds = seconds_since(t_start);
   p.add_stage_seconds(result);
   histories();
+  p.add_resampling_warnings(result);
   return result;
 }
 

@@ -10,6 +10,7 @@
 
 #include "netvmo/observer/jacobian.hpp"
 #include "netvmo/pipeline/frontend/pnp.hpp"
+#include "netvmo/pipeline/frontend/resampling.hpp"
 #include "netvmo/pipeline/frontend/tag_detector.hpp"
 #include "netvmo/pipeline/io/calibration.hpp"
 #include "netvmo/pipeline/io/network_config.hpp"
@@ -184,6 +185,9 @@ struct TrackState {
   /// The decimation the last frame's window was searched at (window_decimate()), 0 when its
   /// window was not searched.
   double window_decimate = 0.0;
+  /// The camera's first image read, measured for nearest-neighbour resampling by the per-camera
+  /// step (run/camera_step.hpp); empty until then.
+  std::optional<Resampling> resampling;
 };
 inline constexpr unsigned kSearchWindow = 1, kSearchNormalizedWindow = 2, kSearchFullFrame = 4,
                           kSearchAcquisition = 8, kSkippedFullFrame = 16, kSkippedAcquisition = 32;
