@@ -133,8 +133,11 @@ TEST_F(Async, NodesConvergeWithDropsDelaysAndAKilledNode) {
 }
 
 // Camera 3's node (it sees the tag; neighbours 1, 2 and 4) killed 2 s (wall) into a 45-frame run
-// and restarted 0.5 s later; the staleness bound (0.5 s of camera time, 15 frames) outlasts the
-// downtime, so its neighbours keep its last estimate meanwhile. The restarted node joins at its
+// and restarted 0.5 s later; the staleness bound (1 s of camera time, 30 frames) outlasts any
+// downtime the test accepts (the return before frame 40, the kill near frame 15: the restarted
+// process's start-up on a loaded machine is part of the downtime; at 0.5 s, one run beside a
+// compile and a stress load joined 19 frames after the kill and was forgotten), so its
+// neighbours keep its last estimate meanwhile. The restarted node joins at its
 // next image with a new incarnation, starts from the average of all its neighbours' estimates
 // (obs::JoinHold: it waits until it has heard every one) and publishes nothing before.
 //
@@ -162,7 +165,7 @@ TEST_F(Async, ARestartedNodeMovesNoNeighbourAndLeavesNoGap) {
   const fs::path dir = *dir_, out = dir / "restart";
   const auto c = net_test::netvmo_bounded(
       launch(dir / "ds", "--max-frames " + std::to_string(kRestartFrames) +
-                             " --stale 0.5 --kill 3@2 --restart-after 0.5 --out " + out.string()),
+                             " --stale 1 --kill 3@2 --restart-after 0.5 --out " + out.string()),
       dir, 90);
   ASSERT_EQ(c.code, 0) << c.out << c.err;
   expect_converged(net_test::read_json(out / "summary.json"), "kill and restart", kRestartFrames);
