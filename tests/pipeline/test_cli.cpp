@@ -6,6 +6,7 @@
 #include <fstream>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 
 #include "netvmo/pipeline/io/truth_io.hpp"
@@ -57,6 +58,44 @@ TEST(Cli, DetectWritesCsvAndSummary) {
   // the summary has a column per reason for not using the target
   for (TargetStatus st : kAllTargetStatuses)
     EXPECT_NE(r.out.find(to_string(st)), std::string::npos) << to_string(st);
+}
+
+// A camera whose frames were enlarged by copying pixels (each frame halved, then doubled by
+// nearest neighbour: the size of its calibration) is named in one warning by `netvmo detect`
+// (stderr) and `netvmo run` (stderr and summary.json's warnings); the other camera is not.
+TEST(Cli, ACameraOfResampledFramesIsWarnedAboutOnce) {
+  const auto dir = testing::fresh_dir("cli_resampled");
+  testing::write_synth_dataset(dir / "ds", testing::simple_dataset_spec(2, 3));
+  int resampled = 0;
+  for (const auto& e : fs::directory_iterator(dir / "ds" / "cam_2")) {
+    const cv::Mat img = cv::imread(e.path().string(), cv::IMREAD_GRAYSCALE);
+    ASSERT_FALSE(img.empty()) << e.path();
+    cv::Mat half, copied;
+    cv::resize(img, half, cv::Size(), 0.5, 0.5, cv::INTER_AREA);
+    cv::resize(half, copied, img.size(), 0.0, 0.0, cv::INTER_NEAREST);
+    ASSERT_TRUE(cv::imwrite(e.path().string(), copied));
+    ++resampled;
+  }
+  ASSERT_EQ(resampled, 3);
+  const std::string warning = "its images look resampled by nearest neighbour";
+  const auto count = [&](const std::string& s) {
+    int n = 0;
+    for (size_t at = s.find(warning); at != std::string::npos; at = s.find(warning, at + 1)) ++n;
+    return n;
+  };
+  const auto d = run_detect(dir / "ds", dir / "detect");
+  ASSERT_EQ(d.code, 0) << d.err;
+  EXPECT_EQ(count(d.err), 1) << d.err;
+  EXPECT_NE(d.err.find("camera 2: " + warning), std::string::npos) << d.err;
+  const auto r = test::run_netvmo("run " + (dir / "ds").string() + " --out " +
+                                      (dir / "run").string() + " --no-overlays --no-plots",
+                                  dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(count(r.err), 1) << r.err;
+  const std::string summary = slurp(dir / "run" / "summary.json");
+  EXPECT_EQ(count(summary), 1) << summary;
+  EXPECT_NE(summary.find("camera 2: " + warning), std::string::npos);
+  EXPECT_EQ(summary.find("camera 1: " + warning), std::string::npos);
 }
 
 // A frame whose target quad fails the border check (frame 1: the tag's side on the image

@@ -13,6 +13,7 @@
 #include <random>
 #include <string>
 
+#include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/frontend/front_end.hpp"
 #include "netvmo/pipeline/frontend/resampling.hpp"
 #include "netvmo/pipeline/run/camera_step.hpp"
@@ -107,8 +108,8 @@ TEST(Resampling, RealPhotosInTheRepositoryNotFlagged) {
   EXPECT_EQ(photos, 29);
 }
 
-// The per-camera step measures a camera's first image read, once, and the warning names the
-// camera.
+// The per-camera step measures a camera's first image read (not an unreadable one), once, and
+// the warning names the camera.
 TEST(Resampling, ThePerCameraStepMeasuresTheFirstImage) {
   cv::Mat big;  // 640x480, the calibration's size
   cv::resize(noise_image(240, 320, 3), big, cv::Size(), 2.0, 2.0, cv::INTER_NEAREST);
@@ -121,6 +122,10 @@ TEST(Resampling, ThePerCameraStepMeasuresTheFirstImage) {
   TrackState track;
   cv::Mat image;
   std::vector<Observation> out;
+  // An unreadable first image is not measured: the first image read is.
+  EXPECT_TRUE(run::observe_camera([]() -> cv::Mat { throw InputError("unreadable"); }, calib, fe,
+                                  track, targets, true, image, out));
+  EXPECT_FALSE(track.resampling.has_value());
   ASSERT_FALSE(run::observe_camera([&] { return big.clone(); }, calib, fe, track, targets, false,
                                    image, out));
   ASSERT_TRUE(track.resampling.has_value());

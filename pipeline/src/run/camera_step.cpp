@@ -22,8 +22,8 @@ std::exception_ptr observe_camera(const std::function<cv::Mat()>& read,
     image.release();
     unreadable = std::current_exception();
   }
-  // The camera's first image: resampled by nearest neighbour? (a warning for the user)
-  if (!track.resampling && image.type() == CV_8UC1)
+  // The camera's first image read: resampled by nearest neighbour? (a warning for the user)
+  if (!track.resampling && !image.empty() && image.type() == CV_8UC1)
     track.resampling = frontend::measure_resampling(image);
   // An unreadable image is a blind frame for the front end too (its tracking state).
   out = front_end.observe_targets(image, calib, all, &track);
