@@ -192,6 +192,7 @@ void add_node(CLI::App& app, int& exit_code) {
       const auto s = net::run_node(o->dataset, dir, no);
       if (staged) staged->commit();
       for (const auto& note : s.notes) std::printf("note: %s\n", note.c_str());
+      for (const auto& w : s.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
       std::printf(
           "netvmo node: camera %d done: %d frames, %d rounds/frame, %llu sent, %llu received, "
           "%llu late, %llu from non-neighbours, %llu dropped, %llu forgotten, %.2f s\n",

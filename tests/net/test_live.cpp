@@ -314,9 +314,14 @@ TEST_F(Live, ImagesThatCameWhileTheNodeWasBusyAreTaken) {
 //   writer, which can come after play's side of the match (--wait-readers): the first image was
 //   lost in 4 of 40 plays without load, 8 of 40 under stress-ng --cpu 4. Play now waits
 //   --settle (0.25 s) after the match when such a reader matches.
+// - Any image, when the node's socket receive buffer fills: the kernel drops what arrives, and
+//   nothing resends a best-effort datagram. At --rate 0 play writes 30 images (9 MB) in a burst;
+//   in a fresh-clone CI run beside other tests, one play lost frames 12 and 13 this way (the
+//   node was then given a larger buffer, cyclone_config.cpp). The node counts such drops
+//   (node_<id>.json messages.kernel_drops, socket_drops.hpp).
 // Here: 24 such plays, best-effort and reliable writers alternately; the node must have every
-// frame each time (without the first wait, the chance that 24 plays keep every first image is
-// about 0.9^24, under 10 %).
+// frame each time, unless best-effort and the kernel dropped datagrams on its sockets (without
+// the first wait, the chance that 24 plays keep every first image is about 0.9^24, under 10 %).
 TEST_F(Live, ALiveNodeGetsEveryImageOfAPlay) {
   const fs::path dir = dir_;
   // Camera 1 of paper5_render.yaml alone, rendered.
@@ -347,7 +352,15 @@ TEST_F(Live, ALiveNodeGetsEveryImageOfAPlay) {
     ASSERT_EQ(r.reader.code, 0) << r.reader.out << r.reader.err;
     // A row per frame (its image time), the first and the last included.
     const auto rows = net_test::read_csv(out / "node_1.csv");
-    EXPECT_EQ(missing_frames(rows, *ds, 0), "frames without a row:")
-        << "play " << k << (k % 2 ? " (reliable writers)" : "");
+    const auto drops = net_test::read_json(out / "node_1.json").at("messages").at("kernel_drops");
+    ASSERT_TRUE(drops.is_number_unsigned()) << "node_1.json: messages.kernel_drops: " << drops;
+    const std::string missing = missing_frames(rows, *ds, 0);
+    if (k % 2 == 0 && drops.get<std::uint64_t>() > 0) {
+      std::printf("play %d: the kernel dropped %llu datagram(s) on the node's sockets; %s\n", k,
+                  static_cast<unsigned long long>(drops.get<std::uint64_t>()), missing.c_str());
+      continue;
+    }
+    EXPECT_EQ(missing, "frames without a row:")
+        << "play " << k << (k % 2 ? " (reliable writers)" : "") << ", kernel drops " << drops;
   }
 }

@@ -30,6 +30,12 @@ std::string loopback_config_xml() {
         <Peer Address="127.0.0.1" />
       </Peers>
     </Discovery>
+    <Internal>
+      <!-- Images come in bursts larger than the 1 MiB Cyclone asks for by default (a 640x480
+           mono8 image is 300 KiB); a full buffer drops datagrams, and a best-effort image with
+           them. Ask for 16 MiB and take what the kernel gives (net.core.rmem_max caps it). -->
+      <SocketReceiveBufferSize max="16MiB" />
+    </Internal>
   </Domain>
 </CycloneDDS>
 )";

@@ -16,6 +16,7 @@
 #include "netvmo/pipeline/io/atomic_file.hpp"
 #include "netvmo/pipeline/net/faulty_transport.hpp"
 #include "netvmo/pipeline/net/ros_publisher.hpp"
+#include "netvmo/pipeline/net/socket_drops.hpp"
 #include "netvmo/pipeline/run/camera_step.hpp"
 #include "netvmo/pipeline/run/ros_frame.hpp"
 #include "netvmo/pipeline/sources/topic_network.hpp"
@@ -387,6 +388,14 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   if (track.resampling)
     if (auto w = frontend::resampling_warning(o.camera_id, *track.resampling))
       summary.warnings.push_back(*w);
+  // (while the participants, and so their sockets, are open)
+  summary.kernel_drops = udp_drops_of_this_process();
+  if (live && summary.kernel_drops.value_or(0) > 0)
+    summary.warnings.push_back(
+        "camera " + std::to_string(o.camera_id) + ": the kernel dropped " +
+        std::to_string(*summary.kernel_drops) +
+        " datagram(s) addressed to this node, its socket receive buffer full: images of a "
+        "best-effort topic may be lost (docs/ros2.md, \"Socket receive buffers\")");
   summary.frames = frames;
   summary.stats = transport.stats();
   summary.stats.dropped = faulty.dropped();
@@ -436,6 +445,8 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
     rej[obs::to_string(static_cast<obs::MessageVerdict>(v))] = summary.refused[v];
   j["messages"]["rejected"] = rej;
   j["messages"]["forgotten_stale"] = summary.forgotten;
+  j["messages"]["kernel_drops"] =
+      summary.kernel_drops ? nlohmann::json(*summary.kernel_drops) : nlohmann::json(nullptr);
   j["first_frame"] = summary.first_frame;
   j["join_rounds"] = summary.join_rounds;
   // Each neighbour's clock as this node's exchange measured it (ClockSync; netvmo merge aligns

@@ -82,6 +82,10 @@ struct NodeSummary {
   /// A late join: the rounds it ran without its measurement, waiting for every neighbour's
   /// estimate and starting from them (obs::JoinHold); 0 otherwise.
   int join_rounds = 0;
+  /// Datagrams the kernel dropped on this node's UDP sockets, their receive buffers full
+  /// (socket_drops.hpp; nullopt where the system does not tell): lost images of a best-effort
+  /// topic, or messages the exchange resent.
+  std::optional<std::uint64_t> kernel_drops;
   std::vector<std::string> warnings;
   std::vector<std::string> notes;  ///< the dataset's (e.g. where the image times come from)
   double seconds = 0.0;
