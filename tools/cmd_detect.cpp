@@ -284,7 +284,7 @@ int run_detect_photos(DetectOptions o) {
          "expected_e1,expected_e2,expected_e3,edge_bias_x,edge_bias_y,edge_blur,scatter_x,scatter_"
          "y,se0,se1,se2,se3,shared_deviation,bow_px,bow_se,apriltag_x0,apriltag_y0,apriltag_x1,"
          "apriltag_y1,apriltag_x2,apriltag_y2,apriltag_x3,apriltag_y3,x0,y0,x1,y1,x2,y2,x3,y3,"
-         "check_reason\n";
+         "check_reason,edge_pairs,repeated_pairs\n";
   std::map<fs::path, io::Calibration> calibs;  // a folder's calib.yaml
   std::map<fs::path, PhotoRecall> by_folder;
   PhotoRecall total;
@@ -310,8 +310,10 @@ int run_detect_photos(DetectOptions o) {
                          std::to_string(calib.width) + "x" + std::to_string(calib.height));
     }
     const auto results = evaluate_photo(gray, calib, o.det, o.tracking, o.recall);
-    by_folder[folder].add(results);
-    total.add(results);
+    // Whether the photo was resampled by nearest neighbour (docs/frontend.md, "Resampled images").
+    const Resampling resampling = measure_resampling(gray);
+    by_folder[folder].add(results, resampling);
+    total.add(results, resampling);
     const std::string rel = fs::relative(f, root).string();
     for (const auto& t : results) {
       char buf[160];
@@ -363,7 +365,8 @@ int run_detect_photos(DetectOptions o) {
         corners(t.corners_px);
       else
         csv << ",,,,,,,,";
-      csv << check_reason << "\n";
+      std::snprintf(buf, sizeof buf, ",%ld,%.4f", resampling.pairs, resampling.repeated);
+      csv << check_reason << buf << "\n";
     }
   }
   csv.commit();
@@ -371,7 +374,8 @@ int run_detect_photos(DetectOptions o) {
   const auto print = [](const std::string& name, const PhotoRecall& r) {
     std::vector<double> d = r.corner_differences;
     std::sort(d.begin(), d.end());
-    std::printf("%-32s %6d %6d %8d %6d", name.c_str(), r.photos, r.references, r.eligible, r.kept);
+    std::printf("%-32s %6d %9d %6d %8d %6d", name.c_str(), r.photos, r.resampled, r.references,
+                r.eligible, r.kept);
     if (r.eligible > 0)  // no recall of no tags
       std::printf(" %7.1f%%", 100.0 * r.recall());
     else
@@ -390,13 +394,28 @@ int run_detect_photos(DetectOptions o) {
               o.det.family.c_str());
   std::printf("eligible: libapriltag hamming 0, fully visible, narrowest side >= %g px, id once\n",
               o.recall.min_side_px);
-  std::printf("%-32s %6s %6s %8s %6s %8s %8s %8s %s\n", "folder", "photos", "tags", "eligible",
-              "kept", "recall", "med_px", "max_px", "lost (by reason)");
+  std::printf("%-32s %6s %9s %6s %8s %6s %8s %8s %8s %s\n", "folder", "photos", "resampled", "tags",
+              "eligible", "kept", "recall", "med_px", "max_px", "lost (by reason)");
   for (const auto& [folder, r] : by_folder) {
     const std::string rel = fs::relative(folder, root).string();
     print(rel.empty() || rel == "." ? "." : rel, r);
   }
   print("all", total);
+  if (total.resampled > 0) {
+    std::string where;
+    for (const auto& [folder, r] : by_folder)
+      if (r.resampled > 0) {
+        const std::string rel = fs::relative(folder, root).string();
+        where += (where.empty() ? "" : ", ") + (rel.empty() ? std::string(".") : rel) + " " +
+                 std::to_string(r.resampled) + " of " + std::to_string(r.photos);
+      }
+    std::fprintf(stderr,
+                 "warning: %d of %d photos look resampled by nearest neighbour (%s; photos.csv "
+                 "repeated_pairs): edges are placed only to half a source pixel there and the "
+                 "frame check may keep a quad with a side 1-1.5 px off (docs/frontend.md, "
+                 "\"Resampled images\")\n",
+                 total.resampled, total.photos, where.c_str());
+  }
   if (!unreadable.empty() && !o.keep_going)
     throw InputError(unreadable.front() + " (" + std::to_string(unreadable.size()) +
                      " unreadable image(s) in total, left out of photos.csv; fix the files or "

@@ -199,7 +199,8 @@ TEST(RealPhotos, DetectPhotosReportAndBadJpeg) {
   EXPECT_EQ(blank.code, 0) << blank.err;
   EXPECT_EQ(blank.out.find('%'), std::string::npos) << blank.out;
   EXPECT_NE(
-      blank.out.find("all                                   1      0        0      0        -"),
+      blank.out.find(
+          "all                                   1         0      0        0      0        -"),
       std::string::npos)
       << blank.out;
   fs::remove_all(dir);

@@ -2,11 +2,13 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <set>
 #include <sstream>
 
 #include "netvmo/pipeline/frontend/resampling.hpp"
@@ -108,6 +110,74 @@ TEST(Cli, ACameraOfResampledFramesIsWarnedAboutOnce) {
   EXPECT_EQ(count(summary), 1) << summary;
   EXPECT_NE(summary.find("camera 2: " + warning), std::string::npos);
   EXPECT_EQ(summary.find("camera 1: " + warning), std::string::npos);
+}
+
+// `netvmo detect --photos` on two folders of the same three frames, blurred as by a lens (sigma 1
+// px): `raw` as they are, `nn` halved and doubled by nearest neighbour. photos.csv gives each
+// photo's pairs on steep edges and the fraction repeated (those of measure_resampling), the
+// report a count of resampled photos per folder, and stderr one warning naming `nn` alone.
+TEST(Cli, DetectPhotosCountsThePhotosResampledByNearestNeighbour) {
+  const auto dir = testing::fresh_dir("cli_photos_resampled");
+  testing::write_synth_dataset(dir / "ds", testing::simple_dataset_spec(1, 3));
+  std::map<std::string, frontend::Resampling> expected;  // by file, relative to photos/
+  for (const std::string folder : {"raw", "nn"}) {
+    fs::create_directories(dir / "photos" / folder);
+    for (const auto& e : fs::directory_iterator(dir / "ds" / "cam_1")) {
+      cv::Mat img = cv::imread(e.path().string(), cv::IMREAD_GRAYSCALE);
+      ASSERT_FALSE(img.empty()) << e.path();
+      cv::GaussianBlur(img, img, cv::Size(0, 0), 1.0);
+      if (folder == "nn") {
+        cv::Mat half;
+        cv::resize(img, half, cv::Size(), 0.5, 0.5, cv::INTER_AREA);
+        cv::resize(half, img, img.size(), 0.0, 0.0, cv::INTER_NEAREST);
+      }
+      const std::string name = folder + "/" + e.path().filename().string();
+      ASSERT_TRUE(cv::imwrite((dir / "photos" / name).string(), img));
+      expected[name] = frontend::measure_resampling(img);
+      EXPECT_GE(expected[name].pairs, frontend::ResamplingSettings().min_pairs) << name;
+      EXPECT_EQ(expected[name].nearest_neighbour, folder == "nn") << name;
+    }
+  }
+  ASSERT_EQ(expected.size(), 6u);
+  const auto r = test::run_netvmo(
+      "detect --photos " + (dir / "photos").string() + " --out " + (dir / "out").string(), dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  // One warning: 3 of 6 photos, the folder nn alone.
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find("warning: 3 of 6 photos look resampled by nearest neighbour (nn 3 of 3;"),
+            std::string::npos)
+      << r.err;
+  // The report: photos, then resampled photos, per folder and in all.
+  for (const auto& [folder, n] : {std::pair<std::string, int>{"nn", 3}, {"raw", 0}, {"all", 0}}) {
+    std::istringstream lines(r.out);
+    std::string line;
+    bool found = false;
+    while (std::getline(lines, line)) {
+      std::istringstream row(line);
+      std::string name;
+      int photos = 0, resampled = -1;
+      if (!(row >> name >> photos >> resampled) || name != folder) continue;
+      found = true;
+      EXPECT_EQ(photos, folder == "all" ? 6 : 3) << line;
+      EXPECT_EQ(resampled, folder == "all" ? 3 : n) << line;
+    }
+    EXPECT_TRUE(found) << folder << " not in\n" << r.out;
+  }
+  // photos.csv: every row's photo with its pairs and fraction.
+  std::istringstream csv(slurp(dir / "out" / "photos.csv"));
+  std::string line;
+  std::getline(csv, line);
+  ASSERT_EQ(line.substr(line.size() - 26), ",edge_pairs,repeated_pairs") << line;
+  std::set<std::string> seen;
+  while (std::getline(csv, line)) {
+    const std::string file = line.substr(0, line.find(','));
+    ASSERT_TRUE(expected.count(file)) << line;
+    seen.insert(file);
+    const size_t last = line.rfind(','), before = line.rfind(',', last - 1);
+    EXPECT_EQ(std::stol(line.substr(before + 1, last - before - 1)), expected[file].pairs) << line;
+    EXPECT_NEAR(std::stod(line.substr(last + 1)), expected[file].repeated, 5e-5) << line;
+  }
+  EXPECT_EQ(seen.size(), 6u) << "a row for each photo's tag";
 }
 
 // A frame whose target quad fails the border check (frame 1: the tag's side on the image

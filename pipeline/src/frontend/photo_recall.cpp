@@ -113,8 +113,9 @@ std::vector<PhotoTagResult> evaluate_photo(const cv::Mat& gray, const io::Calibr
   return out;
 }
 
-void PhotoRecall::add(const std::vector<PhotoTagResult>& photo) {
+void PhotoRecall::add(const std::vector<PhotoTagResult>& photo, const Resampling& resampling) {
   ++photos;
+  resampled += resampling.nearest_neighbour;
   for (const auto& t : photo) {
     ++references;
     if (!t.eligible) continue;

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "netvmo/pipeline/frontend/front_end.hpp"
+#include "netvmo/pipeline/frontend/resampling.hpp"
 #include "netvmo/pipeline/io/calibration.hpp"
 
 namespace netvmo::frontend {
@@ -70,7 +71,9 @@ struct PhotoRecall {
   int photos = 0, references = 0, eligible = 0, kept = 0;
   std::map<TargetStatus, int> lost;        ///< eligible tags lost, by status
   std::vector<double> corner_differences;  ///< of the kept eligible tags [px]
-  void add(const std::vector<PhotoTagResult>& photo);
+  int resampled = 0;  ///< photos that look resampled by nearest neighbour (resampling.hpp)
+  /// One photo's tags and what measure_resampling() found in it.
+  void add(const std::vector<PhotoTagResult>& photo, const Resampling& resampling = {});
   double recall() const { return eligible ? static_cast<double>(kept) / eligible : 1.0; }
 };
 
