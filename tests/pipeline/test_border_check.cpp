@@ -55,48 +55,90 @@ struct Realignments {
   double inner = 0.0;  ///< the largest corner error with the side on its inner edge [px]
 };
 
+/// A quad of check_moved_sides(): one side of the correct quad moved.
+struct MovedSide {
+  size_t side = 0;
+  double moved = 0.0;                  ///< [px], outward positive
+  std::array<cv::Point2d, 4> quad;     ///< as moved
+  BorderCheck check;                   ///< check_border() of `quad`
+  std::optional<Realigned> realigned;  ///< realign_and_check() where the check rejected `quad`
+  /// What the front end would report where it keeps the quad (as moved, or realigned), the
+  /// print's edge bias taken off (remove_edge_bias()): its largest corner error from the cell
+  /// grid [px]; 0 where it keeps nothing.
+  double error = 0.0;
+  double inner_error = 0.0;  ///< the same with a realigned side on its inner edge [px]
+  bool kept() const { return check.ok || realigned.has_value(); }
+};
+
 /// The quads of `img` with one side of the correct quad `c` moved 1 or 1.5 px out or in that put
-/// a corner more than 1 px from `truth`: each is expected rejected by the check with `s`. Where
-/// realign_and_check() keeps one (the moved side back on the border's inner edge), its corners
-/// with the print's edge bias taken off must be within 1 px of the cell grid's (`grid`; default
-/// `truth`), and the side on the inner edge nearer `c` than as moved; counted in `realigned`
-/// when given. `measured` (the check of `c`), when given: a side whose
-/// thickness it could not measure (no white data cell next to it) is not moved. Returns how many
-/// quads were checked.
+/// a corner more than 1 px from `truth`, each checked as the front end does (check_border(),
+/// then realign_and_check() where it rejects), with errors against the cell grid's corners
+/// (`grid`; default `truth`). `measured` (the check of `c`), when given: a side whose thickness
+/// it could not measure (no white data cell next to it) is not moved.
+std::vector<MovedSide> check_moved_sides(const cv::Mat& img, const std::array<cv::Point2d, 4>& c,
+                                         const std::array<cv::Point2d, 4>& truth,
+                                         const cv::Mat& pattern, const DetectorSettings& s,
+                                         const io::Calibration& calib,
+                                         const BorderCheck* measured = nullptr,
+                                         const std::array<cv::Point2d, 4>* grid = nullptr) {
+  std::vector<MovedSide> out;
+  const auto& g = grid ? *grid : truth;
+  for (size_t k = 0; k < 4; ++k) {
+    if (measured && std::isnan(measured->thickness_error[k])) continue;
+    for (double d : {-1.5, -1.0, 1.0, 1.5}) {
+      MovedSide m;
+      m.side = k;
+      m.moved = d;
+      m.quad = testing::move_side(c, k, d);
+      if (max_corner_error(m.quad, truth) <= 1.0) continue;
+      m.check = check_border(img, m.quad, pattern, 8, s, &calib);
+      if (m.check.ok) {
+        m.error = max_corner_error(remove_edge_bias(m.quad, m.check, &calib), g);
+      } else if ((m.realigned = realign_and_check(img, m.quad, m.check, pattern, 8, s, &calib))) {
+        const Realigned& r = *m.realigned;
+        m.error = max_corner_error(remove_edge_bias(r.corners, r.check, &calib), g);
+        m.inner_error = max_corner_error(remove_edge_bias(r.inner, r.check, &calib), g);
+      }
+      out.push_back(m);
+    }
+  }
+  return out;
+}
+
+/// The quads of check_moved_sides() of the correct quad `c`, each expected rejected by the
+/// check. Where realign_and_check() keeps one (the moved side back on the border's inner edge),
+/// its corners with the print's edge bias taken off must be within 1 px of the cell grid's, and
+/// the side on the inner edge nearer `c` than as moved; counted in `realigned` when given.
+void expect_rejected(const std::vector<MovedSide>& moved, const std::array<cv::Point2d, 4>& c,
+                     const std::string& what, Realignments* realigned = nullptr) {
+  for (const MovedSide& m : moved) {
+    EXPECT_FALSE(m.check.ok) << what << ", side " << m.side << " moved " << m.moved
+                             << " px: " << describe(m.check);
+    if (m.check.ok || !m.realigned) continue;
+    const Realigned& r = *m.realigned;
+    EXPECT_LT(m.error, 1.0) << what << ", side " << m.side << " moved " << m.moved
+                            << " px, kept halfway to " << max_corner_error(m.quad, r.inner)
+                            << " px off: " << describe(r.check);
+    EXPECT_LT(max_corner_error(r.inner, c), max_corner_error(m.quad, c))
+        << what << ", side " << m.side << " moved " << m.moved << " px: not moved back";
+    if (realigned) {
+      ++realigned->kept;
+      realigned->worst = std::max(realigned->worst, m.error);
+      realigned->inner = std::max(realigned->inner, m.inner_error);
+    }
+  }
+}
+
+/// check_moved_sides() then expect_rejected(); returns how many quads were checked.
 int expect_moved_sides_rejected(const cv::Mat& img, const std::array<cv::Point2d, 4>& c,
                                 const std::array<cv::Point2d, 4>& truth, const cv::Mat& pattern,
                                 const DetectorSettings& s, const io::Calibration& calib,
                                 const std::string& what, const BorderCheck* measured = nullptr,
                                 Realignments* realigned = nullptr,
                                 const std::array<cv::Point2d, 4>* grid = nullptr) {
-  int checked = 0;
-  for (size_t k = 0; k < 4; ++k) {
-    if (measured && std::isnan(measured->thickness_error[k])) continue;
-    for (double d : {-1.5, -1.0, 1.0, 1.5}) {
-      const auto w = testing::move_side(c, k, d);
-      if (max_corner_error(w, truth) <= 1.0) continue;
-      ++checked;
-      const BorderCheck bw = check_border(img, w, pattern, 8, s, &calib);
-      EXPECT_FALSE(bw.ok) << what << ", side " << k << " moved " << d << " px: " << describe(bw);
-      const auto r = realign_and_check(img, w, bw, pattern, 8, s, &calib);
-      if (!r) continue;
-      // What the front end reports: the print's edge bias taken off (remove_edge_bias()), the
-      // corners of the cell grid.
-      const auto& g = grid ? *grid : truth;
-      const double e = max_corner_error(remove_edge_bias(r->corners, r->check, &calib), g);
-      const double ei = max_corner_error(remove_edge_bias(r->inner, r->check, &calib), g);
-      EXPECT_LT(e, 1.0) << what << ", side " << k << " moved " << d << " px, kept halfway to "
-                        << max_corner_error(w, r->inner) << " px off: " << describe(r->check);
-      EXPECT_LT(max_corner_error(r->inner, c), max_corner_error(w, c))
-          << what << ", side " << k << " moved " << d << " px: not moved back";
-      if (realigned) {
-        ++realigned->kept;
-        realigned->worst = std::max(realigned->worst, e);
-        realigned->inner = std::max(realigned->inner, ei);
-      }
-    }
-  }
-  return checked;
+  const auto moved = check_moved_sides(img, c, truth, pattern, s, calib, measured, grid);
+  expect_rejected(moved, c, what, realigned);
+  return static_cast<int>(moved.size());
 }
 
 /// Multiplies the image by `factor` on the left of the directed line through `p` at angle
@@ -562,26 +604,15 @@ TEST(BorderCheck, RectifiedImagesKeptWithin1PxWrongSideRejectedUnlessNearestNeig
             std::printf("%s: rejected, %s\n", what, b.reason.c_str());
           }
           const BorderCheck bd = check_border(r.image, c, pattern, 8, dflt, &r.calib);
+          const auto moved = check_moved_sides(r.image, c, truth, pattern, dflt, r.calib, &bd);
           if (!nearest)  // each rejected, or realigned within 1 px and nearer the correct quad
-            expect_moved_sides_rejected(r.image, c, truth, pattern, dflt, r.calib, what, &bd,
-                                        &realigned);
-          for (size_t k = 0; k < 4; ++k) {
-            if (std::isnan(bd.thickness_error[k])) continue;
-            for (double d : {-1.5, -1.0, 1.0, 1.5}) {
-              const auto w = testing::move_side(c, k, d);
-              if (max_corner_error(w, truth) <= 1.0) continue;
-              ++n.wrong;
-              const BorderCheck bw = check_border(r.image, w, pattern, 8, dflt, &r.calib);
-              double e = bw.ok ? max_corner_error(remove_edge_bias(w, bw, &r.calib), truth) : 0.0;
-              if (!bw.ok)
-                if (const auto rr = realign_and_check(r.image, w, bw, pattern, 8, dflt, &r.calib))
-                  e = max_corner_error(remove_edge_bias(rr->corners, rr->check, &r.calib), truth);
-              if (e > 1.0) {
-                ++n.wrong_kept;
-                n.wrong_worst = std::max(n.wrong_worst, e);
-              }
+            expect_rejected(moved, c, what, &realigned);
+          n.wrong += static_cast<int>(moved.size());
+          for (const MovedSide& w : moved)  // nearest neighbour: counted, not asserted
+            if (w.kept() && w.error > 1.0) {
+              ++n.wrong_kept;
+              n.wrong_worst = std::max(n.wrong_worst, w.error);
             }
-          }
         }
     }
   for (int i = 0; i < 2; ++i)
