@@ -13,7 +13,12 @@
 #include <sstream>
 #include <thread>
 
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
 #include "net_test_util.hpp"
+#include "netvmo/pipeline/frontend/resampling.hpp"
+#include "netvmo/pipeline/io/network_config.hpp"
 #include "netvmo/pipeline/net/ros_publisher.hpp"
 #include "netvmo/pipeline/ros/image_msgs.hpp"
 #include "netvmo/pipeline/run/image_run.hpp"
@@ -487,6 +492,52 @@ TEST_F(Launch, ANodeNamesItsSilentNeighbour) {
   EXPECT_NE(r.err.find("netvmo node: error: camera 4: no message of round 1 from neighbour camera"),
             std::string::npos)
       << r.err;
+}
+
+// A node of one camera (camera 1 of the render, no neighbours) on its frames as rendered, then
+// on the same frames halved and doubled by nearest neighbour: the second warns once, on stderr
+// and in node_<id>.json's warnings; the first, whose images have enough pairs on steep edges to
+// be judged (asserted), does not.
+TEST_F(Launch, ANodeWarnsOnceOfResampledFrames) {
+  const int domain = net_test::loopback_domain(*dir_);
+  io::NetworkConfig net = io::load_network_config(*dir_ / "ds" / "network.yaml");
+  net.cameras.resize(1);
+  net.edges.clear();
+  const std::string warning = "camera 1: its images look resampled by nearest neighbour";
+  for (const bool resampled : {false, true}) {
+    const fs::path ds = *dir_ / (resampled ? "one_resampled" : "one");
+    fs::create_directories(ds / "calib");
+    fs::copy(*dir_ / "ds" / "calib" / "cam_1.yaml", ds / "calib" / "cam_1.yaml");
+    test::write_text(ds / "network.yaml", io::network_yaml(net));
+    fs::create_directories(ds / "cam_1");
+    for (const auto& e : fs::directory_iterator(*dir_ / "ds" / "cam_1")) {
+      cv::Mat img = cv::imread(e.path().string(), cv::IMREAD_GRAYSCALE);
+      ASSERT_FALSE(img.empty()) << e.path();
+      if (resampled) {
+        cv::Mat half;
+        cv::resize(img, half, cv::Size(), 0.5, 0.5, cv::INTER_AREA);
+        cv::resize(half, img, img.size(), 0.0, 0.0, cv::INTER_NEAREST);
+      }
+      const auto m = frontend::measure_resampling(img);
+      EXPECT_GE(m.pairs, frontend::ResamplingSettings().min_pairs) << e.path();
+      EXPECT_EQ(m.nearest_neighbour, resampled) << e.path() << ": " << m.repeated;
+      ASSERT_TRUE(cv::imwrite((ds / "cam_1" / e.path().filename()).string(), img));
+    }
+    const fs::path out = ds.string() + "_out";
+    const auto r =
+        net_test::netvmo_bounded("node " + ds.string() + " --camera 1 --domain " +
+                                     std::to_string(domain) + " --no-plots --out " + out.string(),
+                                 *dir_, 120);
+    ASSERT_EQ(r.code, 0) << r.out << r.err;
+    const auto count = [&](const std::string& s) {
+      int n = 0;
+      for (size_t at = s.find(warning); at != std::string::npos; at = s.find(warning, at + 1)) ++n;
+      return n;
+    };
+    EXPECT_EQ(count(r.err), resampled ? 1 : 0) << r.err;
+    const auto j = net_test::read_json(out / "node_1.json");
+    EXPECT_EQ(count(j.at("warnings").dump()), resampled ? 1 : 0) << j.at("warnings").dump();
+  }
 }
 
 // --ros-wait-readers: a node waits for the readers of its average_pose topic before its first
