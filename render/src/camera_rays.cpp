@@ -100,6 +100,7 @@ CameraCache make_camera_cache(const Intrinsics& Kc, const std::vector<Eigen::Vec
   CameraCache cc;
   fov_bounds(Kc, cc);
   cc.width = Kc.width;
+  cc.height = Kc.height;
   cc.spp = int(offsets.size());
   cc.fx = float(Kc.fx), cc.fy = float(Kc.fy), cc.cx = float(Kc.cx), cc.cy = float(Kc.cy);
   if (Kc.has_distortion()) {

@@ -29,15 +29,12 @@ struct FrameJob {
         im(scene.imaging),
         camera_id(scene.cameras[size_t(ci)].id),
         frame(frame),
-        width(out.cols),
-        height(out.rows),
         tile(im.tile),
-        tiles_x((width + tile - 1) / tile),
-        ntiles(tiles_x * ((height + tile - 1) / tile)),
-        spp(int(I.offsets.size())),
-        block(std::max(1, int(std::lround(std::sqrt(double(kPacket) / spp))))),
-        scale(255.0 * im.exposure / spp),
-        chunk(std::lcm(block * block * spp, kPacket)),
+        tiles_x((cc.width + tile - 1) / tile),
+        ntiles(tiles_x * ((cc.height + tile - 1) / tile)),
+        block(std::max(1, int(std::lround(std::sqrt(double(kPacket) / cc.spp))))),
+        scale(255.0 * im.exposure / cc.spp),
+        chunk(std::lcm(block * block * cc.spp, kPacket)),
         shading(make_shading(I, scene)),
         cache(*I.radiance[size_t(ci)]),
         out(out),
@@ -75,7 +72,7 @@ struct FrameJob {
   const CameraCache& cc;
   const Imaging& im;
   int camera_id, frame;
-  int width, height, tile, tiles_x, ntiles, spp;
+  int tile, tiles_x, ntiles;  // (the image's size and samples per pixel: cc's)
   int block;     // packets cover block x block pixels with all their samples (~kPacket rays)
   double scale;  // summed radiance of a pixel -> DN
   // Samples traced or reused together: whole packets covering whole pixel blocks, so a traced
@@ -114,10 +111,10 @@ TileRect tile_rect(const FrameJob& f, int tile) {
   t.index = tile;
   t.x0 = (tile % f.tiles_x) * f.tile;
   t.y0 = (tile / f.tiles_x) * f.tile;
-  t.w = std::min(f.tile, f.width - t.x0);
-  t.h = std::min(f.tile, f.height - t.y0);
+  t.w = std::min(f.tile, f.cc.width - t.x0);
+  t.h = std::min(f.tile, f.cc.height - t.y0);
   t.bxn = (t.w + f.block - 1) / f.block;
-  t.per_block = f.block * f.block * f.spp;
+  t.per_block = f.block * f.block * f.cc.spp;
   t.nsamples = t.bxn * ((t.h + f.block - 1) / f.block) * t.per_block;
   return t;
 }
@@ -160,8 +157,8 @@ void clear_lane(RayHitK& rh, const Eigen::Vector3f& O, int j) {
 // overhangs a partial tile.
 bool tile_sample(const FrameJob& f, const TileRect& t, int idx, int& cin, int& rin, int& s) {
   if (idx >= t.nsamples) return false;
-  const int blk = idx / t.per_block, w = idx % t.per_block, pib = w / f.spp;
-  s = w % f.spp;
+  const int blk = idx / t.per_block, w = idx % t.per_block, pib = w / f.cc.spp;
+  s = w % f.cc.spp;
   cin = (blk % t.bxn) * f.block + pib % f.block;
   rin = (blk / t.bxn) * f.block + pib / f.block;
   return cin < t.w && rin < t.h;
@@ -313,7 +310,7 @@ void clear_chunk(const FrameJob& f, const TileRect& t, int c0, int c1, TileWorke
 void copy_radiance(const FrameJob& f, const TileRect& t, TileWorker& w, bool to_cache) {
   for (int y = 0; y < t.h; ++y)
     for (int x = 0; x < t.w; ++x) {
-      float& cached = f.cache.acc[size_t(t.y0 + y) * size_t(f.width) + size_t(t.x0 + x)];
+      float& cached = f.cache.acc[size_t(t.y0 + y) * size_t(f.cc.width) + size_t(t.x0 + x)];
       float& mine = w.acc[size_t(y * t.w + x)];
       if (to_cache)
         cached = mine;
@@ -380,7 +377,7 @@ cv::Mat Renderer::render(int ci, int frame) {
   if (!f.im.reuse_radiance || !f.cache.valid || f.cache.camera != f.g_wc.matrix() || f.timed ||
       f.lens) {
     f.source = Radiance::Trace;
-    f.cache.acc.assign(size_t(f.width) * size_t(f.height), 0.0f);
+    f.cache.acc.assign(size_t(f.cc.width) * size_t(f.cc.height), 0.0f);
     f.cache.packets.assign(size_t(packets), PacketBounds());
   } else if (f.cache.key == key) {
     f.source = Radiance::Reuse;

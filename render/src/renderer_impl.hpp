@@ -93,7 +93,7 @@ struct CameraCache {
   // Imaging::Sampling::Jittered without distortion: each pixel's shift of the sample pattern
   // (pixel_shift()), row-major; empty otherwise (the table holds the shifted samples already).
   std::vector<Eigen::Vector2f> shift;
-  int width = 0, spp = 0;
+  int width = 0, height = 0, spp = 0;    // the image's size, samples per pixel
   float fx = 1, fy = 1, cx = 0, cy = 0;  // the pinhole in the kernel's single precision
   // Bounding box of the undistorted normalized coordinates of the image border.
   double xmin = 0, xmax = 0, ymin = 0, ymax = 0;
