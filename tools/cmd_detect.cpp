@@ -411,10 +411,8 @@ int run_detect_photos(DetectOptions o) {
       }
     std::fprintf(stderr,
                  "warning: %d of %d photos look resampled by nearest neighbour (%s; photos.csv "
-                 "repeated_pairs): edges are placed only to half a source pixel there and the "
-                 "frame check may keep a quad with a side 1-1.5 px off (docs/frontend.md, "
-                 "\"Resampled images\")\n",
-                 total.resampled, total.photos, where.c_str());
+                 "repeated_pairs): %s\n",
+                 total.resampled, total.photos, where.c_str(), kResamplingConsequence);
   }
   if (!unreadable.empty() && !o.keep_going)
     throw InputError(unreadable.front() + " (" + std::to_string(unreadable.size()) +

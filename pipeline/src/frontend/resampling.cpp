@@ -44,11 +44,9 @@ std::optional<std::string> resampling_warning(int camera_id, const Resampling& r
   char buf[400];
   std::snprintf(buf, sizeof buf,
                 "camera %d: its images look resampled by nearest neighbour (%.0f %% of %ld pixel "
-                "pairs on steep edges repeated in its first image): edges are placed only to "
-                "half a source pixel there and the frame check may keep a quad with a side 1-1.5 "
-                "px off; give raw frames with their calibration (docs/frontend.md, \"Resampled "
-                "images\")",
-                camera_id, 100.0 * r.repeated, r.pairs);
+                "pairs on steep edges repeated in its first image; give raw frames with their "
+                "calibration): %s",
+                camera_id, 100.0 * r.repeated, r.pairs, kResamplingConsequence);
   return std::string(buf);
 }
 

@@ -37,6 +37,12 @@ struct Resampling {
 /// are exactly equal. `gray`: CV_8UC1.
 Resampling measure_resampling(const cv::Mat& gray, const ResamplingSettings& s = {});
 
+/// What nearest-neighbour resampling does to the front end: the end of every warning about it
+/// (a camera's, below; `netvmo detect --photos`'s).
+inline constexpr const char* kResamplingConsequence =
+    "edges are placed only to half a source pixel there and the frame check may keep a quad with "
+    "a side 1-1.5 px off (docs/frontend.md, \"Resampled images\")";
+
 /// The warning for camera `camera_id` whose first image measured `r`; none unless it looks
 /// resampled by nearest neighbour.
 std::optional<std::string> resampling_warning(int camera_id, const Resampling& r);
