@@ -317,36 +317,6 @@ static fs::path one_camera(const fs::path& dir) {
   return one;
 }
 
-// One play of `one` (--rate 0, `play_args` added) to a live node of camera 1 of `live`, logs and
-// outputs under `logs`: the node's reported kernel drops, its frames without a row
-// (missing_frames), its warnings (node_1.json) and its stderr.
-struct NodePlay {
-  std::uint64_t kernel_drops = 0;
-  std::string missing, warnings, node_err;
-};
-static void play_to_node(const fs::path& live, const fs::path& one,
-                         const sources::NetworkSource& ds, int domain, const fs::path& logs,
-                         const std::string& play_args, NodePlay& p) {
-  const fs::path out = logs / "out";
-  const auto r =
-      play_to("node " + live.string() + " --camera 1 --live --domain " + std::to_string(domain) +
-                  " --idle 1 --no-plots --out " + out.string(),
-              90,
-              one.string() + " --domain " + std::to_string(domain) +
-                  " --rate 0 --wait-readers 1 --linger 0.5 --timeout 60 --quiet" + play_args,
-              90, logs);
-  ASSERT_EQ(r.play.code, 0) << r.play.out << r.play.err;
-  ASSERT_EQ(r.reader.code, 0) << r.reader.out << r.reader.err;
-  const auto j = net_test::read_json(out / "node_1.json");
-  const auto drops = j.at("messages").at("kernel_drops");
-  ASSERT_TRUE(drops.is_number_unsigned()) << "node_1.json: messages.kernel_drops: " << drops;
-  p.kernel_drops = drops.get<std::uint64_t>();
-  // A row per frame (its image time), the first and the last included.
-  p.missing = missing_frames(net_test::read_csv(out / "node_1.csv"), ds, 0);
-  p.warnings = j.at("warnings").dump();
-  p.node_err = r.reader.err;
-}
-
 // A best-effort reader acknowledges nothing, so `netvmo play` cannot see whether it has an image:
 // - The last image. A live node behind on its topic when play deleted its writers right after
 //   the last write lost that image: its trace (Cyclone DDS) shows the last image's first 11 of
@@ -373,18 +343,29 @@ TEST_F(Live, ALiveNodeGetsEveryImageOfAPlay) {
   const auto ds = sources::open_dataset_source(one);
   const int domain = net_test::loopback_domain(dir);
   for (int k = 0; k < 24; ++k) {
-    NodePlay p;
-    play_to_node(live, one, *ds, domain, dir / ("run_" + std::to_string(k)),
-                 k % 2 ? " --reliable" : "", p);
-    if (HasFatalFailure()) return;
-    if (k % 2 == 0 && p.kernel_drops > 0) {
+    const fs::path logs = dir / ("run_" + std::to_string(k)), out = logs / "out";
+    const auto r =
+        play_to("node " + live.string() + " --camera 1 --live --domain " + std::to_string(domain) +
+                    " --idle 1 --no-plots --out " + out.string(),
+                90,
+                one.string() + " --domain " + std::to_string(domain) +
+                    " --rate 0 --wait-readers 1 --linger 0.5 --timeout 60 --quiet" +
+                    (k % 2 ? " --reliable" : ""),
+                90, logs);
+    ASSERT_EQ(r.play.code, 0) << r.play.out << r.play.err;
+    ASSERT_EQ(r.reader.code, 0) << r.reader.out << r.reader.err;
+    // A row per frame (its image time), the first and the last included.
+    const auto rows = net_test::read_csv(out / "node_1.csv");
+    const auto drops = net_test::read_json(out / "node_1.json").at("messages").at("kernel_drops");
+    ASSERT_TRUE(drops.is_number_unsigned()) << "node_1.json: messages.kernel_drops: " << drops;
+    const std::string missing = missing_frames(rows, *ds, 0);
+    if (k % 2 == 0 && drops.get<std::uint64_t>() > 0) {
       std::printf("play %d: the kernel dropped %llu datagram(s) on the node's sockets; %s\n", k,
-                  static_cast<unsigned long long>(p.kernel_drops), p.missing.c_str());
+                  static_cast<unsigned long long>(drops.get<std::uint64_t>()), missing.c_str());
       continue;
     }
-    EXPECT_EQ(p.missing, "frames without a row:")
-        << "play " << k << (k % 2 ? " (reliable writers)" : "") << ", kernel drops "
-        << p.kernel_drops;
+    EXPECT_EQ(missing, "frames without a row:")
+        << "play " << k << (k % 2 ? " (reliable writers)" : "") << ", kernel drops " << drops;
   }
 }
 
@@ -406,18 +387,30 @@ TEST_F(Live, ANodeWhoseSocketBufferOverflowsCountsItsDropsAndWarns) {
   const int domain = net::domain_from_pid(::getpid());
   int with_drops = 0;
   for (int k = 0; k < 3 && with_drops == 0; ++k) {
-    NodePlay p;
-    play_to_node(live, one, *ds, domain, dir / ("small_" + std::to_string(k)), "", p);
-    if (HasFatalFailure()) return;
-    const std::uint64_t n = p.kernel_drops;
+    const fs::path logs = dir / ("small_" + std::to_string(k)), out = logs / "out";
+    const auto r =
+        play_to("node " + live.string() + " --camera 1 --live --domain " + std::to_string(domain) +
+                    " --idle 1 --no-plots --out " + out.string(),
+                90,
+                one.string() + " --domain " + std::to_string(domain) +
+                    " --rate 0 --wait-readers 1 --linger 0.5 --timeout 60 --quiet",
+                90, logs);
+    ASSERT_EQ(r.play.code, 0) << r.play.out << r.play.err;
+    ASSERT_EQ(r.reader.code, 0) << r.reader.out << r.reader.err;
+    const auto j = net_test::read_json(out / "node_1.json");
+    const auto drops = j.at("messages").at("kernel_drops");
+    ASSERT_TRUE(drops.is_number_unsigned()) << "node_1.json: messages.kernel_drops: " << drops;
+    const std::uint64_t n = drops.get<std::uint64_t>();
+    const std::string missing = missing_frames(net_test::read_csv(out / "node_1.csv"), *ds, 0);
     std::printf("play %d: %llu datagram(s) dropped; %s\n", k, static_cast<unsigned long long>(n),
-                p.missing.c_str());
-    if (p.missing != "frames without a row:") {
-      EXPECT_GT(n, 0u) << "play " << k << ": " << p.missing;
+                missing.c_str());
+    if (missing != "frames without a row:") {
+      EXPECT_GT(n, 0u) << "play " << k << ": " << missing;
     }
     const std::string warning = "camera 1: the kernel dropped " + std::to_string(n) + " datagram";
-    EXPECT_EQ(p.warnings.find(warning) != std::string::npos, n > 0) << p.warnings;
-    EXPECT_EQ(p.node_err.find(warning) != std::string::npos, n > 0) << p.node_err;
+    EXPECT_EQ(j.at("warnings").dump().find(warning) != std::string::npos, n > 0)
+        << j.at("warnings").dump();
+    EXPECT_EQ(r.reader.err.find(warning) != std::string::npos, n > 0) << r.reader.err;
     with_drops += n > 0;
   }
   EXPECT_EQ(with_drops, 1) << "no play overflowed a 64 KiB buffer";
