@@ -195,13 +195,15 @@ void add_node(CLI::App& app, int& exit_code) {
       for (const auto& w : s.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
       std::printf(
           "netvmo node: camera %d done: %d frames, %d rounds/frame, %llu sent, %llu received, "
-          "%llu late, %llu from non-neighbours, %llu dropped, %llu forgotten, %.2f s\n",
+          "%llu late, %llu from non-neighbours, %llu dropped, %llu forgotten, %s kernel drops, "
+          "%.2f s\n",
           o->camera, s.frames, s.substeps, static_cast<unsigned long long>(s.stats.sent),
           static_cast<unsigned long long>(s.stats.received),
           static_cast<unsigned long long>(s.stats.late),
           static_cast<unsigned long long>(s.stats.foreign),
           static_cast<unsigned long long>(s.stats.dropped),
-          static_cast<unsigned long long>(s.forgotten), s.seconds);
+          static_cast<unsigned long long>(s.forgotten),
+          s.kernel_drops ? std::to_string(*s.kernel_drops).c_str() : "unknown", s.seconds);
       return 0;
     });
   });

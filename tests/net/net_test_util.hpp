@@ -2,7 +2,10 @@
 // process's own, and running child processes under a time limit.
 #pragma once
 
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -75,5 +78,59 @@ inline nlohmann::json read_json(const std::filesystem::path& f) {
   std::ifstream in(f);
   return nlohmann::json::parse(in);
 }
+
+/// A UDP socket of this process bound on 127.0.0.1 with a receive buffer of `receive_buffer`
+/// bytes (the kernel doubles it and keeps a minimum), and a socket that sends to it; both closed
+/// on destruction. Datagrams sent faster than they are read overflow the buffer, and the kernel
+/// drops them (socket_drops.hpp).
+class LoopbackUdpPair {
+ public:
+  explicit LoopbackUdpPair(int receive_buffer) {
+    rx_ = ::socket(AF_INET, SOCK_DGRAM, 0);
+    tx_ = ::socket(AF_INET, SOCK_DGRAM, 0);
+    to_.sin_family = AF_INET;
+    to_.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t len = sizeof to_;
+    ok_ = rx_ >= 0 && tx_ >= 0 &&
+          ::setsockopt(rx_, SOL_SOCKET, SO_RCVBUF, &receive_buffer, sizeof receive_buffer) == 0 &&
+          ::bind(rx_, reinterpret_cast<sockaddr*>(&to_), sizeof to_) == 0 &&
+          ::getsockname(rx_, reinterpret_cast<sockaddr*>(&to_), &len) == 0;
+  }
+  ~LoopbackUdpPair() {
+    close_receiver();
+    if (tx_ >= 0) ::close(tx_);
+  }
+  LoopbackUdpPair(const LoopbackUdpPair&) = delete;
+  LoopbackUdpPair& operator=(const LoopbackUdpPair&) = delete;
+
+  /// Both sockets made, the receiver bound.
+  bool ok() const { return ok_; }
+  /// Sends `count` datagrams of `bytes` zero bytes (at most 65000) to the receiver; true if
+  /// every one was sent whole.
+  bool send(int count, size_t bytes) {
+    const std::vector<char> payload(bytes, 0);
+    for (int k = 0; k < count; ++k)
+      if (::sendto(tx_, payload.data(), bytes, 0, reinterpret_cast<const sockaddr*>(&to_),
+                   sizeof to_) != static_cast<ssize_t>(bytes))
+        return false;
+    return true;
+  }
+  /// Reads what is waiting without blocking; returns the number of datagrams read.
+  int read_waiting() {
+    char buffer[65536];
+    int read = 0;
+    while (rx_ >= 0 && ::recv(rx_, buffer, sizeof buffer, MSG_DONTWAIT) > 0) ++read;
+    return read;
+  }
+  void close_receiver() {
+    if (rx_ >= 0) ::close(rx_);
+    rx_ = -1;
+  }
+
+ private:
+  int rx_ = -1, tx_ = -1;
+  sockaddr_in to_{};
+  bool ok_ = false;
+};
 
 }  // namespace netvmo::net_test

@@ -14,6 +14,7 @@
 #include "netvmo/pipeline/io/render_scenario.hpp"
 #include "netvmo/pipeline/net/live_camera.hpp"
 #include "netvmo/pipeline/net/play.hpp"
+#include "netvmo/pipeline/net/socket_drops.hpp"
 #include "netvmo/pipeline/sources/network_source.hpp"
 #include "netvmo/pipeline/sources/topic_network.hpp"
 
@@ -203,6 +204,20 @@ TEST_F(Live, PlayedTopicsGiveTheAsyncLaunchsEstimates) {
   }
 }
 
+// `f`: a live folder of one camera (id 1) on /cam_1/image_raw, with its calibration.
+static void one_topic_folder(const fs::path& f) {
+  fs::create_directories(f / "calib");
+  test::write_text(f / "network.yaml",
+                   "fps: 30\ntarget: {family: tag36h11, id: 0, size: 0.2}\ncameras:\n"
+                   "  - {id: 1, p_wi: [0, 0, 1], r_wi: [0, 0, 0], image_topic: /cam_1/image_raw}\n"
+                   "edges: []\n");
+  test::write_text(f / "calib" / "cam_1.yaml",
+                   "image_width: 64\nimage_height: 48\ncamera_name: cam_1\n"
+                   "camera_matrix: {rows: 3, cols: 3, data: [50, 0, 32, 0, 50, 24, 0, 0, 1]}\n"
+                   "distortion_model: plumb_bob\n"
+                   "distortion_coefficients: {rows: 1, cols: 5, data: [0, 0, 0, 0, 0]}\n");
+}
+
 // A topic nobody publishes fails the node after --timeout with one line naming it; a live folder
 // whose camera names no topic, and a live lock-step launch, are refused in one line.
 TEST_F(Live, BadLiveInputIsOneLine) {
@@ -223,15 +238,7 @@ TEST_F(Live, BadLiveInputIsOneLine) {
   test::expect_one_line(r.err, {"--live", "--mode async"});
   // Camera 1 alone (its neighbour's node is not needed to fail on its silent topic: a node
   // without neighbours' writers fails on them first, so camera 2 is left out of the network).
-  test::write_text(f / "network.yaml",
-                   "fps: 30\ntarget: {family: tag36h11, id: 0, size: 0.2}\ncameras:\n"
-                   "  - {id: 1, p_wi: [0, 0, 1], r_wi: [0, 0, 0], image_topic: /cam_1/image_raw}\n"
-                   "edges: []\n");
-  test::write_text(f / "calib" / "cam_1.yaml",
-                   "image_width: 64\nimage_height: 48\ncamera_name: cam_1\n"
-                   "camera_matrix: {rows: 3, cols: 3, data: [50, 0, 32, 0, 50, 24, 0, 0, 1]}\n"
-                   "distortion_model: plumb_bob\n"
-                   "distortion_coefficients: {rows: 1, cols: 5, data: [0, 0, 0, 0, 0]}\n");
+  one_topic_folder(f);
   const int domain = net_test::loopback_domain(dir);
   r = net_test::netvmo_bounded("node " + f.string() + " --camera 1 --live --domain " +
                                    std::to_string(domain) + " --timeout 1 --out " +
@@ -239,6 +246,46 @@ TEST_F(Live, BadLiveInputIsOneLine) {
                                dir, 60);
   EXPECT_NE(r.code, 0);
   test::expect_one_line(r.err, {"/cam_1/image_raw", "no image within"});
+}
+
+// Images lost whole to a full socket receive buffer look like none published, so a node that gets
+// no image says how many datagrams the kernel dropped on its sockets (docs/ros2.md, "Socket
+// receive buffers"). In process, a camera on a topic nobody publishes: its error names no drops;
+// then a loopback socket of the same process is made to overflow, and the error names them.
+TEST_F(Live, NoImageNamesTheDatagramsTheKernelDropped) {
+  const fs::path dir = dir_;
+  const int domain = net_test::loopback_domain(dir);
+  one_topic_folder(dir / "f");
+  sources::TopicNetwork network(dir / "f");
+  net::LiveCamera camera(domain, network, 0, net::LiveSettings{});
+  auto error_of_waiting = [&] {
+    try {
+      camera.wait_frame(0, 0.5);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  const std::string dropped = "; the kernel dropped ";
+  const std::string quiet = error_of_waiting();
+  EXPECT_NE(quiet.find("/cam_1/image_raw: no image within"), std::string::npos) << quiet;
+  EXPECT_EQ(quiet.find(dropped), std::string::npos) << quiet;
+
+  net_test::LoopbackUdpPair pair(4096);
+  ASSERT_TRUE(pair.ok());
+  ASSERT_TRUE(pair.send(200, 1000));
+  std::uint64_t drops = 0;  // once the loopback has delivered them
+  for (int k = 0; k < 2000 && drops == 0; ++k) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    drops = net::udp_drops_of_this_process().value_or(0);
+  }
+  ASSERT_GT(drops, 0u) << "a 4 KiB buffer held 200 datagrams of 1000 bytes";
+  const std::string lost = error_of_waiting();
+  EXPECT_NE(lost.find("/cam_1/image_raw: no image within"), std::string::npos) << lost;
+  const size_t at = lost.find(dropped);
+  ASSERT_NE(at, std::string::npos) << lost;
+  EXPECT_GE(std::stoull(lost.substr(at + dropped.size())), drops) << lost;
+  EXPECT_NE(lost.find("Socket receive buffers"), std::string::npos) << lost;
 }
 
 // A node busy (integrating rounds, or starved of the CPU by a loaded machine) for longer than
@@ -302,6 +349,21 @@ TEST_F(Live, ImagesThatCameWhileTheNodeWasBusyAreTaken) {
   EXPECT_EQ(network.camera_frame_count(0), kShort);
 }
 
+// Camera 1 of paper5_render.yaml alone, rendered (kFrames frames) into `dir`/one.
+static fs::path one_camera(const fs::path& dir) {
+  render::SceneDescription scene =
+      io::load_render_scenario(std::string(NETVMO_SOURCE_DIR) + "/datasets/paper5_render.yaml");
+  scene.cameras.resize(1);
+  scene.edges.clear();
+  render::Renderer renderer(scene);
+  const fs::path one = dir / "one";
+  io::DatasetSettings written;
+  written.frames = kFrames;
+  written.progress = false;
+  io::write_dataset(renderer, one, written);
+  return one;
+}
+
 // A best-effort reader acknowledges nothing, so `netvmo play` cannot see whether it has an image:
 // - The last image. A live node behind on its topic when play deleted its writers right after
 //   the last write lost that image: its trace (Cyclone DDS) shows the last image's first 11 of
@@ -324,18 +386,7 @@ TEST_F(Live, ImagesThatCameWhileTheNodeWasBusyAreTaken) {
 // the first wait, the chance that 24 plays keep every first image is about 0.9^24, under 10 %).
 TEST_F(Live, ALiveNodeGetsEveryImageOfAPlay) {
   const fs::path dir = dir_;
-  // Camera 1 of paper5_render.yaml alone, rendered.
-  render::SceneDescription scene =
-      io::load_render_scenario(std::string(NETVMO_SOURCE_DIR) + "/datasets/paper5_render.yaml");
-  scene.cameras.resize(1);
-  scene.edges.clear();
-  render::Renderer renderer(scene);
-  const fs::path one = dir / "one";
-  io::DatasetSettings written;
-  written.frames = kFrames;
-  written.progress = false;
-  io::write_dataset(renderer, one, written);
-  const fs::path live = live_folder(one, dir, "live_one", "", false);
+  const fs::path one = one_camera(dir), live = live_folder(one, dir, "live_one", "", false);
   const auto ds = sources::open_dataset_source(one);
   const int domain = net_test::loopback_domain(dir);
   for (int k = 0; k < 24; ++k) {
@@ -363,4 +414,62 @@ TEST_F(Live, ALiveNodeGetsEveryImageOfAPlay) {
     EXPECT_EQ(missing, "frames without a row:")
         << "play " << k << (k % 2 ? " (reliable writers)" : "") << ", kernel drops " << drops;
   }
+}
+
+// What a node says when its socket receive buffer overflows (docs/ros2.md, "Socket receive
+// buffers"): every process of the test on netvmo's loopback configuration with a 64 KiB buffer
+// (128 KiB as the kernel counts it, under half an image of 23 datagrams), and best-effort plays
+// of the 30 images at --rate 0, at most three, until one drops. Either the node gets images: a
+// missing frame then needs reported kernel drops, and drops need the warning, naming their number
+// (stderr, node_1.json). Or it gets none (a starved node drains its socket too slowly for any
+// image to arrive whole, as in a fresh-clone CI run): its one error line must then say that the
+// kernel dropped datagrams. Without load each of three plays dropped 178-303 datagrams and kept
+// 5-10 of the 30 frames (2026-12-06).
+TEST_F(Live, ANodeWhoseSocketBufferOverflowsSaysSo) {
+  const fs::path dir = dir_;
+  const fs::path one = one_camera(dir), live = live_folder(one, dir, "live_one", "", false);
+  const auto ds = sources::open_dataset_source(one);
+  test::write_text(
+      dir / "small_buffer.xml",
+      test::replaced(net::loopback_config_xml(), "<SocketReceiveBufferSize max=\"16MiB\"",
+                     "<SocketReceiveBufferSize max=\"64KiB\""));
+  net::use_config(dir / "small_buffer.xml");
+  const int domain = net::domain_from_pid(::getpid());
+  const std::string dropped = "the kernel dropped ";
+  int with_drops = 0;
+  for (int k = 0; k < 3 && with_drops == 0; ++k) {
+    const fs::path logs = dir / ("small_" + std::to_string(k)), out = logs / "out";
+    const auto r =
+        play_to("node " + live.string() + " --camera 1 --live --domain " + std::to_string(domain) +
+                    " --timeout 30 --idle 1 --no-plots --out " + out.string(),
+                90,
+                one.string() + " --domain " + std::to_string(domain) +
+                    " --rate 0 --wait-readers 1 --linger 0.5 --timeout 60 --quiet",
+                90, logs);
+    ASSERT_EQ(r.play.code, 0) << r.play.out << r.play.err;
+    if (r.reader.code != 0) {  // no image came whole
+      test::expect_one_line(r.reader.err, {"/cam_1/image_raw: no image within", dropped});
+      std::printf("play %d: no image; %s", k, r.reader.err.c_str());
+      with_drops += r.reader.err.find(dropped) != std::string::npos;
+      continue;
+    }
+    const auto j = net_test::read_json(out / "node_1.json");
+    const auto drops = j.at("messages").at("kernel_drops");
+    ASSERT_TRUE(drops.is_number_unsigned()) << "node_1.json: messages.kernel_drops: " << drops;
+    const std::uint64_t n = drops.get<std::uint64_t>();
+    const std::string missing = missing_frames(net_test::read_csv(out / "node_1.csv"), *ds, 0);
+    std::printf("play %d: %llu datagram(s) dropped; %s\n", k, static_cast<unsigned long long>(n),
+                missing.c_str());
+    if (missing != "frames without a row:") {
+      EXPECT_GT(n, 0u) << "play " << k << ": " << missing;
+    }
+    const std::string warning = "camera 1: " + dropped + std::to_string(n) + " datagram";
+    EXPECT_EQ(j.at("warnings").dump().find(warning) != std::string::npos, n > 0)
+        << j.at("warnings").dump();
+    EXPECT_EQ(r.reader.err.find(warning) != std::string::npos, n > 0) << r.reader.err;
+    EXPECT_NE(r.reader.out.find(std::to_string(n) + " kernel drops"), std::string::npos)
+        << r.reader.out;
+    with_drops += n > 0;
+  }
+  EXPECT_EQ(with_drops, 1) << "no play overflowed a 64 KiB buffer";
 }

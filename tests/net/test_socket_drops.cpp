@@ -40,30 +40,19 @@ TEST(SocketDrops, TheDropsColumnIsSummedOverTheGivenSocketsOnly) {
 }
 
 TEST(SocketDrops, AFullReceiveBufferIsCountedForThisProcess) {
-  const int rx = ::socket(AF_INET, SOCK_DGRAM, 0), tx = ::socket(AF_INET, SOCK_DGRAM, 0);
-  ASSERT_GE(rx, 0);
-  ASSERT_GE(tx, 0);
-  const int small = 4096;  // the kernel's minimum is about this (SOCK_MIN_RCVBUF, doubled)
-  ASSERT_EQ(::setsockopt(rx, SOL_SOCKET, SO_RCVBUF, &small, sizeof small), 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t len = sizeof a;
-  ASSERT_EQ(::bind(rx, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
-  ASSERT_EQ(::getsockname(rx, reinterpret_cast<sockaddr*>(&a), &len), 0);
+  // The kernel's minimum is about 4 KiB (SOCK_MIN_RCVBUF, doubled).
+  net_test::LoopbackUdpPair pair(4096);
+  ASSERT_TRUE(pair.ok());
   const auto before = net::udp_drops_of_this_process();
   ASSERT_TRUE(before.has_value()) << "/proc/net/udp not readable";
   const int sent = 200;
-  char payload[1000] = {};
-  for (int k = 0; k < sent; ++k)
-    ASSERT_EQ(::sendto(tx, payload, sizeof payload, 0, reinterpret_cast<sockaddr*>(&a), sizeof a),
-              static_cast<ssize_t>(sizeof payload));
+  ASSERT_TRUE(pair.send(sent, 1000));
   // Every datagram is either read or counted as dropped, once the loopback has delivered them.
   int read = 0;
   std::uint64_t dropped = 0;
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   while (std::chrono::steady_clock::now() < give_up) {
-    while (::recv(rx, payload, sizeof payload, MSG_DONTWAIT) > 0) ++read;
+    read += pair.read_waiting();
     dropped = net::udp_drops_of_this_process().value_or(0) - *before;
     if (read + static_cast<int>(dropped) >= sent) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
@@ -72,9 +61,8 @@ TEST(SocketDrops, AFullReceiveBufferIsCountedForThisProcess) {
   EXPECT_GT(dropped, 0u) << "a 4 KiB buffer held 200 datagrams of 1000 bytes";
   EXPECT_GT(read, 0);
   // A closed socket's drops are no longer this process's.
-  ::close(rx);
+  pair.close_receiver();
   EXPECT_EQ(net::udp_drops_of_this_process().value_or(0), *before);
-  ::close(tx);
 }
 
 namespace {

@@ -391,11 +391,8 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   // (while the participants, and so their sockets, are open)
   summary.kernel_drops = udp_drops_of_this_process();
   if (live && summary.kernel_drops.value_or(0) > 0)
-    summary.warnings.push_back(
-        "camera " + std::to_string(o.camera_id) + ": the kernel dropped " +
-        std::to_string(*summary.kernel_drops) +
-        " datagram(s) addressed to this node, its socket receive buffer full: images of a "
-        "best-effort topic may be lost (docs/ros2.md, \"Socket receive buffers\")");
+    summary.warnings.push_back("camera " + std::to_string(o.camera_id) + ": " +
+                               kernel_drops_consequence(*summary.kernel_drops));
   summary.frames = frames;
   summary.stats = transport.stats();
   summary.stats.dropped = faulty.dropped();

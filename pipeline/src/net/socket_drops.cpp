@@ -54,4 +54,10 @@ std::optional<std::uint64_t> udp_drops_of_this_process() {
   return total;
 }
 
+std::string kernel_drops_consequence(std::uint64_t n) {
+  return "the kernel dropped " + std::to_string(n) +
+         " datagram(s) addressed to this node, its socket receive buffer full: images of a "
+         "best-effort topic may be lost (docs/ros2.md, \"Socket receive buffers\")";
+}
+
 }  // namespace netvmo::net

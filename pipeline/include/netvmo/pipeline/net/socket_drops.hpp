@@ -8,6 +8,7 @@
 #include <istream>
 #include <optional>
 #include <set>
+#include <string>
 
 namespace netvmo::net {
 
@@ -22,5 +23,9 @@ std::set<unsigned long> own_socket_inodes();
 /// opened; nullopt where /proc/net/udp cannot be read (not Linux). Sockets already closed are
 /// not counted: sample it while the participant that owns them lives.
 std::optional<std::uint64_t> udp_drops_of_this_process();
+
+/// What `n` (> 0) drops mean, for a node's warning and for its error when no image came: "the
+/// kernel dropped n datagram(s) addressed to this node, its socket receive buffer full: ...".
+std::string kernel_drops_consequence(std::uint64_t n);
 
 }  // namespace netvmo::net
