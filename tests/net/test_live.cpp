@@ -364,6 +364,19 @@ static fs::path one_camera(const fs::path& dir) {
   return one;
 }
 
+// The images of `one` played at --rate 0 (`play_args` added) to a live node of camera 1 of
+// `live` (`node_args` added) whose outputs go to logs/out.
+static PlayedTo play_to_node(const fs::path& live, const fs::path& one, int domain,
+                             const fs::path& logs, const std::string& node_args,
+                             const std::string& play_args) {
+  return play_to("node " + live.string() + " --camera 1 --live --domain " + std::to_string(domain) +
+                     node_args + " --idle 1 --no-plots --out " + (logs / "out").string(),
+                 90,
+                 one.string() + " --domain " + std::to_string(domain) +
+                     " --rate 0 --wait-readers 1 --linger 0.5 --timeout 60 --quiet" + play_args,
+                 90, logs);
+}
+
 // A best-effort reader acknowledges nothing, so `netvmo play` cannot see whether it has an image:
 // - The last image. A live node behind on its topic when play deleted its writers right after
 //   the last write lost that image: its trace (Cyclone DDS) shows the last image's first 11 of
@@ -391,14 +404,7 @@ TEST_F(Live, ALiveNodeGetsEveryImageOfAPlay) {
   const int domain = net_test::loopback_domain(dir);
   for (int k = 0; k < 24; ++k) {
     const fs::path logs = dir / ("run_" + std::to_string(k)), out = logs / "out";
-    const auto r =
-        play_to("node " + live.string() + " --camera 1 --live --domain " + std::to_string(domain) +
-                    " --idle 1 --no-plots --out " + out.string(),
-                90,
-                one.string() + " --domain " + std::to_string(domain) +
-                    " --rate 0 --wait-readers 1 --linger 0.5 --timeout 60 --quiet" +
-                    (k % 2 ? " --reliable" : ""),
-                90, logs);
+    const auto r = play_to_node(live, one, domain, logs, "", k % 2 ? " --reliable" : "");
     ASSERT_EQ(r.play.code, 0) << r.play.out << r.play.err;
     ASSERT_EQ(r.reader.code, 0) << r.reader.out << r.reader.err;
     // A row per frame (its image time), the first and the last included.
@@ -439,13 +445,7 @@ TEST_F(Live, ANodeWhoseSocketBufferOverflowsSaysSo) {
   int with_drops = 0;
   for (int k = 0; k < 3 && with_drops == 0; ++k) {
     const fs::path logs = dir / ("small_" + std::to_string(k)), out = logs / "out";
-    const auto r =
-        play_to("node " + live.string() + " --camera 1 --live --domain " + std::to_string(domain) +
-                    " --timeout 30 --idle 1 --no-plots --out " + out.string(),
-                90,
-                one.string() + " --domain " + std::to_string(domain) +
-                    " --rate 0 --wait-readers 1 --linger 0.5 --timeout 60 --quiet",
-                90, logs);
+    const auto r = play_to_node(live, one, domain, logs, " --timeout 30", "");
     ASSERT_EQ(r.play.code, 0) << r.play.out << r.play.err;
     if (r.reader.code != 0) {  // no image came whole
       test::expect_one_line(r.reader.err, {"/cam_1/image_raw: no image within", dropped});
