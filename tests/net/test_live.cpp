@@ -395,8 +395,9 @@ static PlayedTo play_to_node(const fs::path& live, const fs::path& one, int doma
 //   node was then given a larger buffer, cyclone_config.cpp). The node counts such drops
 //   (node_<id>.json messages.kernel_drops, socket_drops.hpp).
 // Here: 24 such plays, best-effort and reliable writers alternately; the node must have every
-// frame each time, unless best-effort and the kernel dropped datagrams on its sockets (without
-// the first wait, the chance that 24 plays keep every first image is about 0.9^24, under 10 %).
+// frame each time, unless best-effort and the kernel dropped datagrams on its sockets (a node that
+// got no image at all then says so in its error line). Without the first wait, the chance that 24
+// plays keep every first image is about 0.9^24, under 10 %.
 TEST_F(Live, ALiveNodeGetsEveryImageOfAPlay) {
   const fs::path dir = dir_;
   const fs::path one = one_camera(dir), live = live_folder(one, dir, "live_one", "", false);
@@ -406,6 +407,12 @@ TEST_F(Live, ALiveNodeGetsEveryImageOfAPlay) {
     const fs::path logs = dir / ("run_" + std::to_string(k)), out = logs / "out";
     const auto r = play_to_node(live, one, domain, logs, "", k % 2 ? " --reliable" : "");
     ASSERT_EQ(r.play.code, 0) << r.play.out << r.play.err;
+    if (k % 2 == 0 && r.reader.code != 0 &&
+        r.reader.err.find("no image within") != std::string::npos &&
+        r.reader.err.find("the kernel dropped ") != std::string::npos) {
+      std::printf("play %d: no image; %s", k, r.reader.err.c_str());
+      continue;
+    }
     ASSERT_EQ(r.reader.code, 0) << r.reader.out << r.reader.err;
     // A row per frame (its image time), the first and the last included.
     const auto rows = net_test::read_csv(out / "node_1.csv");
