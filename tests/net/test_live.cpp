@@ -436,8 +436,9 @@ TEST_F(Live, ALiveNodeGetsEveryImageOfAPlay) {
 // missing frame then needs reported kernel drops, and drops need the warning, naming their number
 // (stderr, node_1.json). Or it gets none (a starved node drains its socket too slowly for any
 // image to arrive whole, as in a fresh-clone CI run): its one error line must then say that the
-// kernel dropped datagrams. Without load each of three plays dropped 178-303 datagrams and kept
-// 5-10 of the 30 frames (2026-12-06).
+// kernel dropped datagrams. Measured 2026-12-06: without load five plays dropped 136-237
+// datagrams and kept 5-10 of the 30 frames; under stress-ng --cpu 4 four plays dropped 329-404
+// and kept 0-4 (one got no image).
 TEST_F(Live, ANodeWhoseSocketBufferOverflowsSaysSo) {
   const fs::path dir = dir_;
   const fs::path one = one_camera(dir), live = live_folder(one, dir, "live_one", "", false);
