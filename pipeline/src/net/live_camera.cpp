@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <chrono>
-#include <sstream>
 
 #include "netvmo/pipeline/error.hpp"
+#include "netvmo/pipeline/io/yaml_reader.hpp"
 #include "netvmo/pipeline/net/socket_drops.hpp"
 #include "netvmo/pipeline/ros/image_msgs.hpp"
 #include "netvmo/pipeline/sources/dataset.hpp"
@@ -16,13 +16,6 @@ namespace {
 
 bool ends_with(const std::string& s, const std::string& tail) {
   return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
-}
-
-// 30 -> "30", 0.5 -> "0.5" (std::to_string writes "30.000000").
-std::string seconds_text(double s) {
-  std::ostringstream os;
-  os << s;
-  return os.str();
 }
 
 }  // namespace
@@ -111,7 +104,7 @@ bool LiveCamera::wait_frame(int frame, double first_timeout_s) {
         // Images published and all lost to a full socket buffer look like none published.
         const std::uint64_t drops = udp_drops_of_this_process().value_or(0);
         throw InputError(
-            image_topic_ + ": no image within " + seconds_text(first_timeout_s) + " s" +
+            image_topic_ + ": no image within " + io::format_number(first_timeout_s) + " s" +
             (net_.has_calibration(index_) ? "" : " (nor camera info on " + info_topic_ + ")") +
             (drops > 0 ? "; " + kernel_drops_consequence(drops) : ""));
       }
