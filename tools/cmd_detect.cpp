@@ -263,28 +263,12 @@ int run_detect(DetectOptions o) {
 int run_detect_photos(DetectOptions o) {
   apply_detector_flags(o);
   const fs::path root(o.dataset);
-  if (!fs::is_directory(root)) throw InputError(o.dataset + ": not a folder of photos");
-  std::vector<fs::path> files;
-  for (const auto& e : fs::recursive_directory_iterator(root)) {
-    if (!e.is_regular_file()) continue;
-    std::string ext = e.path().extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
-    if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".pgm" || ext == ".bmp" ||
-        ext == ".tif" || ext == ".tiff")
-      files.push_back(e.path());
-  }
-  std::sort(files.begin(), files.end());
-  if (files.empty()) throw InputError(o.dataset + ": no images (.png, .jpg, .pgm, .bmp, .tif)");
+  const std::vector<fs::path> files = list_images(root);
+  if (files.empty()) throw InputError(o.dataset + ": no images (" + kImageExtensions + ")");
   io::check_output_apart(o.out, o.dataset);
   io::OutputDir out(o.out, "detect");
   io::AtomicFile csv(out.path() / "photos.csv");
-  csv << "file,id,hamming,libapriltag_margin,narrowest_px,fully_visible,eligible,status,"
-         "corner_difference_px,reason,check_e0,check_e1,check_e2,check_e3,expected_e0,"
-         "expected_e1,expected_e2,expected_e3,edge_bias_x,edge_bias_y,edge_blur,scatter_x,scatter_"
-         "y,se0,se1,se2,se3,shared_deviation,bow_px,bow_se,apriltag_x0,apriltag_y0,apriltag_x1,"
-         "apriltag_y1,apriltag_x2,apriltag_y2,apriltag_x3,apriltag_y3,x0,y0,x1,y1,x2,y2,x3,y3,"
-         "check_reason,edge_pairs,repeated_pairs\n";
+  csv << kPhotosHeader << "\n";
   std::map<fs::path, io::Calibration> calibs;  // a folder's calib.yaml
   std::map<fs::path, PhotoRecall> by_folder;
   PhotoRecall total;
@@ -315,59 +299,7 @@ int run_detect_photos(DetectOptions o) {
     by_folder[folder].add(results, resampling);
     total.add(results, resampling);
     const std::string rel = fs::relative(f, root).string();
-    for (const auto& t : results) {
-      char buf[160];
-      std::snprintf(buf, sizeof buf, "%d,%d,%.2f,%.2f,%d,%d,%s,", t.ref.id, t.ref.hamming,
-                    t.ref.margin, t.ref.narrowest, t.ref.fully_visible, t.eligible,
-                    to_string(t.status));
-      csv << rel << "," << buf;
-      if (t.status == TargetStatus::detected) {
-        std::snprintf(buf, sizeof buf, "%.3f", t.corner_difference);
-        csv << buf;
-      }
-      std::string reason = t.reason, check_reason = t.check.reason;
-      std::replace(reason.begin(), reason.end(), ',', ';');
-      std::replace(check_reason.begin(), check_reason.end(), ',', ';');
-      csv << "," << reason;
-      // The frame check on libapriltag's own (refined) quad.
-      const BorderCheck& b = t.check;
-      std::snprintf(
-          buf, sizeof buf, ",%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,",
-          b.thickness_error[0], b.thickness_error[1], b.thickness_error[2], b.thickness_error[3],
-          b.expected_thickness_error[0], b.expected_thickness_error[1],
-          b.expected_thickness_error[2], b.expected_thickness_error[3], b.edge_bias[0],
-          b.edge_bias[1], b.edge_blur, b.edge_bias_scatter[0], b.edge_bias_scatter[1]);
-      csv << buf;
-      std::snprintf(buf, sizeof buf, "%.3f,%.3f,%.3f,%.3f,%.3f,", b.thickness_se[0],
-                    b.thickness_se[1], b.thickness_se[2], b.thickness_se[3], b.shared_deviation);
-      csv << buf;
-      // The bow of the same quad's sides (where the other tests passed): the largest shift of a
-      // corner and its standard error (empty where not measured).
-      if (b.bow.measured) {
-        size_t w = 0;
-        for (size_t k = 1; k < 4; ++k)
-          if (cv::norm(b.bow.corner_shift[k]) > cv::norm(b.bow.corner_shift[w])) w = k;
-        std::snprintf(buf, sizeof buf, "%.3f,%.3f,", cv::norm(b.bow.corner_shift[w]),
-                      b.bow.corner_se[w]);
-        csv << buf;
-      } else {
-        csv << ",,";
-      }
-      // The corners [OpenCV pixels, libapriltag's order]: libapriltag's, then the front end's
-      // (empty unless it kept the tag).
-      const auto corners = [&](const std::array<cv::Point2d, 4>& c) {
-        std::snprintf(buf, sizeof buf, "%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,", c[0].x, c[0].y,
-                      c[1].x, c[1].y, c[2].x, c[2].y, c[3].x, c[3].y);
-        csv << buf;
-      };
-      corners(t.ref.corners);
-      if (t.status == TargetStatus::detected)
-        corners(t.corners_px);
-      else
-        csv << ",,,,,,,,";
-      std::snprintf(buf, sizeof buf, ",%ld,%.4f", resampling.pairs, resampling.repeated);
-      csv << check_reason << buf << "\n";
-    }
+    for (const auto& t : results) csv << format_photo_row(rel, t, resampling) << "\n";
   }
   csv.commit();
   out.commit();

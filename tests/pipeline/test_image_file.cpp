@@ -144,6 +144,31 @@ TEST(ImageFile, ReadGrayImageRefusesACutImageNamingTheFile) {
   test::expect_input_error([&] { io::read_gray_image(dir / "none.jpg"); }, {"none.jpg"});
 }
 
+// The images netvmo reads are told by their extension in any case; list_images finds every one
+// below a folder, sorted by path, and nothing else.
+TEST(ImageFile, ListImagesFindsEveryImageBelowAFolderSorted) {
+  for (const char* name :
+       {"a.png", "a.PNG", "b.jpg", "b.JPEG", "c.pgm", "d.Bmp", "e.tif", "e.TIFF"})
+    EXPECT_TRUE(io::is_image_file(name)) << name;
+  for (const char* name : {"a.txt", "png", "a.png.bak", "a.gif", "calib.yaml", "a.jpg2"})
+    EXPECT_FALSE(io::is_image_file(name)) << name;
+
+  const fs::path dir = testing::fresh_dir("list_images");
+  fs::create_directories(dir / "sub" / "deeper");
+  fs::create_directories(dir / "folder.png");  // a folder, whatever its name
+  for (const char* name :
+       {"d.TIFF", "a.PNG", "sub/b.jpg", "sub/deeper/c.Bmp", "notes.txt", "sub/calib.yaml", "e.pgm"})
+    write(dir / name, {1, 2, 3});
+  const std::vector<fs::path> want = {dir / "a.PNG", dir / "d.TIFF", dir / "e.pgm",
+                                      dir / "sub" / "b.jpg", dir / "sub" / "deeper" / "c.Bmp"};
+  EXPECT_EQ(io::list_images(dir), want);
+  // Not a folder: one line naming it.
+  test::expect_input_error([&] { io::list_images(dir / "a.PNG"); },
+                           {(dir / "a.PNG").string(), "not a folder"});
+  test::expect_input_error([&] { io::list_images(dir / "none"); },
+                           {(dir / "none").string(), "not a folder"});
+}
+
 // The repository's real photos, JPEG (phones and cameras: EXIF, thumbnails, their own tables) and
 // PNG, are complete, and each cut at half of its length is found.
 TEST(ImageFile, RealPhotosAreCompleteAndTheirCutsFound) {

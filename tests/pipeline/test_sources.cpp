@@ -69,6 +69,34 @@ TEST(Sources, ImageFolderAndMjpgVideoAgree) {
   EXPECT_GT(cv::norm(f1, f3, cv::NORM_INF), 0.0);
 }
 
+// A camera's image folder may hold any image netvmo reads (io::is_image_file), in any case of
+// extension, mixed: the frames are the same pixels as the PNGs they were converted from.
+TEST(Sources, ImageFolderReadsEveryImageFormat) {
+  const auto dir = testing::fresh_dir("src_formats");
+  testing::write_synth_dataset(dir, testing::simple_dataset_spec(1, 4, false));
+  Dataset png = open_dataset(dir);
+  ASSERT_EQ(png.frame_count, 4);
+  std::vector<cv::Mat> want;
+  for (int f = 0; f < 4; ++f) want.push_back(png.read(0, f).clone());
+  const fs::path cam = png.cameras[0].source->path();
+  const char* exts[] = {".TIF", ".bmp", ".pgm", ".tiff"};
+  for (int f = 0; f < 4; ++f) {
+    char stem[16];
+    std::snprintf(stem, sizeof stem, "%06d", f);
+    const fs::path from = cam / (std::string(stem) + ".png");
+    ASSERT_TRUE(fs::exists(from)) << from;
+    ASSERT_TRUE(cv::imwrite((cam / (stem + std::string(exts[f]))).string(),
+                            cv::imread(from.string(), cv::IMREAD_UNCHANGED)));
+    fs::remove(from);
+  }
+  Dataset mixed = open_dataset(dir);
+  EXPECT_TRUE(mixed.warnings.empty());
+  ASSERT_EQ(mixed.frame_count, 4);
+  for (int f = 0; f < 4; ++f)
+    EXPECT_EQ(cv::norm(mixed.read(0, f), want[static_cast<size_t>(f)], cv::NORM_INF), 0.0)
+        << "frame " << f << " (" << exts[f] << ")";
+}
+
 // Other containers/codecs: lossless FFV1 in .avi gives identical detections; mp4v in .mp4
 // (lossy) within 0.5 px.
 TEST(Sources, Ffv1AviAndMp4VideosAgree) {

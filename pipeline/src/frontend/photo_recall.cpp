@@ -3,6 +3,7 @@
 #include <apriltag/apriltag.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <map>
 #include <opencv2/imgproc.hpp>
 
@@ -111,6 +112,69 @@ std::vector<PhotoTagResult> evaluate_photo(const cv::Mat& gray, const io::Calibr
     out.push_back(t);
   }
   return out;
+}
+
+const char* const kPhotosHeader =
+    "file,id,hamming,libapriltag_margin,narrowest_px,fully_visible,eligible,status,"
+    "corner_difference_px,reason,check_e0,check_e1,check_e2,check_e3,expected_e0,expected_e1,"
+    "expected_e2,expected_e3,edge_bias_x,edge_bias_y,edge_blur,scatter_x,scatter_y,se0,se1,se2,"
+    "se3,shared_deviation,bow_px,bow_se,apriltag_x0,apriltag_y0,apriltag_x1,apriltag_y1,"
+    "apriltag_x2,apriltag_y2,apriltag_x3,apriltag_y3,x0,y0,x1,y1,x2,y2,x3,y3,check_reason,"
+    "edge_pairs,repeated_pairs";
+
+std::string format_photo_row(const std::string& file, const PhotoTagResult& t,
+                             const Resampling& resampling) {
+  std::string row = file + ",";
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "%d,%d,%.2f,%.2f,%d,%d,%s,", t.ref.id, t.ref.hamming, t.ref.margin,
+                t.ref.narrowest, t.ref.fully_visible, t.eligible, to_string(t.status));
+  row += buf;
+  if (t.status == TargetStatus::detected) {
+    std::snprintf(buf, sizeof buf, "%.3f", t.corner_difference);
+    row += buf;
+  }
+  std::string reason = t.reason, check_reason = t.check.reason;
+  std::replace(reason.begin(), reason.end(), ',', ';');
+  std::replace(check_reason.begin(), check_reason.end(), ',', ';');
+  row += "," + reason;
+  // The frame check on libapriltag's own (refined) quad.
+  const BorderCheck& b = t.check;
+  std::snprintf(buf, sizeof buf,
+                ",%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,",
+                b.thickness_error[0], b.thickness_error[1], b.thickness_error[2],
+                b.thickness_error[3], b.expected_thickness_error[0], b.expected_thickness_error[1],
+                b.expected_thickness_error[2], b.expected_thickness_error[3], b.edge_bias[0],
+                b.edge_bias[1], b.edge_blur, b.edge_bias_scatter[0], b.edge_bias_scatter[1]);
+  row += buf;
+  std::snprintf(buf, sizeof buf, "%.3f,%.3f,%.3f,%.3f,%.3f,", b.thickness_se[0], b.thickness_se[1],
+                b.thickness_se[2], b.thickness_se[3], b.shared_deviation);
+  row += buf;
+  // The bow of the same quad's sides (where the other tests passed): the largest shift of a
+  // corner and its standard error (empty where not measured).
+  if (b.bow.measured) {
+    size_t w = 0;
+    for (size_t k = 1; k < 4; ++k)
+      if (cv::norm(b.bow.corner_shift[k]) > cv::norm(b.bow.corner_shift[w])) w = k;
+    std::snprintf(buf, sizeof buf, "%.3f,%.3f,", cv::norm(b.bow.corner_shift[w]),
+                  b.bow.corner_se[w]);
+    row += buf;
+  } else {
+    row += ",,";
+  }
+  // The corners [OpenCV pixels, libapriltag's order]: libapriltag's, then the front end's
+  // (empty unless it kept the tag).
+  const auto corners = [&](const std::array<cv::Point2d, 4>& c) {
+    std::snprintf(buf, sizeof buf, "%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,", c[0].x, c[0].y,
+                  c[1].x, c[1].y, c[2].x, c[2].y, c[3].x, c[3].y);
+    row += buf;
+  };
+  corners(t.ref.corners);
+  if (t.status == TargetStatus::detected)
+    corners(t.corners_px);
+  else
+    row += ",,,,,,,,";
+  std::snprintf(buf, sizeof buf, ",%ld,%.4f", resampling.pairs, resampling.repeated);
+  return row + check_reason + buf;
 }
 
 void PhotoRecall::add(const std::vector<PhotoTagResult>& photo, const Resampling& resampling) {

@@ -1,6 +1,7 @@
 #include "netvmo/pipeline/io/image_file.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -96,6 +97,26 @@ std::string png_cut_short(const std::uint8_t* d, std::size_t n) {
     if (type == "IEND") return {};
   }
   return ends("");
+}
+
+bool is_image_file(const fs::path& file) {
+  std::string e = file.extension().string();
+  std::transform(e.begin(), e.end(), e.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return e == ".png" || e == ".jpg" || e == ".jpeg" || e == ".pgm" || e == ".bmp" || e == ".tif" ||
+         e == ".tiff";
+}
+
+std::vector<fs::path> list_images(const fs::path& root) {
+  std::error_code ec;
+  if (!fs::is_directory(root, ec)) throw InputError(root.string() + ": not a folder of images");
+  std::vector<fs::path> files;
+  for (auto it = fs::recursive_directory_iterator(root, ec); !ec && it != fs::end(it);
+       it.increment(ec))
+    if (it->is_regular_file(ec) && is_image_file(it->path())) files.push_back(it->path());
+  if (ec) throw InputError(root.string() + ": cannot list the folder: " + ec.message());
+  std::sort(files.begin(), files.end());
+  return files;
 }
 
 std::string image_cut_short(const std::uint8_t* data, std::size_t size) {

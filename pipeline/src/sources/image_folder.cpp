@@ -1,5 +1,5 @@
-// Image folders: cam_<id>/ holding png, jpg, jpeg or pgm images (frame-count rule in
-// sources/dataset.hpp).
+// Image folders: cam_<id>/ holding images (io::is_image_file); the frame-count rule is in
+// sources/dataset.hpp.
 #include <algorithm>
 #include <map>
 
@@ -11,17 +11,11 @@
 namespace netvmo::sources {
 namespace fs = std::filesystem;
 using detail::all_digits;
-using detail::lower;
 using detail::to_gray;
 
 namespace {
 
 constexpr long kMaxFrameNumber = 100'000'000;
-
-bool is_image_ext(const fs::path& p) {
-  const std::string e = lower(p.extension().string());
-  return e == ".png" || e == ".jpg" || e == ".jpeg" || e == ".pgm";
-}
 
 class ImageFolderStream : public CameraStream {
  public:
@@ -29,10 +23,10 @@ class ImageFolderStream : public CameraStream {
     std::vector<fs::path> files;
     std::error_code ec;
     for (const auto& e : fs::directory_iterator(dir_, ec))
-      if (e.is_regular_file() && is_image_ext(e.path())) files.push_back(e.path());
+      if (e.is_regular_file() && io::is_image_file(e.path())) files.push_back(e.path());
     if (ec) throw InputError(dir_.string() + "/: cannot list folder: " + ec.message());
     if (files.empty())
-      throw InputError(dir_.string() + "/: no images (png, jpg, jpeg, pgm) in the folder");
+      throw InputError(dir_.string() + "/: no images (" + io::kImageExtensions + ") in the folder");
     std::sort(files.begin(), files.end(),
               [](const fs::path& a, const fs::path& b) { return a.filename() < b.filename(); });
     const bool numeric = std::all_of(files.begin(), files.end(), [](const fs::path& p) {

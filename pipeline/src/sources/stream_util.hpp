@@ -7,8 +7,6 @@
 
 namespace netvmo::sources::detail {
 
-/// Lower-case ASCII copy.
-std::string lower(std::string s);
 /// Non-empty and only decimal digits.
 bool all_digits(const std::string& s);
 /// 8-bit single-channel view or copy of an image (BGR, BGRA, 16-bit converted).

@@ -62,6 +62,16 @@ std::vector<PhotoTagResult> evaluate_photo(const cv::Mat& gray, const io::Calibr
                                            const TrackingSettings& tracking,
                                            const PhotoRecallSettings& recall = {});
 
+/// photos.csv's header (`netvmo detect --photos`; docs/frontend.md, "Real photos"), without its
+/// newline: the reference tag, the front end's decision, the frame check on libapriltag's own
+/// refined quad, libapriltag's corners and the front end's, and the photo's resampling.
+extern const char* const kPhotosHeader;
+
+/// photos.csv's row of reference tag `t` of the photo `file` (as the report names it), in which
+/// measure_resampling() found `resampling`; without its newline, commas of reasons as ';'.
+std::string format_photo_row(const std::string& file, const PhotoTagResult& t,
+                             const Resampling& resampling);
+
 /// A calibration for a photo whose camera is unknown: no distortion, f = the larger image side,
 /// the principal point at the centre (only the front end's corners are used).
 io::Calibration nominal_calibration(int width, int height);

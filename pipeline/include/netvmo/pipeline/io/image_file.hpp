@@ -10,8 +10,19 @@
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <string>
+#include <vector>
 
 namespace netvmo::io {
+
+/// The image files netvmo reads, by extension (any case), as a message names them.
+inline constexpr const char* kImageExtensions = "png, jpg, jpeg, pgm, bmp, tif, tiff";
+
+/// Whether `file`'s extension, in any case, is one of kImageExtensions.
+bool is_image_file(const std::filesystem::path& file);
+
+/// Every regular file below `root` (recursively) that is_image_file, sorted by path; InputError
+/// naming `root` when it is not a folder or cannot be listed.
+std::vector<std::filesystem::path> list_images(const std::filesystem::path& root);
 
 /// Whether the JPEG stream data[0, size) ends before its EOI marker, and where: "" when it is
 /// not a JPEG (it does not start with the SOI marker FF D8) or its markers lead to an EOI marker
