@@ -269,6 +269,8 @@ int run_detect_photos(DetectOptions o) {
   io::OutputDir out(o.out, "detect");
   io::AtomicFile csv(out.path() / "photos.csv");
   csv << kPhotosHeader << "\n";
+  // libapriltag's decoding table, built once for every photo (evaluate_photo).
+  const auto decoder = std::make_shared<const TagDecoder>(o.det.family, kReferenceBitsCorrected);
   std::map<fs::path, io::Calibration> calibs;  // a folder's calib.yaml
   std::map<fs::path, PhotoRecall> by_folder;
   PhotoRecall total;
@@ -293,7 +295,7 @@ int run_detect_photos(DetectOptions o) {
                          std::to_string(gray.rows) + " image, but " + cf.string() + " is for " +
                          std::to_string(calib.width) + "x" + std::to_string(calib.height));
     }
-    const auto results = evaluate_photo(gray, calib, o.det, o.tracking, o.recall);
+    const auto results = evaluate_photo(gray, calib, o.det, o.tracking, o.recall, decoder);
     // Whether the photo was resampled by nearest neighbour (docs/frontend.md, "Resampled images").
     const Resampling resampling = measure_resampling(gray);
     by_folder[folder].add(results, resampling);

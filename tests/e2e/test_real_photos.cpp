@@ -20,6 +20,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <string>
@@ -27,6 +28,7 @@
 
 #include "netvmo/pipeline/frontend/photo_recall.hpp"
 #include "netvmo/pipeline/frontend/pnp.hpp"
+#include "netvmo/pipeline/io/image_file.hpp"
 #include "test_util.hpp"
 
 namespace netvmo {
@@ -216,21 +218,18 @@ fs::path corpus_dir() {
 /// id <id>: <reason>".
 PhotoRecall recall_over(const fs::path& dir, std::vector<std::string>* losses = nullptr) {
   PhotoRecall total;
-  std::vector<fs::path> photos;
-  for (const auto& e : fs::recursive_directory_iterator(dir)) {
-    const std::string ext = e.path().extension().string();
-    if (e.is_regular_file() && (ext == ".png" || ext == ".jpg" || ext == ".JPG"))
-      photos.push_back(e.path());
-  }
-  std::sort(photos.begin(), photos.end());
-  for (const fs::path& photo : photos) {
+  // One libapriltag decoding table for every photo, as netvmo detect --photos builds it.
+  const auto decoder =
+      std::make_shared<const TagDecoder>(DetectorSettings{}.family, kReferenceBitsCorrected);
+  for (const fs::path& photo : io::list_images(dir)) {
     const cv::Mat gray = cv::imread(photo.string(), cv::IMREAD_GRAYSCALE);
     EXPECT_FALSE(gray.empty()) << photo;
     if (gray.empty()) continue;
     io::Calibration calib = nominal_calibration(gray.cols, gray.rows);
     if (fs::exists(photo.parent_path() / "calib.yaml"))
       calib = io::load_calibration_opencv(photo.parent_path() / "calib.yaml");
-    const auto results = evaluate_photo(gray, calib, DetectorSettings{}, TrackingSettings{});
+    const auto results =
+        evaluate_photo(gray, calib, DetectorSettings{}, TrackingSettings{}, {}, decoder);
     for (const auto& t : results)
       if (t.eligible && t.status != TargetStatus::detected) {
         const std::string name = photo.parent_path().filename().string() + "/" +

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 #include <optional>
 #include <set>
+#include <thread>
 
 #include "netvmo/observer/jacobian.hpp"
 #include "netvmo/pipeline/error.hpp"
@@ -239,6 +240,56 @@ TEST(Detector, OtherIdsReportedNotUsed) {
   ASSERT_EQ(d2.status, TargetStatus::detected);
   EXPECT_EQ(d2.target()->id, 5);
   EXPECT_EQ(d2.all.size(), 2u);
+}
+
+// Every decoded tag of `got` is `want`'s: the same ids and corners, bit for bit.
+void expect_same_tags(const FrameDetections& got, const FrameDetections& want, const char* what) {
+  ASSERT_EQ(got.all.size(), want.all.size()) << what;
+  for (size_t i = 0; i < want.all.size(); ++i) {
+    EXPECT_EQ(got.all[i].id, want.all[i].id) << what;
+    for (size_t k = 0; k < 4; ++k) EXPECT_EQ(got.all[i].corners[k], want.all[i].corners[k]) << what;
+  }
+}
+
+// Detectors made from one TagDecoder share libapriltag's decoding table: they decode what a
+// detector with a table of its own decodes, on two threads at once, and keep decoding when
+// another one is destroyed (libapriltag's own destroy frees the family's table) and when the
+// decoder's last other owner lets go of it. A decoder of other bits is not shared.
+TEST(Detector, DetectorsOfOneDecoderShareItsTable) {
+  const auto calib = testing::test_calibration();
+  const cv::Mat img = render_tags(calib, {{0, kSize, facing_pose(1.5, -0.3, 0.0), {}},
+                                          {7, kSize, facing_pose(1.5, 0.3, 0.0), {}}});
+  TagDetector own;
+  const FrameDetections want = own.detect(img);
+  ASSERT_EQ(want.status, TargetStatus::detected);
+  ASSERT_EQ(want.all.size(), 2u);
+
+  auto decoder = std::make_shared<const TagDecoder>("tag36h11", DetectorSettings{}.bits_corrected);
+  auto a = std::make_unique<TagDetector>(DetectorSettings{}, decoder);
+  TagDetector b(DetectorSettings{}, decoder);
+  EXPECT_EQ(a->decoder(), decoder);
+  EXPECT_EQ(b.decoder(), decoder);
+  EXPECT_NE(own.decoder(), decoder);
+  FrameDetections on_a, on_b;
+  std::thread other([&] {
+    for (int k = 0; k < 5; ++k) on_a = a->detect(img);
+  });
+  for (int k = 0; k < 5; ++k) on_b = b.detect(img);
+  other.join();
+  expect_same_tags(on_a, want, "detector a, on its own thread");
+  expect_same_tags(on_b, want, "detector b");
+
+  a.reset();
+  decoder.reset();  // b alone holds the decoder now
+  expect_same_tags(b.detect(img), want, "detector b after a was destroyed");
+
+  DetectorSettings one_bit;
+  one_bit.bits_corrected = 1;
+  TagDetector c(one_bit, b.decoder());
+  EXPECT_NE(c.decoder(), b.decoder());
+  EXPECT_EQ(c.decoder()->bits_corrected(), 1);
+  EXPECT_THROW(create_apriltag_detector(*b.decoder(), one_bit), std::invalid_argument);
+  EXPECT_THROW(TagDecoder("tag36h11", 4), std::invalid_argument);
 }
 
 TEST(Detector, DuplicateTargetIdRejected) {

@@ -164,8 +164,9 @@ double window_decimate(double side, double quad_decimate, const TrackingSettings
   return std::clamp(d, quad_decimate, static_cast<double>(t.window_max_decimate));
 }
 
-FrontEnd::FrontEnd(DetectorSettings settings, TrackingSettings tracking)
-    : detector_(std::move(settings)), tracking_(tracking) {
+FrontEnd::FrontEnd(DetectorSettings settings, TrackingSettings tracking,
+                   std::shared_ptr<const TagDecoder> decoder)
+    : detector_(std::move(settings), std::move(decoder)), tracking_(tracking) {
   validate(tracking_);
 }
 

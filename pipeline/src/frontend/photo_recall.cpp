@@ -12,23 +12,22 @@
 
 namespace netvmo::frontend {
 
-std::vector<ReferenceTag> reference_detections(const cv::Mat& gray, const std::string& family) {
+std::vector<ReferenceTag> reference_detections(const cv::Mat& gray, const TagDecoder& decoder) {
   CV_Assert(gray.type() == CV_8UC1);
-  const render::TagFamilyPtr fam = render::create_tag_family(family);
   DetectorSettings reference;  // libapriltag's defaults but for quad_decimate
-  reference.bits_corrected = 2;
+  reference.bits_corrected = kReferenceBitsCorrected;
   reference.quad_decimate = 1.0;
   reference.quad_sigma = 0.0;
   reference.nthreads = 1;
   reference.refine_edges = true;
   reference.decode_sharpening = 0.25;
   reference.min_white_black_diff = 5;
-  apriltag_detector_t* td = create_apriltag_detector(fam.get(), reference);
+  const ApriltagDetectorPtr td = create_apriltag_detector(decoder, reference);
   image_u8_t im{gray.cols, gray.rows, static_cast<int32_t>(gray.step[0]),
                 const_cast<uint8_t*>(gray.ptr<uint8_t>())};
-  zarray_t* dets = apriltag_detector_detect(td, &im);
+  zarray_t* dets = apriltag_detector_detect(td.get(), &im);
   std::vector<ReferenceTag> out;
-  const int border = fam->width_at_border;
+  const int border = decoder.family()->width_at_border;
   for (int i = 0; dets && i < zarray_size(dets); ++i) {
     apriltag_detection_t* det = nullptr;
     zarray_get(dets, i, &det);
@@ -51,7 +50,6 @@ std::vector<ReferenceTag> reference_detections(const cv::Mat& gray, const std::s
     out.push_back(r);
   }
   if (dets) apriltag_detections_destroy(dets);
-  apriltag_detector_destroy(td);
   std::sort(out.begin(), out.end(),
             [](const ReferenceTag& a, const ReferenceTag& b) { return a.id < b.id; });
   return out;
@@ -70,8 +68,12 @@ io::Calibration nominal_calibration(int width, int height) {
 std::vector<PhotoTagResult> evaluate_photo(const cv::Mat& gray, const io::Calibration& calib,
                                            const DetectorSettings& settings,
                                            const TrackingSettings& tracking,
-                                           const PhotoRecallSettings& recall) {
-  const std::vector<ReferenceTag> refs = reference_detections(gray, settings.family);
+                                           const PhotoRecallSettings& recall,
+                                           std::shared_ptr<const TagDecoder> decoder) {
+  if (!decoder || decoder->family_name() != settings.family ||
+      decoder->bits_corrected() != kReferenceBitsCorrected)
+    decoder = std::make_shared<const TagDecoder>(settings.family, kReferenceBitsCorrected);
+  const std::vector<ReferenceTag> refs = reference_detections(gray, *decoder);
   std::vector<PhotoTagResult> out;
   if (refs.empty()) return out;
   std::map<int, int> count;
@@ -85,7 +87,7 @@ std::vector<PhotoTagResult> evaluate_photo(const cv::Mat& gray, const io::Calibr
   s.target_id = ids[0];
   for (size_t k = 1; k < ids.size(); ++k) s.bundle_ids.push_back(ids[k]);
   if (ids.size() > 1) s.tags_per_target.assign(ids.size(), 1);
-  FrontEnd fe(s, tracking);
+  FrontEnd fe(s, tracking, decoder);  // (its own decoder where s corrects other bits)
   TrackState track;
   const std::vector<Observation> obs = fe.observe_targets(gray, calib, nullptr, &track);
   for (const auto& r : refs) {

@@ -28,10 +28,42 @@ constexpr double kMaxNormalizedDisagreement = 0.35;
 
 }  // namespace
 
-apriltag_detector* create_apriltag_detector(apriltag_family* family, const DetectorSettings& s) {
-  apriltag_detector_t* td = apriltag_detector_create();
+TagDecoder::TagDecoder(const std::string& family, int bits_corrected)
+    : name_(family), bits_(bits_corrected), family_(render::create_tag_family(family)) {
+  if (bits_corrected < 0 || bits_corrected > 3)
+    throw std::invalid_argument("TagDecoder: bits_corrected must be in 0..3, not " +
+                                std::to_string(bits_corrected));
+  owner_ = apriltag_detector_create();
+  if (!owner_) throw std::runtime_error("libapriltag: cannot create the detector");
+  // The table is built into the family (family->impl) here, and freed with owner_.
+  apriltag_detector_add_family_bits(owner_, family_.get(), bits_corrected);
+  if (!family_->impl) {
+    apriltag_detector_destroy(owner_);
+    throw std::runtime_error("libapriltag: cannot build the decoding table of " + family + " for " +
+                             std::to_string(bits_corrected) + " corrected bits (out of memory)");
+  }
+}
+
+TagDecoder::~TagDecoder() {
+  apriltag_detector_destroy(owner_);  // frees the table, before the family
+}
+
+void ApriltagDetectorDeleter::operator()(apriltag_detector* td) const {
+  // Its family list emptied first: libapriltag's destroy would free the family's table, which
+  // is the decoder's (TagDecoder).
+  zarray_clear(td->tag_families);
+  apriltag_detector_destroy(td);
+}
+
+ApriltagDetectorPtr create_apriltag_detector(const TagDecoder& decoder, const DetectorSettings& s) {
+  if (s.bits_corrected != decoder.bits_corrected())
+    throw std::invalid_argument(
+        "create_apriltag_detector: bits_corrected " + std::to_string(s.bits_corrected) +
+        ", but the decoder's table is for " + std::to_string(decoder.bits_corrected()));
+  ApriltagDetectorPtr td(apriltag_detector_create());
   if (!td) throw std::runtime_error("libapriltag: cannot create the detector");
-  apriltag_detector_add_family_bits(td, family, s.bits_corrected);
+  // The family's table exists (TagDecoder): libapriltag adds the family and builds nothing.
+  apriltag_detector_add_family_bits(td.get(), decoder.family(), s.bits_corrected);
   td->quad_decimate = static_cast<float>(s.quad_decimate);
   td->quad_sigma = static_cast<float>(s.quad_sigma);
   td->nthreads = s.nthreads;
@@ -57,27 +89,30 @@ TagDetection to_tag_detection(const apriltag_detection& det, cv::Point origin) {
 
 struct TagDetector::Impl {
   DetectorSettings s;
-  render::TagFamilyPtr family{nullptr, nullptr};
-  apriltag_detector_t* td = nullptr;
-  cv::Mat gray;                   // conversion buffer for non-gray input
+  std::shared_ptr<const TagDecoder> decoder;
+  apriltag_family_t* family = nullptr;  // the decoder's
+  ApriltagDetectorPtr td;               // (destroyed before the decoder it uses)
+  cv::Mat gray;                         // conversion buffer for non-gray input
   cv::Mat normalized;             // the image with the searched region normalised (SearchSettings)
   std::vector<cv::Mat> patterns;  // bitmap of each tag of the body, for the border check
   StageSeconds seconds;           // time spent, by stage
 
-  explicit Impl(DetectorSettings settings) : s(std::move(settings)) {
+  Impl(DetectorSettings settings, std::shared_ptr<const TagDecoder> shared)
+      : s(std::move(settings)) {
     validate(s);
-    family = render::create_tag_family(s.family);
-    td = create_apriltag_detector(family.get(), s);
+    decoder =
+        shared && shared->family_name() == s.family && shared->bits_corrected() == s.bits_corrected
+            ? std::move(shared)
+            : std::make_shared<const TagDecoder>(s.family, s.bits_corrected);
+    family = decoder->family();
+    td = create_apriltag_detector(*decoder, s);
     patterns.push_back(tag_pattern(s.family, s.target_id));
     for (int id : s.bundle_ids) patterns.push_back(tag_pattern(s.family, id));
   }
-  ~Impl() {
-    if (td) apriltag_detector_destroy(td);  // before the family it holds
-  }
 };
 
-TagDetector::TagDetector(DetectorSettings settings)
-    : impl_(std::make_unique<Impl>(std::move(settings))) {}
+TagDetector::TagDetector(DetectorSettings settings, std::shared_ptr<const TagDecoder> decoder)
+    : impl_(std::make_unique<Impl>(std::move(settings), std::move(decoder))) {}
 TagDetector::~TagDetector() = default;
 TagDetector::TagDetector(TagDetector&&) noexcept = default;
 TagDetector& TagDetector::operator=(TagDetector&&) noexcept = default;
@@ -87,6 +122,9 @@ const DetectorSettings& TagDetector::settings() const {
 }
 const StageSeconds& TagDetector::seconds() const {
   return impl_->seconds;
+}
+const std::shared_ptr<const TagDecoder>& TagDetector::decoder() const {
+  return impl_->decoder;
 }
 
 int TagDetector::border_cells() const {
@@ -161,7 +199,7 @@ FrameDetections TagDetector::detect(const cv::Mat& image, const cv::Rect& region
                 const_cast<uint8_t*>(sub.ptr<uint8_t>())};
   impl_->td->quad_decimate = static_cast<float>(decimate);
   const auto t_search = Clock::now();
-  zarray_t* dets = apriltag_detector_detect(impl_->td, &im);
+  zarray_t* dets = apriltag_detector_detect(impl_->td.get(), &im);
   impl_->seconds.search += seconds_since(t_search);
   impl_->td->quad_decimate = static_cast<float>(s.quad_decimate);
   if (!dets) throw std::runtime_error("libapriltag: detection failed");

@@ -127,11 +127,12 @@ struct Pipeline {
     // Cameras run in parallel; each worker owns a detector whose libapriltag threads share the
     // remaining cores.
     ds.nthreads = std::max(1, ds.nthreads / workers);
-    // Each detector builds libapriltag's decoding table (~45 ms here for tag36h11 correcting 2
-    // bits, ~3 % of a 150-frame 1280x720 run per detector): the workers' are built in parallel.
-    std::vector<std::optional<frontend::FrontEnd>> built(static_cast<size_t>(workers));
-    in_parallel([&](int w) { built[static_cast<size_t>(w)].emplace(ds, options.tracking); });
-    for (auto& f : built) front_ends.push_back(std::move(*f));
+    // The workers' detectors share one libapriltag decoding table (frontend::TagDecoder): built
+    // once, not once per worker.
+    front_ends.reserve(static_cast<size_t>(workers));
+    front_ends.emplace_back(ds, options.tracking);
+    const auto decoder = front_ends.front().detector().decoder();
+    for (int w = 1; w < workers; ++w) front_ends.emplace_back(ds, options.tracking, decoder);
   }
   static std::vector<obs::SE3> believed_at_start(const sources::NetworkSource& p) {
     std::vector<obs::SE3> g;

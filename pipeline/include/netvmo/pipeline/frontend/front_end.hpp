@@ -195,7 +195,10 @@ inline constexpr unsigned kSearchWindow = 1, kSearchNormalizedWindow = 2, kSearc
 /// Detector (reused across frames and cameras) + refinement + cv::undistortPoints.
 class FrontEnd {
  public:
-  explicit FrontEnd(DetectorSettings settings = {}, TrackingSettings tracking = {});
+  /// `decoder`: libapriltag's decoding table to share with other front ends (TagDetector's
+  /// constructor; `detector().decoder()` gives one's to the next), nullptr: its own.
+  explicit FrontEnd(DetectorSettings settings = {}, TrackingSettings tracking = {},
+                    std::shared_ptr<const TagDecoder> decoder = nullptr);
 
   /// Runs on one camera's frame. An empty image (camera blind at that frame) gives
   /// detected = false. If `all` is given it receives every decoded tag of the frame (of the

@@ -6,6 +6,7 @@
 #include <array>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
@@ -13,6 +14,7 @@
 
 #include "netvmo/pipeline/frontend/front_end.hpp"
 #include "netvmo/pipeline/frontend/resampling.hpp"
+#include "netvmo/pipeline/frontend/tag_detector.hpp"
 #include "netvmo/pipeline/io/calibration.hpp"
 
 namespace netvmo::frontend {
@@ -28,10 +30,14 @@ struct ReferenceTag {
   bool fully_visible = false;
 };
 
-/// libapriltag's detections of `family` in an 8-bit gray image, with libapriltag's defaults but
-/// for a full-resolution quad search (quad_decimate 1, quad_sigma 0, refine_edges on,
-/// decode_sharpening 0.25, min_white_black_diff 5, 2 corrected bits, 1 thread).
-std::vector<ReferenceTag> reference_detections(const cv::Mat& gray, const std::string& family);
+/// The bits libapriltag corrects when it makes the reference (its default).
+inline constexpr int kReferenceBitsCorrected = 2;
+
+/// libapriltag's detections of `decoder`'s family in an 8-bit gray image, with libapriltag's
+/// defaults but for a full-resolution quad search (quad_decimate 1, quad_sigma 0, refine_edges
+/// on, decode_sharpening 0.25, min_white_black_diff 5, 1 thread); `decoder` corrects
+/// kReferenceBitsCorrected bits (std::invalid_argument otherwise).
+std::vector<ReferenceTag> reference_detections(const cv::Mat& gray, const TagDecoder& decoder);
 
 /// How a reference tag fared in the front end.
 struct PhotoTagResult {
@@ -57,10 +63,14 @@ struct PhotoRecallSettings {
 /// target of its own, decided in one pass from a camera with no history: the full-frame
 /// search and the acquisition pass) on one photo, against libapriltag's detections of the same
 /// family. `calib` undistorts the refinement and the check where the photo's camera is known.
+/// `decoder`, of the settings' family with kReferenceBitsCorrected bits, is used for the
+/// reference and, where the settings correct as many bits, for the front end (a folder of photos
+/// builds libapriltag's decoding table once; see TagDecoder); nullptr: built for this photo.
 std::vector<PhotoTagResult> evaluate_photo(const cv::Mat& gray, const io::Calibration& calib,
                                            const DetectorSettings& settings,
                                            const TrackingSettings& tracking,
-                                           const PhotoRecallSettings& recall = {});
+                                           const PhotoRecallSettings& recall = {},
+                                           std::shared_ptr<const TagDecoder> decoder = nullptr);
 
 /// photos.csv's header (`netvmo detect --photos`; docs/frontend.md, "Real photos"), without its
 /// newline: the reference tag, the front end's decision, the frame check on libapriltag's own
