@@ -8,7 +8,6 @@
 #include <opencv2/imgproc.hpp>
 
 #include "netvmo/pipeline/frontend/tag_detector.hpp"
-#include "netvmo/render/tag_family.hpp"
 
 namespace netvmo::frontend {
 
@@ -70,8 +69,7 @@ std::vector<PhotoTagResult> evaluate_photo(const cv::Mat& gray, const io::Calibr
                                            const TrackingSettings& tracking,
                                            const PhotoRecallSettings& recall,
                                            std::shared_ptr<const TagDecoder> decoder) {
-  if (!decoder || decoder->family_name() != settings.family ||
-      decoder->bits_corrected() != kReferenceBitsCorrected)
+  if (!decoder || !decoder->decodes(settings.family, kReferenceBitsCorrected))
     decoder = std::make_shared<const TagDecoder>(settings.family, kReferenceBitsCorrected);
   const std::vector<ReferenceTag> refs = reference_detections(gray, *decoder);
   std::vector<PhotoTagResult> out;

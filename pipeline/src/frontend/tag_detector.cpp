@@ -90,9 +90,8 @@ TagDetection to_tag_detection(const apriltag_detection& det, cv::Point origin) {
 struct TagDetector::Impl {
   DetectorSettings s;
   std::shared_ptr<const TagDecoder> decoder;
-  apriltag_family_t* family = nullptr;  // the decoder's
-  ApriltagDetectorPtr td;               // (destroyed before the decoder it uses)
-  cv::Mat gray;                         // conversion buffer for non-gray input
+  ApriltagDetectorPtr td;         // (destroyed before the decoder it uses)
+  cv::Mat gray;                   // conversion buffer for non-gray input
   cv::Mat normalized;             // the image with the searched region normalised (SearchSettings)
   std::vector<cv::Mat> patterns;  // bitmap of each tag of the body, for the border check
   StageSeconds seconds;           // time spent, by stage
@@ -100,11 +99,9 @@ struct TagDetector::Impl {
   Impl(DetectorSettings settings, std::shared_ptr<const TagDecoder> shared)
       : s(std::move(settings)) {
     validate(s);
-    decoder =
-        shared && shared->family_name() == s.family && shared->bits_corrected() == s.bits_corrected
-            ? std::move(shared)
-            : std::make_shared<const TagDecoder>(s.family, s.bits_corrected);
-    family = decoder->family();
+    decoder = shared && shared->decodes(s.family, s.bits_corrected)
+                  ? std::move(shared)
+                  : std::make_shared<const TagDecoder>(s.family, s.bits_corrected);
     td = create_apriltag_detector(*decoder, s);
     patterns.push_back(tag_pattern(s.family, s.target_id));
     for (int id : s.bundle_ids) patterns.push_back(tag_pattern(s.family, id));
@@ -128,7 +125,7 @@ const std::shared_ptr<const TagDecoder>& TagDetector::decoder() const {
 }
 
 int TagDetector::border_cells() const {
-  return impl_->family->width_at_border;
+  return impl_->decoder->family()->width_at_border;
 }
 
 FrameDetections TagDetector::detect(const cv::Mat& image, const io::Calibration* calib) {

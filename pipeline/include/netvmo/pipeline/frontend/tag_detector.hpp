@@ -50,6 +50,11 @@ class TagDecoder {
 
   const std::string& family_name() const { return name_; }
   int bits_corrected() const { return bits_; }
+  /// Whether it decodes `family` correcting `bits_corrected` bits (a detector of those settings
+  /// may share it).
+  bool decodes(const std::string& family, int bits_corrected) const {
+    return family == name_ && bits_corrected == bits_;
+  }
   apriltag_family* family() const { return family_.get(); }
 
  private:
