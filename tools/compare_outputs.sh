@@ -15,6 +15,9 @@
 #   sweep on it (k_s 2,20): sweep.csv, inputs.csv
 #   launch on it (lock-step, one process per camera over loopback DDS): estimates.csv,
 #       energies.csv, errors.csv, summary.json without "timing", every node's node_<id>.csv
+#   calibrate with a map (datasets/calib_map.yaml rendered, its map datasets/calib_map_tags.yaml)
+#       and without (datasets/calib_moved.yaml rendered, 20 frames, --keep-going): every output
+#       file (calibration.json without its wall times, "seconds") and the lines printed
 #   (not the output folders' .lock files: they hold the writer's pid)
 # Exit status 0 when everything is identical; a CSV file whose every field is the same number
 # written differently (e.g. -0 and 0) counts as identical and is listed; otherwise the
@@ -44,7 +47,7 @@ while [ $# -gt 0 ]; do
       }
       if [ "$1" = --tolerance ]; then tolerance="$2"; else abs_tol="$2"; fi
       shift 2 ;;
-    -h|--help) sed -n 2,22p "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) awk 'NR > 1 && !/^#/ {exit} NR > 1 {sub(/^# ?/, ""); print}' "$0"; exit 0 ;;
     *) if [ -z "$ref" ]; then ref="$1"; else new="$1"; fi; shift ;;
   esac
 done
@@ -101,6 +104,19 @@ produce() {  # produce NETVMO NAME: outputs in $work/NAME, produced under one co
   "$bin" sweep "$out/dataset" --out "$out/sweep" --ks 2,20 --no-plot >/dev/null 2>&1
   "$bin" launch "$out/dataset" --out "$out/launch" --domain "$domain" --no-overlays --no-plots \
     --timeout 300 >/dev/null 2>&1
+  # calibrate, with a map of static tags and with a tag moved through the rig (each build on its
+  # own renderings).
+  "$bin" render "$top/datasets/calib_map.yaml" --out "$out/calib_map_dataset" --quiet >/dev/null
+  "$bin" calibrate "$out/calib_map_dataset" --map "$top/datasets/calib_map_tags.yaml" \
+    --out "$out/calibrate_map" --no-plots >"$out/calibrate_map.txt"
+  "$bin" render "$top/datasets/calib_moved.yaml" --out "$out/calib_moved_dataset" --frames 20 \
+    --quiet >/dev/null
+  "$bin" calibrate "$out/calib_moved_dataset" --out "$out/calibrate_moved" --no-plots \
+    --keep-going >"$out/calibrate_moved.txt" 2>/dev/null
+  for c in calibrate_map calibrate_moved; do
+    grep -v '"seconds":' "$out/$c/calibration.json" >"$out/$c/calibration.noseconds.json"
+    rm "$out/$c/calibration.json"
+  done
   # The nodes' logs, statistics and exchange timings hold wall-clock times; the DDS
   # configuration its own path.
   rm -f "$out"/launch/nodes/*.log "$out"/launch/nodes/*.json "$out/launch/cyclonedds.xml" \
