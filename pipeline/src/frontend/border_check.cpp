@@ -273,30 +273,37 @@ cv::Mat tag_pattern(const std::string& family, int id) {
   return out;
 }
 
-BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners,
-                         const cv::Mat& pattern, int border_cells, const DetectorSettings& s,
-                         const io::Calibration* calib, const EdgeSamples* edges) {
-  CV_Assert(gray.type() == CV_8UC1);
-  BorderCheck out;
-  const int n = border_cells;
-  if (pattern.empty() || n < 3 || pattern.rows != pattern.cols || pattern.rows < n + 2) return out;
-  const int off = (pattern.rows - n) / 2;    // bitmap index of the black square's first cell
-  auto white_at = [&](double X, double Y) {  // object cell coordinates -> bitmap colour
+namespace {
+
+// The tag's bitmap at object cell coordinates (X right, Y down, the black square [0, n]^2):
+// whether (X, Y) is white.
+struct Bitmap {
+  const cv::Mat& pattern;
+  int off;  ///< bitmap index of the black square's first cell
+  bool operator()(double X, double Y) const {
     const int c = static_cast<int>(std::floor(X)) + off, r = static_cast<int>(std::floor(Y)) + off;
     return pattern.at<uchar>(r, c) > 127;
-  };
-  // Only for a black border ring inside a white ring (not the reversed-border families).
-  for (int i = 0; i < n; ++i)
-    if (white_at(i + 0.5, 0.5) || white_at(0.5, i + 0.5) || white_at(i + 0.5, n - 0.5) ||
-        white_at(n - 0.5, i + 0.5) || !white_at(i + 0.5, -0.5) || !white_at(-0.5, i + 0.5) ||
-        !white_at(i + 0.5, n + 0.5) || !white_at(n + 0.5, i + 0.5))
-      return out;
-  const SquareToImage map(corners, n, calib);
-  if (!map.ok()) return out;
-  out.checked = true;
+  }
+};
 
+// What the border's samples show, per side (side k runs from corner k to corner k + 1).
+struct SideSamples {
+  std::array<size_t, 4> planned{};  ///< inner-edge points the bitmap places along the side
+  /// The measured inner-edge offsets [px], where along the side (cells) and where on the tag
+  /// (object cell coordinates) each was measured, and one cell across the edge there [px].
+  std::array<std::vector<double>, 4> offsets, ts, cells;
+  std::array<std::vector<cv::Point2d>, 4> where;
+  std::vector<double> spreads;  ///< the inner edge's spread at the measured points [px]
+  /// Pixels whose centre lies within 0.5 px of a side, and how many of them are intermediate.
+  int near_side = 0, intermediate = 0;
+};
+
+// Stage 1: the border sampled along each side: its contrast against the quiet zone (samples,
+// failed, outside) and the inner edge's offset next to each white data cell, fitted along the
+// side (thickness_error, thickness_se). False when the bitmap has no white data cell.
+bool sample_border(const cv::Mat& gray, int n, const Bitmap& white_at, const SquareToImage& map,
+                   const DetectorSettings& s, SideSamples& smp, BorderCheck& out) {
   // Side k runs from corner k to corner k+1: start S, direction D, outward normal O (cells).
-  const double N = n;
   const detail::SquareSides sides(n);
   const cv::Point2d* S = sides.start;
   const cv::Point2d* D = sides.along;
@@ -311,10 +318,7 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
   for (int r = 1; r < n - 1; ++r)
     for (int c = 1; c < n - 1; ++c)
       if (white_at(c + 0.5, r + 0.5)) white_cells.emplace_back(c + 0.5, r + 0.5);
-  if (white_cells.empty()) {
-    out.checked = false;
-    return out;
-  }
+  if (white_cells.empty()) return false;
   obj.insert(obj.end(), white_cells.begin(), white_cells.end());
   std::array<std::vector<double>, 4> edge_t;  // positions along side k of inner-edge points
   for (int k = 0; k < 4; ++k) {
@@ -354,12 +358,14 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
   // point-sampled (aliased) image, such as a 1-sample-per-pixel rendering, none do (0-5 %), and
   // every edge position is quantised to the pixel grid by up to 0.5 px, so the border's two
   // edges may disagree by up to 1 px on a correct quad.
-  int near_side = 0, intermediate = 0;
-  std::vector<double> near, spreads;
-  // Per side: the measured inner-edge offsets, where along the side (cells) and where on the
-  // tag (object cell coordinates) each was measured.
-  std::array<std::vector<double>, 4> offsets, ts, cells;
-  std::array<std::vector<cv::Point2d>, 4> where;
+  int& near_side = smp.near_side;
+  int& intermediate = smp.intermediate;
+  std::vector<double> near;
+  auto& spreads = smp.spreads;
+  auto& offsets = smp.offsets;
+  auto& ts = smp.ts;
+  auto& cells = smp.cells;
+  auto& where = smp.where;
   for (int k = 0; k < 4; ++k) {
     const size_t ks = static_cast<size_t>(k);
     // Contrast samples.
@@ -443,10 +449,14 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
       if (!std::isnan(spread)) spreads.push_back(spread);
     }
     out.thickness_error[ks] = end_offset(ts[ks], offsets[ks], &out.thickness_se[ks]);
+    smp.planned[ks] = edge_t[ks].size();
   }
-  out.aliased = near_side >= 16 && intermediate < 0.1 * near_side;
-  out.thickness_limit = s.border_max_thickness_error + (out.aliased ? kAliasedAllowance : 0.0);
+  return true;
+}
 
+// Stage 2: the edge blur, and the thinning every side shares
+// (common_offset).
+void shared_thinning(const SideSamples& smp, const DetectorSettings& s, BorderCheck& out) {
   // A camera's tone curve moves every edge of a blurred print alike: gamma encoding puts a
   // blurred edge a fraction of the blur toward the dark side (0.42 sigma per edge for sRGB and
   // black ink at 5 % of the white), so a correct border looks thinner on all four sides. The
@@ -455,14 +465,14 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
   // measured blur. A side on an occluder's outline
   // is thinner alone (or with its neighbour, towards one corner): the other sides do not share
   // its error, so it is judged as before. A border thicker on every side is not discounted.
-  const double spread = median(spreads);
+  const double spread = median(smp.spreads);
   out.edge_blur = std::isnan(spread) ? 0.0 : std::sqrt(std::max(0.0, spread * spread - 0.25));
   {
     int planned = 0, measured = 0, thinner = 0;
     double least = -std::numeric_limits<double>::infinity();  // the least thin side
     for (size_t k = 0; k < 4; ++k) {
       const double t = out.thickness_error[k];
-      planned += edge_t[k].size() >= 4;
+      planned += smp.planned[k] >= 4;
       if (std::isnan(t)) continue;
       ++measured;
       thinner += t < 0.0;
@@ -474,6 +484,20 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
     if (measured >= 3 && measured == planned && thinner == measured)
       out.common_offset = std::max(least, -s.border_blur_allowance * out.edge_blur);
   }
+}
+
+// Stage 3: each side's thickness error less what the print explains (the edge bias its cells
+// show, what every side shares), with each side's limit (side_limit) and what was expected
+// (expected_thickness_error).
+std::array<double, 4> unexplained_thickness(const cv::Mat& gray,
+                                            const std::array<cv::Point2d, 4>& corners, int n,
+                                            const Bitmap& white_at, const SquareToImage& map,
+                                            const DetectorSettings& s, const SideSamples& smp,
+                                            BorderCheck& out) {
+  const double N = n;
+  const detail::SquareSides sides(n);
+  const cv::Point2d* S = sides.start;
+  const cv::Point2d* D = sides.along;
   // The print's edge bias, measured on the tag's own cells: every edge of the print imaged b
   // toward the white (ink spread; the tone curve under blur; one axis only under motion blur).
   // The sides are fitted to the outer edges, so the quad is dilated by b on each side and the
@@ -485,7 +509,7 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
   if (s.border_edge_bias) measure_edge_bias(gray, n, white_at, map, kMinEdgeBiasPairs, bias, out);
   int planned = 0, measured = 0;
   for (size_t k = 0; k < 4; ++k) {
-    planned += edge_t[k].size() >= 4;
+    planned += smp.planned[k] >= 4;
     measured += !std::isnan(out.thickness_error[k]);
   }
   const bool biased = !std::isnan(out.edge_bias[0]) && !std::isnan(out.edge_bias[1]);
@@ -501,12 +525,13 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
       const size_t axis = k % 2 == 0 ? 1 : 0;  // sides 0 and 2 run along X: their normal is Y
       const double cell = cv::norm(corners[(k + 1) % 4] - corners[k]) / n;
       const double limit = s.border_max_edge_bias * cell;
-      std::vector<double> r = offsets[k];
+      std::vector<double> r = smp.offsets[k];
       for (size_t i = 0; i < r.size(); ++i) {
-        const double b = std::clamp(bias.at(axis, where[k][i], out.edge_bias[axis]), -limit, limit);
+        const double b =
+            std::clamp(bias.at(axis, smp.where[k][i], out.edge_bias[axis]), -limit, limit);
         r[i] -= 2.0 * (b - b_mean) * (1.0 - 1.0 / n);
       }
-      shared[k] = end_offset(ts[k], r, &out.thickness_se[k]);
+      shared[k] = end_offset(smp.ts[k], r, &out.thickness_se[k]);
       // The bias across the side itself, a quarter and three quarters along it (perspective
       // grows an ink spread in pixels toward the near side); 0 where the axis's bias is within
       // what the estimator itself shows on clean renderings (edge_bias_deadband).
@@ -555,8 +580,8 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
     double least = std::numeric_limits<double>::infinity();  // [cells]
     std::array<double, 4> cell{};
     for (size_t k = 0; k < 4; ++k) {
-      if (std::isnan(residual[k]) || cells[k].empty()) continue;
-      cell[k] = median(cells[k]);
+      if (std::isnan(residual[k]) || smp.cells[k].empty()) continue;
+      cell[k] = median(smp.cells[k]);
       ++measured_sides;
       above += residual[k] > 0.0;
       below += residual[k] < 0.0;
@@ -574,7 +599,14 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
     if (s.border_significance > 0.0 && !std::isnan(out.thickness_se[k]))
       out.side_limit[k] = std::max(out.side_limit[k], s.border_significance * out.thickness_se[k]);
   }
+  return residual;
+}
 
+// Stage 4: a side fails on its contrast or on its unexplained thickness (`residual`); ok and
+// the reason.
+void judge_sides(const std::array<double, 4>& residual, const DetectorSettings& s,
+                 BorderCheck& out) {
+  const bool biased = !std::isnan(out.edge_bias[0]) && !std::isnan(out.edge_bias[1]);
   // A side fails on either test; the reason names the side that fails worst (relative to its
   // threshold), which is the one on the occluder's outline when the others only inherit part
   // of its error through the homography.
@@ -582,6 +614,7 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
   double worst = 0.0;  // how far the worst failing side exceeds its threshold (ratio)
   for (int k = 0; k < 4; ++k) {
     const size_t ks = static_cast<size_t>(k);
+    const int m = out.samples[ks];
     const int failed = out.failed[ks];
     const double contrast_excess =
         std::max(failed / std::max(1.0, s.border_max_failed_fraction * m),
@@ -629,6 +662,13 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
                     std::abs(out.common_offset));
     out.reason = buf;
   }
+}
+
+// Stage 5: the sides' bow (quad_bow): a corner further from where the straight sides meet than
+// border_max_bow fails; a smaller bow that a flat tag would not show is marked to be taken off.
+void judge_bow(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, int n,
+               const io::Calibration* calib, const EdgeSamples* edges, const DetectorSettings& s,
+               BorderCheck& out) {
   if (out.ok && s.border_max_bow > 0.0) {
     out.bow = quad_bow(gray, corners, n, calib, edges);
     // A point-sampled image's edge samples are quantised to the pixel grid, and its staircase
@@ -644,6 +684,7 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
         continue;
       worst_bow = shift;
       out.ok = false;
+      char buf[200];
       std::snprintf(buf, sizeof buf,
                     "sides %d and %d bowed: corner %d lies %.2f px (se %.2f) from where their "
                     "straight lines meet (a bent print or lens distortion not calibrated)",
@@ -663,6 +704,41 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
     }
     out.bow_taken_off = bowed && narrowest_side(corners) / n >= s.border_bow_min_cell;
   }
+}
+
+}  // namespace
+
+BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners,
+                         const cv::Mat& pattern, int border_cells, const DetectorSettings& s,
+                         const io::Calibration* calib, const EdgeSamples* edges) {
+  CV_Assert(gray.type() == CV_8UC1);
+  BorderCheck out;
+  const int n = border_cells;
+  if (pattern.empty() || n < 3 || pattern.rows != pattern.cols || pattern.rows < n + 2) return out;
+  const Bitmap white_at{pattern, (pattern.rows - n) / 2};
+  // Only for a black border ring inside a white ring (not the reversed-border families).
+  for (int i = 0; i < n; ++i)
+    if (white_at(i + 0.5, 0.5) || white_at(0.5, i + 0.5) || white_at(i + 0.5, n - 0.5) ||
+        white_at(n - 0.5, i + 0.5) || !white_at(i + 0.5, -0.5) || !white_at(-0.5, i + 0.5) ||
+        !white_at(i + 0.5, n + 0.5) || !white_at(n + 0.5, i + 0.5))
+      return out;
+  const SquareToImage map(corners, n, calib);
+  if (!map.ok()) return out;
+  out.checked = true;
+
+  SideSamples samples;
+  if (!sample_border(gray, n, white_at, map, s, samples, out)) {
+    out.checked = false;
+    return out;
+  }
+  out.aliased = samples.near_side >= 16 && samples.intermediate < 0.1 * samples.near_side;
+  out.thickness_limit = s.border_max_thickness_error + (out.aliased ? kAliasedAllowance : 0.0);
+
+  shared_thinning(samples, s, out);
+  const std::array<double, 4> residual =
+      unexplained_thickness(gray, corners, n, white_at, map, s, samples, out);
+  judge_sides(residual, s, out);
+  judge_bow(gray, corners, n, calib, edges, s, out);
   return out;
 }
 
