@@ -64,6 +64,35 @@ std::string frame_row(int k, double t, const frontend::Observation& cam,
   return s + "\n";
 }
 
+// A row of node_<id>_links.csv: the neighbours (their camera ids) whose estimate is in the
+// mutual term after frame k.
+std::string links_row(int k, double t, const obs::CameraObserver& net,
+                      const std::vector<int>& labels) {
+  std::string in_term;
+  for (size_t a = 0; a < net.latest().size(); ++a)
+    if (net.latest()[a] && net.latest()[a]->initialized)
+      in_term += (in_term.empty() ? "" : " ") +
+                 std::to_string(labels[static_cast<size_t>(net.neighbours()[a])]);
+  std::string row = std::to_string(k);
+  put(row, t);
+  return row + "," + in_term + "\n";
+}
+
+// A frame on the camera's ROS 2 topics (run::ros_frame): its measurement, its estimate and the
+// neighbours' estimates it holds.
+void publish_frame(RosPublisher& ros, int camera_id, double t, const frontend::Observation& cam,
+                   const obs::CameraObserver& net) {
+  std::vector<SE3> neighbours_w;
+  for (const auto& m : net.latest())
+    if (m && m->initialized) neighbours_w.push_back(m->g_w);
+  const std::optional<SE3> estimate =
+      net.initialized() ? std::optional<SE3>(net.estimate_world()) : std::nullopt;
+  const run::RosFrame f = run::ros_frame(camera_id, t, cam, estimate, neighbours_w);
+  if (f.measurement) ros.measurement(*f.measurement);
+  if (f.average_pose) ros.average_pose(*f.average_pose);
+  if (!f.tf.empty()) ros.tf(f.tf);
+}
+
 void sleep_until_epoch(double t) {
   const double wait = t - epoch_seconds();
   if (wait > 0) std::this_thread::sleep_for(std::chrono::duration<double>(wait));
@@ -121,6 +150,88 @@ class RowJournal {
   fs::path file_, partial_;
   std::ofstream out_;
 };
+
+// What a node ran: its setup and discovery times, and each exchange round's publish and receive
+// [us] (lock-step: the wait for the neighbours too), a frame's first round (which also waits for
+// the neighbours' front ends) apart from the others.
+struct NodeTimes {
+  double setup_s = 0.0, discovery_s = 0.0;
+  bool discovered = false;
+  std::vector<double> first_round_us, round_us;
+};
+
+// node_<id>.json: the run's options (the same for every node of a run: netvmo merge checks
+// them), statistics, the timings, each neighbour's clock as the exchange measured it
+// (`clocks_of`), warnings and notes.
+nlohmann::json node_json(const NodeSettings& o, const NodeSummary& summary, int frames,
+                         int dataset_frames, const LiveCamera* camera, const NodeTimes& times,
+                         const ClockSync& clocks_of, const std::vector<int>& neighbours,
+                         const std::vector<int>& labels, double clock) {
+  nlohmann::json j;
+  j["camera"] = o.camera_id;
+  j["mode"] = to_string(o.dds.mode);
+  j["domain"] = o.dds.domain;
+  j["frames"] = frames;
+  j["dataset_frames"] = dataset_frames;
+  if (camera) {
+    j["image_topic"] = camera->image_topic();
+    j["images_out_of_order"] = camera->out_of_order();  // dropped: stamp not after the last
+  }
+  // What the merge of the run's outputs needs (netvmo merge): the same for every node of a run.
+  j["options"] = {{"estimator", o.run.runner.estimator},
+                  {"k_e", o.run.runner.k_e},
+                  {"k_s", o.run.runner.k_s},
+                  {"error", o.run.runner.error_model},
+                  {"init", run::to_string(o.run.runner.init)},
+                  {"rounds", o.run.runner.rounds}};
+  j["rounds_per_frame"] = summary.substeps;
+  j["seconds"] = summary.seconds;
+  const auto quantile = [&](std::vector<double> v, double q) {
+    if (v.empty()) return 0.0;
+    const auto at = v.begin() + static_cast<std::ptrdiff_t>(q * static_cast<double>(v.size() - 1));
+    std::nth_element(v.begin(), at, v.end());
+    return *at;
+  };
+  j["timing"] = {{"setup_s", times.setup_s},
+                 {"discovery_s", times.discovery_s},
+                 {"discovered", times.discovered},
+                 {"rounds", times.first_round_us.size() + times.round_us.size()},
+                 {"round_median_us", quantile(times.round_us, 0.5)},
+                 {"round_p99_us", quantile(times.round_us, 0.99)},
+                 {"first_round_median_us", quantile(times.first_round_us, 0.5)},
+                 {"first_round_p99_us", quantile(times.first_round_us, 0.99)}};
+  j["messages"] = {{"sent", summary.stats.sent},
+                   {"received", summary.stats.received},
+                   {"dropped", summary.stats.dropped},
+                   {"late", summary.stats.late},
+                   {"foreign", summary.stats.foreign}};
+  nlohmann::json rej;
+  for (size_t v = 1; v < summary.refused.size(); ++v)
+    rej[obs::to_string(static_cast<obs::MessageVerdict>(v))] = summary.refused[v];
+  j["messages"]["rejected"] = rej;
+  j["messages"]["forgotten_stale"] = summary.forgotten;
+  j["messages"]["kernel_drops"] =
+      summary.kernel_drops ? nlohmann::json(*summary.kernel_drops) : nlohmann::json(nullptr);
+  j["first_frame"] = summary.first_frame;
+  j["join_rounds"] = summary.join_rounds;
+  // Each neighbour's clock as this node's exchange measured it (ClockSync; netvmo merge aligns
+  // the nodes' rows with them).
+  nlohmann::json clocks = nlohmann::json::array();
+  for (const int nb : neighbours)
+    if (const auto c = clocks_of.offset(nb)) {
+      nlohmann::json e = {{"camera", labels[static_cast<size_t>(nb)]},
+                          {"offset_s", c->offset_s},
+                          {"round_trips", c->round_trips}};
+      e["delay_s"] = c->round_trip() ? nlohmann::json(c->delay_s) : nlohmann::json(nullptr);
+      clocks.push_back(e);
+    }
+  j["clock"] = {{"neighbours", clocks},
+                {"ignored_samples", clocks_of.ignored()},
+                {"emulated_offset_s", clock}};
+  j["warnings"] = summary.warnings;
+  j["notes"] = summary.notes;
+  return j;
+}
 
 }  // namespace
 
@@ -241,15 +352,13 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
     throw InputError("--clock-offset: lock-step needs one clock for every camera (--mode async)");
   DdsTransport transport(self, graph.neighbors(self), labels, dds);
   const auto t_discovery = Clock::now();
-  const bool discovered =
+  NodeTimes times;
+  times.discovered =
       transport.wait_for_writers(static_cast<int>(graph.neighbors(self).size()), o.dds.timeout_s);
   // Setup (reading, the front end, the participant) and discovery (every neighbour's writer
   // matched), for the record.
-  const double setup_s = std::chrono::duration<double>(t_discovery - t_start).count(),
-               discovery_s = std::chrono::duration<double>(Clock::now() - t_discovery).count();
-  // Each round's publish and receive [us] (lock-step: the wait for the neighbours too): a frame's
-  // first round, which also waits for the neighbours' front ends, and the others.
-  std::vector<double> first_round_us, round_us;
+  times.setup_s = std::chrono::duration<double>(t_discovery - t_start).count();
+  times.discovery_s = std::chrono::duration<double>(Clock::now() - t_discovery).count();
   std::optional<RosPublisher> ros;
   if (o.publish_ros_pose) ros.emplace(transport.participant(), o.camera_id);
   if (ros && o.ros_wait_readers > 0 &&
@@ -350,34 +459,17 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
       const obs::TakeReport taken = obs::take_estimates(
           net, exchange, inbox,
           async ? std::optional<obs::Staleness>({tr + clock, o.stale_s}) : std::nullopt);
-      (r == 0 ? first_round_us : round_us)
+      (r == 0 ? times.first_round_us : times.round_us)
           .push_back(std::chrono::duration<double, std::micro>(Clock::now() - round_start).count());
       summary.forgotten += taken.forgotten;
       if (join.may_step(net, tr)) net.step(h);
     }
     for (int r = 0; r < N_ind; ++r) ind.step(h_ind);
     csv.row(frame_row(k, t + clock, cam, net, ind));
-    std::string in_term;
-    for (size_t a = 0; a < net.latest().size(); ++a)
-      if (net.latest()[a] && net.latest()[a]->initialized)
-        in_term += (in_term.empty() ? "" : " ") +
-                   std::to_string(labels[static_cast<size_t>(net.neighbours()[a])]);
-    std::string link = std::to_string(k);
-    put(link, t + clock);
-    links.row(link + "," + in_term + "\n");
+    links.row(links_row(k, t + clock, net, labels));
     csv.flush();
     links.flush();
-    if (ros) {
-      std::vector<SE3> neighbours_w;
-      for (const auto& m : net.latest())
-        if (m && m->initialized) neighbours_w.push_back(m->g_w);
-      const std::optional<SE3> estimate =
-          net.initialized() ? std::optional<SE3>(net.estimate_world()) : std::nullopt;
-      const run::RosFrame f = run::ros_frame(o.camera_id, t + clock, cam, estimate, neighbours_w);
-      if (f.measurement) ros->measurement(*f.measurement);
-      if (f.average_pose) ros->average_pose(*f.average_pose);
-      if (!f.tf.empty()) ros->tf(f.tf);
-    }
+    if (ros) publish_frame(*ros, o.camera_id, t + clock, cam, net);
   }
   // Lock-step neighbours still wait for our last round; async ones take what has arrived (and a
   // killed neighbour would never acknowledge).
@@ -399,69 +491,9 @@ NodeSummary run_node(const fs::path& dataset, const fs::path& out_dir, const Nod
   summary.refused = net.refused();
   summary.seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
 
-  nlohmann::json j;
-  j["camera"] = o.camera_id;
-  j["mode"] = to_string(o.dds.mode);
-  j["domain"] = o.dds.domain;
-  j["frames"] = frames;
-  j["dataset_frames"] = dataset_frames;
-  if (live) {
-    j["image_topic"] = camera->image_topic();
-    j["images_out_of_order"] = camera->out_of_order();  // dropped: stamp not after the last
-  }
-  // What the merge of the run's outputs needs (netvmo merge): the same for every node of a run.
-  j["options"] = {{"estimator", o.run.runner.estimator},
-                  {"k_e", o.run.runner.k_e},
-                  {"k_s", o.run.runner.k_s},
-                  {"error", o.run.runner.error_model},
-                  {"init", run::to_string(o.run.runner.init)},
-                  {"rounds", o.run.runner.rounds}};
-  j["rounds_per_frame"] = summary.substeps;
-  j["seconds"] = summary.seconds;
-  const auto quantile = [&](std::vector<double> v, double q) {
-    if (v.empty()) return 0.0;
-    const auto at = v.begin() + static_cast<std::ptrdiff_t>(q * static_cast<double>(v.size() - 1));
-    std::nth_element(v.begin(), at, v.end());
-    return *at;
-  };
-  j["timing"] = {{"setup_s", setup_s},
-                 {"discovery_s", discovery_s},
-                 {"discovered", discovered},
-                 {"rounds", first_round_us.size() + round_us.size()},
-                 {"round_median_us", quantile(round_us, 0.5)},
-                 {"round_p99_us", quantile(round_us, 0.99)},
-                 {"first_round_median_us", quantile(first_round_us, 0.5)},
-                 {"first_round_p99_us", quantile(first_round_us, 0.99)}};
-  j["messages"] = {{"sent", summary.stats.sent},
-                   {"received", summary.stats.received},
-                   {"dropped", summary.stats.dropped},
-                   {"late", summary.stats.late},
-                   {"foreign", summary.stats.foreign}};
-  nlohmann::json rej;
-  for (size_t v = 1; v < summary.refused.size(); ++v)
-    rej[obs::to_string(static_cast<obs::MessageVerdict>(v))] = summary.refused[v];
-  j["messages"]["rejected"] = rej;
-  j["messages"]["forgotten_stale"] = summary.forgotten;
-  j["messages"]["kernel_drops"] =
-      summary.kernel_drops ? nlohmann::json(*summary.kernel_drops) : nlohmann::json(nullptr);
-  j["first_frame"] = summary.first_frame;
-  j["join_rounds"] = summary.join_rounds;
-  // Each neighbour's clock as this node's exchange measured it (ClockSync; netvmo merge aligns
-  // the nodes' rows with them).
-  nlohmann::json clocks = nlohmann::json::array();
-  for (const int nb : graph.neighbors(self))
-    if (const auto c = transport.clock().offset(nb)) {
-      nlohmann::json e = {{"camera", labels[static_cast<size_t>(nb)]},
-                          {"offset_s", c->offset_s},
-                          {"round_trips", c->round_trips}};
-      e["delay_s"] = c->round_trip() ? nlohmann::json(c->delay_s) : nlohmann::json(nullptr);
-      clocks.push_back(e);
-    }
-  j["clock"] = {{"neighbours", clocks},
-                {"ignored_samples", transport.clock().ignored()},
-                {"emulated_offset_s", clock}};
-  j["warnings"] = summary.warnings;
-  j["notes"] = summary.notes;
+  const nlohmann::json j =
+      node_json(o, summary, frames, dataset_frames, camera ? &*camera : nullptr, times,
+                transport.clock(), graph.neighbors(self), labels, clock);
   io::write_file_atomic(files.json, j.dump(2) + "\n");
   return summary;
 }
