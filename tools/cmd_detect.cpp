@@ -8,27 +8,19 @@
 // the exit code is 0. Dataset-level problems (network.yaml, a missing calibration, no frames for
 // a camera, an unknown camera id) stop before anything is written.
 #include <algorithm>
-#include <array>
-#include <chrono>
 #include <cstdio>
 #include <cstring>
-#include <map>
-#include <opencv2/imgproc.hpp>
-#include <set>
 
 #include "choices.hpp"
 #include "commands.hpp"
 #include "netvmo/pipeline/error.hpp"
-#include "netvmo/pipeline/frontend/front_end.hpp"
 #include "netvmo/pipeline/frontend/photo_recall.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
 #include "netvmo/pipeline/io/image_file.hpp"
 #include "netvmo/pipeline/io/output_dir.hpp"
 #include "netvmo/pipeline/io/truth_io.hpp"
-#include "netvmo/pipeline/progress.hpp"
-#include "netvmo/pipeline/run/camera_step.hpp"
+#include "netvmo/pipeline/run/detect.hpp"
 #include "netvmo/pipeline/sources/dataset.hpp"
-#include "netvmo/pipeline/stopwatch.hpp"
 
 namespace netvmo::tools {
 namespace fs = std::filesystem;
@@ -53,50 +45,32 @@ struct DetectOptions {
   PhotoRecallSettings recall;
 };
 
-struct CameraStats {
-  int frames = 0, images = 0, detected = 0, unreadable = 0;
-  std::map<TargetStatus, int> by_status;  ///< frames per status (detected and every reason)
-  double margin_sum = 0;
-  std::set<int> other_ids;
-};
-
 int column_width(TargetStatus s) {
   return std::max(6, static_cast<int>(std::strlen(to_string(s))));
 }
 
-/// Against the dataset's truth.csv (rendered datasets): recall of fully visible tags by the
-/// narrowest side of their projected black square, and accepted corners more than 1 px off.
-/// truth.csv has the primary tag's corners: with a bundle, the primary's acceptance counts.
-struct TruthTally {
-  static constexpr double kEdges[] = {18, 24, 30, 40};  ///< bins <18, 18-24, 24-30, 30-40, >=40
-  std::array<int, 5> visible{}, detected{};
-  int accepted = 0, off_1px = 0;
-  double max_error = 0.0;
-  void add(const TruthRow& t, const Observation& o) {
-    const bool primary = o.delta && o.slots.front() == 0;
-    if (primary && t.corners) {
-      ++accepted;
-      double e = 0.0;
-      for (size_t k = 0; k < 4; ++k) e = std::max(e, cv::norm(o.corners_px[k] - (*t.corners)[k]));
-      off_1px += e > 1.0;
-      max_error = std::max(max_error, e);
-    }
-    if (!t.in_fov || t.visible_fraction < 0.999 || !t.corners) return;
-    const double side = narrowest_side(*t.corners);
-    size_t bin = 0;
-    while (bin < std::size(kEdges) && side >= kEdges[bin]) ++bin;
-    ++visible[bin];
-    detected[bin] += primary;
-  }
-  void print() const {
-    std::printf("against truth.csv: fully visible tags detected, by narrowest side [px]:");
-    const char* names[] = {"<18", "18-24", "24-30", "30-40", ">=40"};
-    for (size_t b = 0; b < visible.size(); ++b)
-      std::printf(" %s %d/%d", names[b], detected[b], visible[b]);
-    std::printf("; accepted %d, with a corner > 1 px off %d (max %.2f px)\n", accepted, off_1px,
-                max_error);
-  }
-};
+void print_truth_tally(const run::TruthTally& t) {
+  std::printf("against truth.csv: fully visible tags detected, by narrowest side [px]:");
+  const char* names[] = {"<18", "18-24", "24-30", "30-40", ">=40"};
+  for (size_t b = 0; b < t.visible.size(); ++b)
+    std::printf(" %s %d/%d", names[b], t.detected[b], t.visible[b]);
+  std::printf("; accepted %d, with a corner > 1 px off %d (max %.2f px)\n", t.accepted, t.off_1px,
+              t.max_error);
+}
+
+/// The settings of both jobs from the options.
+run::DetectSettings detect_settings(const DetectOptions& o) {
+  run::DetectSettings s;
+  s.detector = o.det;
+  s.tracking = o.tracking;
+  s.keep_going = o.keep_going;
+  s.progress = !o.quiet;
+  return s;
+}
+
+void warn(const std::string& line) {
+  std::fprintf(stderr, "netvmo detect: warning: %s\n", line.c_str());
+}
 
 /// The detector settings the command line's flags and names stand for.
 void apply_detector_flags(DetectOptions& o) {
@@ -113,109 +87,13 @@ int run_detect(DetectOptions o) {
   io::OutputDir out(o.out, "detect");
   Dataset ds = open_dataset(o.dataset, {}, o.keep_going);
   for (const auto& w : ds.warnings) std::fprintf(stderr, "netvmo detect: warning: %s\n", w.c_str());
-  // Several targets: all are decided in one pass (as netvmo run does); the rows report the first.
-  set_targets(o.det, ds.network.targets);
-  const auto& target = ds.network.target();
-  std::set<int> body_ids;
-  for (size_t k = 0; k < target.tag_count(); ++k) body_ids.insert(target.tag_id(k));
-  FrontEnd fe(o.det, o.tracking);
-
   const fs::path out_dir(o.out);
   io::AtomicFile csv(out.path() / "detections.csv");
   csv << kDetectionsHeader << "\n";
-
-  std::vector<CameraStats> stats(ds.cameras.size());
-  std::vector<TrackState> tracks(ds.cameras.size());
-  std::map<std::pair<int, int>, TruthRow> truth;  // (frame, camera) -> row, when truth.csv exists
-  if (fs::exists(fs::path(o.dataset) / "truth.csv"))
-    for (auto& t : read_truth_csv(fs::path(o.dataset) / "truth.csv"))
-      truth[{t.frame, t.camera}] = t;
-  TruthTally tally;
-  double seconds = 0.0;
-  std::vector<std::string> unreadable;
-  Progress progress("detect", ds.frame_count, !o.quiet);
-  std::vector<frontend::Observation> cams;
-  for (int f = 0; f < ds.frame_count; ++f) {
-    for (size_t c = 0; c < ds.cameras.size(); ++c) {
-      CameraStats& st = stats[c];
-      ++st.frames;
-      // The per-camera step of run and node, without PnP: an unreadable image is a blind frame
-      // (reported below, or a warning with --keep-going).
-      cv::Mat img;
-      FrameDetections all;
-      double reading = 0.0;
-      const auto t0 = Clock::now();
-      if (const auto error = run::observe_camera([&] { return ds.read(c, f); }, ds.cameras[c].calib,
-                                                 fe, tracks[c], ds.network.targets, o.keep_going,
-                                                 img, cams, &reading, &all, /*pnp=*/false)) {
-        try {
-          std::rethrow_exception(error);
-        } catch (const InputError& e) {
-          ++st.unreadable;
-          unreadable.push_back(e.what());
-          if (o.keep_going)
-            std::fprintf(stderr, "netvmo detect: warning: %s (camera blind there)\n", e.what());
-        }
-      }
-      seconds += seconds_since(t0) - reading;
-      if (!img.empty()) ++st.images;
-      const Observation& obs = cams.front();
-      if (const auto it = truth.find({f, ds.cameras[c].id}); it != truth.end())
-        tally.add(it->second, obs);
-      for (const auto& d : all.all)
-        if (!body_ids.count(d.id)) st.other_ids.insert(d.id);
-      ++st.by_status[obs.status];
-      if (obs.delta) {
-        ++st.detected;
-        st.margin_sum += obs.margin;
-      }
-      if (!target.bundle.empty()) {
-        // A bundle: one row per tag of the body (primary, then bundle order), each with that
-        // tag's own decision; the camera's delta is 1 when any of its rows has detected = 1.
-        for (size_t k = 0; k < target.tag_count(); ++k) {
-          DetectionRow row;
-          row.frame = f;
-          row.camera = ds.cameras[c].id;
-          row.tag_id = target.tag_id(k);
-          if (k < all.tags.size()) {
-            const TagDecision& d = all.tags[k];
-            row.detected = d.index >= 0;
-            row.status = d.status;
-            row.reason = d.reason;
-            if (row.detected) {
-              row.margin = all.all[static_cast<size_t>(d.index)].margin;
-              row.corners = all.all[static_cast<size_t>(d.index)].corners;
-            }
-          } else {
-            row.status = obs.status;  // not searched (no image)
-            row.reason = obs.reason;
-          }
-          csv << format_detection_row(row) << "\n";
-        }
-        continue;
-      }
-      DetectionRow row;
-      row.frame = f;
-      row.camera = ds.cameras[c].id;
-      row.tag_id = o.det.target_id;
-      row.detected = obs.delta;
-      row.status = obs.status;
-      row.reason = obs.reason;
-      if (obs.delta) {
-        row.margin = obs.margin;
-        row.corners = obs.corners_px;
-      }
-      csv << format_detection_row(row) << "\n";
-    }
-    progress.update(f + 1);
-  }
-  progress.finish();
+  const run::DatasetDetections r = run::detect_dataset(ds, detect_settings(o), csv.stream(), warn);
   csv.commit();
   out.commit();  // complete, even when frames were unreadable (reported below)
-  for (size_t c = 0; c < ds.cameras.size(); ++c)
-    if (tracks[c].resampling)
-      if (auto w = frontend::resampling_warning(ds.cameras[c].id, *tracks[c].resampling))
-        std::fprintf(stderr, "netvmo detect: warning: %s\n", w->c_str());
+  for (const auto& w : r.warnings) warn(w);
 
   std::printf(
       "netvmo detect: %s -> %s (%d frames, target %s id %d%s)\n", o.dataset.c_str(),
@@ -232,7 +110,7 @@ int run_detect(DetectOptions o) {
     if (s != TargetStatus::detected) std::printf(" %*s", column_width(s), to_string(s));
   std::printf(" %10s %10s\n", "other_ids", "unreadable");
   for (size_t c = 0; c < ds.cameras.size(); ++c) {
-    const CameraStats& st = stats[c];
+    const run::CameraDetections& st = r.cameras[c];
     const std::string src = ds.cameras[c].source->label();
     const double rate = st.frames ? 100.0 * st.detected / st.frames : 0.0;
     const double mm = st.detected ? st.margin_sum / st.detected : 0.0;
@@ -246,12 +124,12 @@ int run_detect(DetectOptions o) {
     std::printf(" %10zu %10d\n", st.other_ids.size(), st.unreadable);
   }
   int images = 0;
-  for (const auto& st : stats) images += st.images;
+  for (const auto& st : r.cameras) images += st.images;
   std::printf("front end: %.2f ms per image (mean over %d images)\n",
-              images ? 1e3 * seconds / images : 0.0, images);
-  if (!truth.empty()) tally.print();
-  if (!unreadable.empty() && !o.keep_going)
-    throw InputError(unreadable.front() + " (" + std::to_string(unreadable.size()) +
+              images ? 1e3 * r.front_end_seconds / images : 0.0, images);
+  if (r.has_truth) print_truth_tally(r.truth);
+  if (!r.unreadable.empty() && !o.keep_going)
+    throw InputError(r.unreadable.front() + " (" + std::to_string(r.unreadable.size()) +
                      " unreadable frame(s) in total, treated as blind in detections.csv; "
                      "fix the files or pass --keep-going)");
   return 0;
@@ -269,40 +147,8 @@ int run_detect_photos(DetectOptions o) {
   io::OutputDir out(o.out, "detect");
   io::AtomicFile csv(out.path() / "photos.csv");
   csv << kPhotosHeader << "\n";
-  // libapriltag's decoding table, built once for every photo (evaluate_photo).
-  const auto decoder = std::make_shared<const TagDecoder>(o.det.family, kReferenceBitsCorrected);
-  std::map<fs::path, io::Calibration> calibs;  // a folder's calib.yaml
-  std::map<fs::path, PhotoRecall> by_folder;
-  PhotoRecall total;
-  std::vector<std::string> unreadable;
-  for (const fs::path& f : files) {
-    const fs::path folder = f.parent_path();
-    cv::Mat gray;
-    try {
-      gray = io::read_gray_image(f);
-    } catch (const InputError& e) {
-      unreadable.push_back(e.what());
-      if (o.keep_going)
-        std::fprintf(stderr, "netvmo detect: warning: %s\n", unreadable.back().c_str());
-      continue;
-    }
-    io::Calibration calib = nominal_calibration(gray.cols, gray.rows);
-    if (const fs::path cf = folder / "calib.yaml"; fs::exists(cf)) {
-      if (!calibs.count(folder)) calibs[folder] = load_calibration_yaml(cf);
-      calib = calibs[folder];
-      if (calib.width != gray.cols || calib.height != gray.rows)
-        throw InputError(f.string() + ": " + std::to_string(gray.cols) + "x" +
-                         std::to_string(gray.rows) + " image, but " + cf.string() + " is for " +
-                         std::to_string(calib.width) + "x" + std::to_string(calib.height));
-    }
-    const auto results = evaluate_photo(gray, calib, o.det, o.tracking, o.recall, decoder);
-    // Whether the photo was resampled by nearest neighbour (docs/frontend.md, "Resampled images").
-    const Resampling resampling = measure_resampling(gray);
-    by_folder[folder].add(results, resampling);
-    total.add(results, resampling);
-    const std::string rel = fs::relative(f, root).string();
-    for (const auto& t : results) csv << format_photo_row(rel, t, resampling) << "\n";
-  }
+  const run::PhotoDetections r =
+      run::detect_photos(root, files, detect_settings(o), o.recall, csv.stream(), warn);
   csv.commit();
   out.commit();
   const auto print = [](const std::string& name, const PhotoRecall& r) {
@@ -330,26 +176,26 @@ int run_detect_photos(DetectOptions o) {
               o.recall.min_side_px);
   std::printf("%-32s %6s %9s %6s %8s %6s %8s %8s %8s %s\n", "folder", "photos", "resampled", "tags",
               "eligible", "kept", "recall", "med_px", "max_px", "lost (by reason)");
-  for (const auto& [folder, r] : by_folder) {
+  for (const auto& [folder, f] : r.by_folder) {
     const std::string rel = fs::relative(folder, root).string();
-    print(rel.empty() || rel == "." ? "." : rel, r);
+    print(rel.empty() || rel == "." ? "." : rel, f);
   }
-  print("all", total);
-  if (total.resampled > 0) {
+  print("all", r.total);
+  if (r.total.resampled > 0) {
     std::string where;
-    for (const auto& [folder, r] : by_folder)
-      if (r.resampled > 0) {
+    for (const auto& [folder, f] : r.by_folder)
+      if (f.resampled > 0) {
         const std::string rel = fs::relative(folder, root).string();
         where += (where.empty() ? "" : ", ") + (rel.empty() ? std::string(".") : rel) + " " +
-                 std::to_string(r.resampled) + " of " + std::to_string(r.photos);
+                 std::to_string(f.resampled) + " of " + std::to_string(f.photos);
       }
     std::fprintf(stderr,
                  "warning: %d of %d photos look resampled by nearest neighbour (%s; photos.csv "
                  "repeated_pairs): %s\n",
-                 total.resampled, total.photos, where.c_str(), kResamplingConsequence);
+                 r.total.resampled, r.total.photos, where.c_str(), kResamplingConsequence);
   }
-  if (!unreadable.empty() && !o.keep_going)
-    throw InputError(unreadable.front() + " (" + std::to_string(unreadable.size()) +
+  if (!r.unreadable.empty() && !o.keep_going)
+    throw InputError(r.unreadable.front() + " (" + std::to_string(r.unreadable.size()) +
                      " unreadable image(s) in total, left out of photos.csv; fix the files or "
                      "pass --keep-going)");
   return 0;

@@ -11,7 +11,8 @@
 #   render datasets/paper5_render.yaml: every image, calibration, network.yaml and truth file
 #   run on that rendered dataset (each build on its own rendering):
 #       estimates.csv, energies.csv, errors.csv, summary.json without its "timing" block
-#   detect on that rendered dataset: detections.csv
+#   detect on that rendered dataset: detections.csv and the lines it prints (not the time per
+#       image)
 #   sweep on it (k_s 2,20): sweep.csv, inputs.csv
 #   launch on it (lock-step, one process per camera over loopback DDS): estimates.csv,
 #       energies.csv, errors.csv, summary.json without "timing", every node's node_<id>.csv
@@ -100,7 +101,9 @@ produce() {  # produce NETVMO NAME: outputs in $work/NAME, produced under one co
     --no-overlays --no-plots >/dev/null 2>&1
   "$bin" run "$out/dataset" --out "$out/run_zero_offset" --estimator zero-offset \
     --no-overlays --no-plots >/dev/null 2>&1
-  "$bin" detect "$out/dataset" --out "$out/detect" --quiet >/dev/null
+  # detect's report too, all but its time per image
+  "$bin" detect "$out/dataset" --out "$out/detect" --quiet | grep -v '^front end: .* ms per image' \
+    >"$out/detect.txt"
   "$bin" sweep "$out/dataset" --out "$out/sweep" --ks 2,20 --no-plot >/dev/null 2>&1
   "$bin" launch "$out/dataset" --out "$out/launch" --domain "$domain" --no-overlays --no-plots \
     --timeout 300 >/dev/null 2>&1
