@@ -156,67 +156,136 @@ void check_xml_ends_outside_tags(const std::string& text, const std::string& fil
   if (in_tag) throw InputError(file + ": the XML file ends inside a tag (truncated?)");
 }
 
+// The checks a calibration file's text passes before OpenCV's FileStorage parses it: inputs on
+// which that parser loops for ever or does not return (found by fuzzing).
+void check_calibration_text(const fs::path& path, const std::string& file) {
+  // OpenCV's FileStorage parser can loop for ever on a NUL byte inside the text (found by
+  // fuzzing); calibration files are text.
+  std::ifstream in(path, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (text.find('\0') != std::string::npos)
+    throw InputError(file + ": not a text file (it contains a NUL byte)");
+  // It also loops for ever on a YAML document marker with text after it ("--- a: 1" or
+  // "-----a: 1", then a later line ending in "---"; found by fuzzing). OpenCV writes the marker
+  // alone on its line, so only that form is accepted.
+  // OpenCV reads a file as YAML by its content whatever its name (a "cam_1.xml" starting with
+  // "%YAML" is parsed as YAML), so the checks go by the content: not XML ('<'), not JSON ('{').
+  const size_t lead = text.find_first_not_of(" \t\r\n");
+  const bool yaml = lead != std::string::npos && text[lead] != '<' && text[lead] != '{';
+  size_t line_no = 1;
+  int markers = 0;
+  bool content = false;  // a line of the document seen
+  for (size_t at = 0; at < text.size(); ++line_no) {
+    const size_t end = std::min(text.find('\n', at), text.size());
+    const bool alone = text.find_first_not_of(" \t\r", at + 3) >= end;
+    if (text.compare(at, 3, "---") == 0 && !alone)
+      throw InputError(file + ":" + std::to_string(line_no) +
+                       ": a YAML document marker '---' must stand alone on its line");
+    if (yaml && ((text.compare(at, 3, "---") == 0 && (++markers > 1 || content)) ||
+                 (text.compare(at, 3, "...") == 0 && alone)))
+      throw InputError(file + ":" + std::to_string(line_no) +
+                       ": one YAML document expected (a calibration file has at most one '---', "
+                       "before its first key, and no '...')");
+    const size_t first = text.find_first_not_of(" \t\r", at);
+    if (first < end && text[first] != '#' && text[at] != '%' && text.compare(at, 3, "---") != 0)
+      content = true;
+    at = end + 1;
+  }
+  if (lead != std::string::npos && text[lead] == '<') check_xml_ends_outside_tags(text, file);
+  if (yaml) {
+    check_yaml_indentation(text, file);
+    // Then the whole file must be well-formed YAML (yaml-cpp; the single document the checks
+    // above leave, so its single-document Load sees all of it): OpenCV's own parser does not
+    // return on some malformed files (three kinds found by fuzzing, and more may exist).
+    // OpenCV's "%YAML:1.0" first line is not a YAML 1.2 directive: blanked, keeping line numbers.
+    std::string doc = text;
+    if (!doc.empty() && doc[0] == '%') doc.replace(0, std::min(doc.find('\n'), doc.size()), "");
+    try {
+      // A calibration file's top level is a mapping of keys: a text that yaml-cpp reads as one
+      // multi-line scalar (a first line without ": ", the rest continuing it) hung OpenCV's
+      // parser, which reads the same text as keys and flow collections (found by fuzzing).
+      if (!YAML::Load(doc).IsMap())
+        throw InputError(file +
+                         ": not a calibration file: its top level is not a mapping of keys "
+                         "(e.g. image_width: 640)");
+    } catch (const YAML::Exception& e) {
+      const std::string at = e.mark.is_null() ? "" : ":" + std::to_string(e.mark.line + 1);
+      throw InputError(file + at + ": not well-formed YAML: " + e.msg);
+    }
+  }
+}
+
+// distortion_coefficients (`D`, as read) with lens_model and distortion_model, into c.dist,
+// c.rational and c.fisheye, each checked against the others.
+void read_distortion(const cv::FileStorage& fsr, cv::Mat D, const std::string& file,
+                     Calibration& c) {
+  D.convertTo(D, CV_64F);
+  D = D.reshape(1, 1);
+  const int n = D.empty() ? 0 : D.cols;
+  // lens_model: pinhole (default) or fisheye (cv::fisheye's k1..k4).
+  if (const cv::FileNode lm = fsr["lens_model"]; !lm.empty() && !lm.isNone()) {
+    const std::string model = lm.isString() ? std::string(lm) : std::string("(not a string)");
+    if (model == "fisheye")
+      c.fisheye = true;
+    else if (model != "pinhole")
+      throw InputError(file + ": lens_model: '" + model +
+                       "' is not supported (supported: pinhole, fisheye)");
+    if (c.fisheye && n != 4)
+      throw InputError(file +
+                       ": distortion_coefficients: the fisheye model takes 4 (k1..k4), got " +
+                       std::to_string(n));
+  }
+  if (n != 4 && n != 5 && n != 8 && n != 12 && n != 14)
+    throw InputError(file + ": distortion_coefficients: expected 4, 5 or 8 numbers, got " +
+                     std::to_string(n));
+  // distortion_model (ROS camera_info's key, which some converters also write into OpenCV
+  // files): must agree with the coefficients and lens_model.
+  if (const cv::FileNode dm = fsr["distortion_model"]; !dm.empty() && !dm.isNone()) {
+    const std::string model = dm.isString() ? std::string(dm) : std::string("(not a string)");
+    const char* expected = nullptr;
+    bool ok = false;
+    if (model == "plumb_bob") {
+      ok = !c.fisheye && (n == 4 || n == 5);
+      expected = "4 or 5 pinhole coefficients (k1 k2 p1 p2 [k3])";
+    } else if (model == "rational_polynomial") {
+      ok = !c.fisheye && n == 8;
+      expected = "8 pinhole coefficients (k1 k2 p1 p2 k3 k4 k5 k6)";
+    } else if (model == "equidistant") {
+      ok = n == 4;
+      expected = "4 fisheye coefficients (k1..k4)";
+      if (ok && !c.fisheye && !fsr["lens_model"].empty())
+        throw InputError(file + ": distortion_model: equidistant contradicts lens_model: pinhole");
+      c.fisheye = true;
+    } else {
+      throw InputError(file + ": distortion_model: '" + model +
+                       "' is not supported (supported: plumb_bob, rational_polynomial, "
+                       "equidistant)");
+    }
+    if (!ok)
+      throw InputError(file + ": distortion_coefficients: distortion_model " + model + " takes " +
+                       expected + ", got " + std::to_string(n) +
+                       (c.fisheye && model != "equidistant" ? " with lens_model: fisheye" : ""));
+  }
+  for (int i = 0; i < n; ++i) {
+    const double v = D.at<double>(0, i);
+    if (i < 5)
+      c.dist[i] = v;
+    else if (i < 8)
+      c.rational[i - 5] = v;
+    else if (v != 0.0)
+      throw InputError(file +
+                       ": distortion_coefficients: only the models with 5 (k1 k2 p1 p2 k3) "
+                       "or 8 (+ k4 k5 k6) coefficients are supported; coefficient " +
+                       std::to_string(i) + " is non-zero");
+  }
+}
+
 }  // namespace
 
 Calibration load_calibration_opencv(const fs::path& path) {
   const std::string file = path.string();
   if (!fs::is_regular_file(path)) throw InputError(file + ": calibration file not found");
-  {
-    // OpenCV's FileStorage parser can loop for ever on a NUL byte inside the text (found by
-    // fuzzing); calibration files are text.
-    std::ifstream in(path, std::ios::binary);
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (text.find('\0') != std::string::npos)
-      throw InputError(file + ": not a text file (it contains a NUL byte)");
-    // It also loops for ever on a YAML document marker with text after it ("--- a: 1" or
-    // "-----a: 1", then a later line ending in "---"; found by fuzzing). OpenCV writes the marker
-    // alone on its line, so only that form is accepted.
-    // OpenCV reads a file as YAML by its content whatever its name (a "cam_1.xml" starting with
-    // "%YAML" is parsed as YAML), so the checks go by the content: not XML ('<'), not JSON ('{').
-    const size_t lead = text.find_first_not_of(" \t\r\n");
-    const bool yaml = lead != std::string::npos && text[lead] != '<' && text[lead] != '{';
-    size_t line_no = 1;
-    int markers = 0;
-    bool content = false;  // a line of the document seen
-    for (size_t at = 0; at < text.size(); ++line_no) {
-      const size_t end = std::min(text.find('\n', at), text.size());
-      const bool alone = text.find_first_not_of(" \t\r", at + 3) >= end;
-      if (text.compare(at, 3, "---") == 0 && !alone)
-        throw InputError(file + ":" + std::to_string(line_no) +
-                         ": a YAML document marker '---' must stand alone on its line");
-      if (yaml && ((text.compare(at, 3, "---") == 0 && (++markers > 1 || content)) ||
-                   (text.compare(at, 3, "...") == 0 && alone)))
-        throw InputError(file + ":" + std::to_string(line_no) +
-                         ": one YAML document expected (a calibration file has at most one '---', "
-                         "before its first key, and no '...')");
-      const size_t first = text.find_first_not_of(" \t\r", at);
-      if (first < end && text[first] != '#' && text[at] != '%' && text.compare(at, 3, "---") != 0)
-        content = true;
-      at = end + 1;
-    }
-    if (lead != std::string::npos && text[lead] == '<') check_xml_ends_outside_tags(text, file);
-    if (yaml) {
-      check_yaml_indentation(text, file);
-      // Then the whole file must be well-formed YAML (yaml-cpp; the single document the checks
-      // above leave, so its single-document Load sees all of it): OpenCV's own parser does not
-      // return on some malformed files (three kinds found by fuzzing, and more may exist).
-      // OpenCV's "%YAML:1.0" first line is not a YAML 1.2 directive: blanked, keeping line numbers.
-      std::string doc = text;
-      if (!doc.empty() && doc[0] == '%') doc.replace(0, std::min(doc.find('\n'), doc.size()), "");
-      try {
-        // A calibration file's top level is a mapping of keys: a text that yaml-cpp reads as one
-        // multi-line scalar (a first line without ": ", the rest continuing it) hung OpenCV's
-        // parser, which reads the same text as keys and flow collections (found by fuzzing).
-        if (!YAML::Load(doc).IsMap())
-          throw InputError(file +
-                           ": not a calibration file: its top level is not a mapping of keys "
-                           "(e.g. image_width: 640)");
-      } catch (const YAML::Exception& e) {
-        const std::string at = e.mark.is_null() ? "" : ":" + std::to_string(e.mark.line + 1);
-        throw InputError(file + at + ": not well-formed YAML: " + e.msg);
-      }
-    }
-  }
+  check_calibration_text(path, file);
   Calibration c;
   c.source = file;
   try {
@@ -238,67 +307,9 @@ Calibration load_calibration_opencv(const fs::path& path) {
     K.convertTo(K, CV_64F);
     for (int r = 0; r < 3; ++r)
       for (int col = 0; col < 3; ++col) c.K(r, col) = K.at<double>(r, col);
-    cv::Mat D = read_matrix(need("distortion_coefficients"), file, "distortion_coefficients", 14);
-    D.convertTo(D, CV_64F);
-    D = D.reshape(1, 1);
-    const int n = D.empty() ? 0 : D.cols;
-    // lens_model: pinhole (default) or fisheye (cv::fisheye's k1..k4).
-    if (const cv::FileNode lm = fsr["lens_model"]; !lm.empty() && !lm.isNone()) {
-      const std::string model = lm.isString() ? std::string(lm) : std::string("(not a string)");
-      if (model == "fisheye")
-        c.fisheye = true;
-      else if (model != "pinhole")
-        throw InputError(file + ": lens_model: '" + model +
-                         "' is not supported (supported: pinhole, fisheye)");
-      if (c.fisheye && n != 4)
-        throw InputError(file +
-                         ": distortion_coefficients: the fisheye model takes 4 (k1..k4), got " +
-                         std::to_string(n));
-    }
-    if (n != 4 && n != 5 && n != 8 && n != 12 && n != 14)
-      throw InputError(file + ": distortion_coefficients: expected 4, 5 or 8 numbers, got " +
-                       std::to_string(n));
-    // distortion_model (ROS camera_info's key, which some converters also write into OpenCV
-    // files): must agree with the coefficients and lens_model.
-    if (const cv::FileNode dm = fsr["distortion_model"]; !dm.empty() && !dm.isNone()) {
-      const std::string model = dm.isString() ? std::string(dm) : std::string("(not a string)");
-      const char* expected = nullptr;
-      bool ok = false;
-      if (model == "plumb_bob") {
-        ok = !c.fisheye && (n == 4 || n == 5);
-        expected = "4 or 5 pinhole coefficients (k1 k2 p1 p2 [k3])";
-      } else if (model == "rational_polynomial") {
-        ok = !c.fisheye && n == 8;
-        expected = "8 pinhole coefficients (k1 k2 p1 p2 k3 k4 k5 k6)";
-      } else if (model == "equidistant") {
-        ok = n == 4;
-        expected = "4 fisheye coefficients (k1..k4)";
-        if (ok && !c.fisheye && !fsr["lens_model"].empty())
-          throw InputError(file +
-                           ": distortion_model: equidistant contradicts lens_model: pinhole");
-        c.fisheye = true;
-      } else {
-        throw InputError(file + ": distortion_model: '" + model +
-                         "' is not supported (supported: plumb_bob, rational_polynomial, "
-                         "equidistant)");
-      }
-      if (!ok)
-        throw InputError(file + ": distortion_coefficients: distortion_model " + model + " takes " +
-                         expected + ", got " + std::to_string(n) +
-                         (c.fisheye && model != "equidistant" ? " with lens_model: fisheye" : ""));
-    }
-    for (int i = 0; i < n; ++i) {
-      const double v = D.at<double>(0, i);
-      if (i < 5)
-        c.dist[i] = v;
-      else if (i < 8)
-        c.rational[i - 5] = v;
-      else if (v != 0.0)
-        throw InputError(file +
-                         ": distortion_coefficients: only the models with 5 (k1 k2 p1 p2 k3) "
-                         "or 8 (+ k4 k5 k6) coefficients are supported; coefficient " +
-                         std::to_string(i) + " is non-zero");
-    }
+    read_distortion(
+        fsr, read_matrix(need("distortion_coefficients"), file, "distortion_coefficients", 14),
+        file, c);
   } catch (const cv::Exception& e) {
     throw InputError(file + ": cannot parse calibration: " + e.err);
   } catch (const InputError&) {
