@@ -51,9 +51,8 @@ int column_width(TargetStatus s) {
 
 void print_truth_tally(const run::TruthTally& t) {
   std::printf("against truth.csv: fully visible tags detected, by narrowest side [px]:");
-  const char* names[] = {"<18", "18-24", "24-30", "30-40", ">=40"};
   for (size_t b = 0; b < t.visible.size(); ++b)
-    std::printf(" %s %d/%d", names[b], t.detected[b], t.visible[b]);
+    std::printf(" %s %d/%d", run::TruthTally::bin_label(b).c_str(), t.detected[b], t.visible[b]);
   std::printf("; accepted %d, with a corner > 1 px off %d (max %.2f px)\n", t.accepted, t.off_1px,
               t.max_error);
 }
@@ -86,7 +85,7 @@ int run_detect(DetectOptions o) {
   io::check_output_apart(o.out, o.dataset);
   io::OutputDir out(o.out, "detect");
   Dataset ds = open_dataset(o.dataset, {}, o.keep_going);
-  for (const auto& w : ds.warnings) std::fprintf(stderr, "netvmo detect: warning: %s\n", w.c_str());
+  for (const auto& w : ds.warnings) warn(w);
   const fs::path out_dir(o.out);
   io::AtomicFile csv(out.path() / "detections.csv");
   csv << kDetectionsHeader << "\n";

@@ -69,8 +69,7 @@ std::vector<PhotoTagResult> evaluate_photo(const cv::Mat& gray, const io::Calibr
                                            const TrackingSettings& tracking,
                                            const PhotoRecallSettings& recall,
                                            std::shared_ptr<const TagDecoder> decoder) {
-  if (!decoder || !decoder->decodes(settings.family, kReferenceBitsCorrected))
-    decoder = std::make_shared<const TagDecoder>(settings.family, kReferenceBitsCorrected);
+  decoder = TagDecoder::shared_or_new(std::move(decoder), settings.family, kReferenceBitsCorrected);
   const std::vector<ReferenceTag> refs = reference_detections(gray, *decoder);
   std::vector<PhotoTagResult> out;
   if (refs.empty()) return out;

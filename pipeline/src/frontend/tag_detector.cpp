@@ -44,6 +44,12 @@ TagDecoder::TagDecoder(const std::string& family, int bits_corrected)
   }
 }
 
+std::shared_ptr<const TagDecoder> TagDecoder::shared_or_new(
+    std::shared_ptr<const TagDecoder> shared, const std::string& family, int bits_corrected) {
+  if (shared && shared->decodes(family, bits_corrected)) return shared;
+  return std::make_shared<const TagDecoder>(family, bits_corrected);
+}
+
 TagDecoder::~TagDecoder() {
   apriltag_detector_destroy(owner_);  // frees the table, before the family
 }
@@ -99,9 +105,7 @@ struct TagDetector::Impl {
   Impl(DetectorSettings settings, std::shared_ptr<const TagDecoder> shared)
       : s(std::move(settings)) {
     validate(s);
-    decoder = shared && shared->decodes(s.family, s.bits_corrected)
-                  ? std::move(shared)
-                  : std::make_shared<const TagDecoder>(s.family, s.bits_corrected);
+    decoder = TagDecoder::shared_or_new(std::move(shared), s.family, s.bits_corrected);
     td = create_apriltag_detector(*decoder, s);
     patterns.push_back(tag_pattern(s.family, s.target_id));
     for (int id : s.bundle_ids) patterns.push_back(tag_pattern(s.family, id));

@@ -1,6 +1,7 @@
 #include "netvmo/pipeline/run/detect.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <memory>
 #include <opencv2/core.hpp>
 
@@ -31,6 +32,18 @@ void TruthTally::add(const io::TruthRow& t, const Observation& o) {
   while (bin < std::size(kEdges) && side >= kEdges[bin]) ++bin;
   ++visible[bin];
   detected[bin] += primary;
+}
+
+std::string TruthTally::bin_label(size_t b) {
+  const auto edge = [](size_t k) {
+    char s[32];
+    std::snprintf(s, sizeof s, "%g", kEdges[k]);
+    return std::string(s);
+  };
+  const size_t n = std::size(kEdges);
+  if (b == 0) return "<" + edge(0);
+  if (b >= n) return ">=" + edge(n - 1);
+  return edge(b - 1) + "-" + edge(b);
 }
 
 DatasetDetections detect_dataset(sources::Dataset& ds, const DetectSettings& s, std::ostream& rows,
@@ -131,10 +144,12 @@ DatasetDetections detect_dataset(sources::Dataset& ds, const DetectSettings& s, 
   return out;
 }
 
-PhotoDetections detect_photos(const fs::path& root, const std::vector<fs::path>& files,
-                              const DetectSettings& s, const frontend::PhotoRecallSettings& recall,
-                              std::ostream& rows,
-                              const std::function<void(const std::string&)>& warn) {
+PhotoDetections detect_photos(
+    const fs::path& root, const std::vector<fs::path>& files, const DetectSettings& s,
+    const frontend::PhotoRecallSettings& recall, std::ostream& rows,
+    const std::function<void(const std::string&)>& warn,
+    const std::function<void(const fs::path& photo,
+                             const std::vector<frontend::PhotoTagResult>& tags)>& on_photo) {
   // libapriltag's decoding table, built once for every photo (evaluate_photo).
   const auto decoder = std::make_shared<const frontend::TagDecoder>(
       s.detector.family, frontend::kReferenceBitsCorrected);
@@ -167,6 +182,7 @@ PhotoDetections detect_photos(const fs::path& root, const std::vector<fs::path>&
     out.total.add(results, resampling);
     const std::string rel = fs::relative(f, root).string();
     for (const auto& t : results) rows << frontend::format_photo_row(rel, t, resampling) << "\n";
+    if (on_photo) on_photo(f, results);
   }
   return out;
 }

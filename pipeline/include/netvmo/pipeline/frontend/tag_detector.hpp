@@ -55,6 +55,11 @@ class TagDecoder {
   bool decodes(const std::string& family, int bits_corrected) const {
     return family == name_ && bits_corrected == bits_;
   }
+  /// `shared` where it is given and decodes `family` correcting `bits_corrected` bits, else a
+  /// new decoder of those.
+  static std::shared_ptr<const TagDecoder> shared_or_new(std::shared_ptr<const TagDecoder> shared,
+                                                         const std::string& family,
+                                                         int bits_corrected);
   apriltag_family* family() const { return family_.get(); }
 
  private:

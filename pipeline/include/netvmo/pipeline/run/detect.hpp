@@ -8,6 +8,7 @@
 #include <array>
 #include <filesystem>
 #include <functional>
+#include <iterator>
 #include <map>
 #include <ostream>
 #include <set>
@@ -36,10 +37,12 @@ struct DetectSettings {
 /// primary tag's corners: with a bundle, the primary's acceptance counts.
 struct TruthTally {
   static constexpr double kEdges[] = {18, 24, 30, 40};  ///< bins <18, 18-24, 24-30, 30-40, >=40
-  std::array<int, 5> visible{}, detected{};
+  std::array<int, std::size(kEdges) + 1> visible{}, detected{};
   int accepted = 0, off_1px = 0;
   double max_error = 0.0;
   void add(const io::TruthRow& t, const frontend::Observation& o);
+  /// Bin b's range of sides [px] from kEdges: "<18", "18-24", ..., ">=40".
+  static std::string bin_label(size_t b);
 };
 
 /// One camera's figures over a dataset.
@@ -77,11 +80,13 @@ struct PhotoDetections {
 /// Every photo of `files` (below `root`, io::list_images) through frontend::evaluate_photo, with
 /// one libapriltag decoding table for all. A folder's calib.yaml is its photos' camera (else a
 /// nominal one); a photo of another size than it is an InputError. Writes photos.csv's rows (not
-/// its header) to `rows`, each photo named relative to `root`.
-PhotoDetections detect_photos(const std::filesystem::path& root,
-                              const std::vector<std::filesystem::path>& files,
-                              const DetectSettings& s, const frontend::PhotoRecallSettings& recall,
-                              std::ostream& rows,
-                              const std::function<void(const std::string&)>& warn);
+/// its header) to `rows`, each photo named relative to `root`; `on_photo`, when given, gets each
+/// photo's results too.
+PhotoDetections detect_photos(
+    const std::filesystem::path& root, const std::vector<std::filesystem::path>& files,
+    const DetectSettings& s, const frontend::PhotoRecallSettings& recall, std::ostream& rows,
+    const std::function<void(const std::string&)>& warn,
+    const std::function<void(const std::filesystem::path& photo,
+                             const std::vector<frontend::PhotoTagResult>& tags)>& on_photo = {});
 
 }  // namespace netvmo::run
