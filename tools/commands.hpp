@@ -46,6 +46,7 @@ void add_launch(CLI::App& app, int& exit_code);
 void add_merge(CLI::App& app, int& exit_code);  // cmd_launch.cpp
 void add_security(CLI::App& app, int& exit_code);
 void add_calibrate(CLI::App& app, int& exit_code);
+void add_trajectories(CLI::App& app, int& exit_code);
 /// The async options shared by `node` and `launch` (cmd_node.cpp).
 void add_async_options(CLI::App& cmd, double& speed, double& stale, double& drop, double& delay,
                        std::uint64_t& seed);

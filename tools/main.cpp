@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   netvmo::tools::add_calibrate(app, exit_code);
   netvmo::tools::add_run(app, exit_code);
   netvmo::tools::add_sweep(app, exit_code);
+  netvmo::tools::add_trajectories(app, exit_code);
   netvmo::tools::add_demo(app, exit_code);
   netvmo::tools::add_bench(app, exit_code);
   netvmo::tools::add_node(app, exit_code);

@@ -382,6 +382,11 @@ TEST_F(Async, CamerasAtDifferentRatesConverge) {
     }
   }
   for (const auto& [id, ts] : expected_t) EXPECT_EQ(count[id], static_cast<int>(ts.size()));
+  // The files' t = 0 is the earliest image's time (summary.json's time_origin_s); run's, 0.
+  double first = INFINITY;
+  for (const auto& [id, ts] : expected_t) first = std::min(first, ts.front());
+  EXPECT_DOUBLE_EQ(net_test::read_json(out / "summary.json")["time_origin_s"].get<double>(), first);
+  EXPECT_EQ(run_summary["time_origin_s"].get<double>(), 0.0);
   const auto err = net_test::read_csv(out / "errors.csv");
   ASSERT_EQ(err.size(), 1u + kFrames);
   for (int k = 0; k < kFrames; ++k)

@@ -351,8 +351,58 @@ std::vector<CameraTruthRow> read_truth_cameras_csv(const fs::path& file) {
 }
 
 std::string target_truth_file(const NetworkConfig& net, size_t target) {
-  return target == 0 ? "target.csv"
-                     : "target_" + std::to_string(net.targets.at(target).id) + ".csv";
+  return target_truth_file(net.targets.at(target).id, target == 0);
+}
+
+std::string target_truth_file(int tag_id, bool primary) {
+  return primary ? "target.csv" : "target_" + std::to_string(tag_id) + ".csv";
+}
+
+std::vector<EstimateRow> read_estimates_csv(const fs::path& file) {
+  std::string header;
+  {
+    std::ifstream in(file);
+    if (!in) throw InputError(file.string() + ": cannot open (missing or unreadable)");
+    if (!std::getline(in, header))
+      throw InputError(file.string() + ": empty file, expected header");
+    if (!header.empty() && header.back() == '\r') header.pop_back();
+  }
+  const bool simulation = header == kSimulationEstimatesHeader;
+  const bool targets = header == kEstimatesTargetsHeader;
+  if (!simulation && !targets && header != kEstimatesHeader)
+    throw InputError(file.string() + ":1: unexpected header '" + header + "', expected '" +
+                     kEstimatesHeader + "', '" + kEstimatesTargetsHeader + "' or '" +
+                     kSimulationEstimatesHeader + "'");
+  std::vector<EstimateRow> rows;
+  read_csv(file, header.c_str(), [&](const auto& f, const auto& names, const std::string& where) {
+    EstimateRow r;
+    size_t i = 0;
+    if (!simulation) r.frame = integer(f, names, i++, where);
+    r.t = num(f, names, i++, where);
+    if (targets) r.target = integer(f, names, i++, where);
+    r.camera = integer(f, names, i, where);
+    if (r.camera <= 0)
+      throw InputError(where + ": camera: expected a positive camera id, got '" + f[i] + "'");
+    ++i;
+    if (!simulation) r.delta = flag(f, names, i++, where);
+    size_t empty = 0;
+    for (size_t k = i; k < i + 6; ++k) empty += f[k].empty();
+    if (empty > 0 && empty < 6) {
+      size_t k = i;
+      while (!f[k].empty()) ++k;
+      throw InputError(where + ": " + names[k] +
+                       ": empty while other columns of the pose are given (all six of px..rz, "
+                       "or none)");
+    }
+    if (empty == 0)
+      r.g_w = obs::make_pose(obs::Vec3(num(f, names, i, where), num(f, names, i + 1, where),
+                                       num(f, names, i + 2, where)),
+                             obs::Vec3(num(f, names, i + 3, where), num(f, names, i + 4, where),
+                                       num(f, names, i + 5, where)));
+    r.line = std::stoi(where.substr(where.rfind(':') + 1));
+    rows.push_back(r);
+  });
+  return rows;
 }
 
 }  // namespace netvmo::io

@@ -5,6 +5,7 @@
 #include "netvmo/pipeline/run/flips.hpp"
 
 #include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/io/truth_io.hpp"
 
 namespace netvmo::run {
 namespace fs = std::filesystem;
@@ -58,6 +59,7 @@ json run_summary(const sources::NetworkSource& source, const ImageRunSettings& o
   s["dataset"] = source.name();
   s["frames"] = h.size();
   s["fps"] = net.fps;
+  s["time_origin_s"] = result.time_origin_s;  // the dataset time of t = 0 in the files
   s["estimator"] = options.runner.estimator;
   s["k_e"] = options.runner.k_e;
   s["k_s"] = options.runner.k_s;
@@ -246,7 +248,7 @@ json write_run_outputs(const fs::path& dir, const sources::NetworkSource& source
   const std::string target_col = several ? ",target" : "";
   {
     io::AtomicFile f(dir / "estimates.csv");
-    f << "frame,t" << target_col << ",camera,delta,px,py,pz,rx,ry,rz\n";
+    f << (several ? io::kEstimatesTargetsHeader : io::kEstimatesHeader) << '\n';
     const auto row = [&](int frame, double t, size_t j, size_t i, bool delta, bool initialized,
                          const obs::SE3& est_w) {
       f << frame << ',' << t << target_cell(j) << ',' << net.cameras[i].id << ','

@@ -8,6 +8,7 @@
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
 #include "netvmo/pipeline/io/network_config.hpp"
+#include "netvmo/pipeline/io/truth_io.hpp"
 #include "netvmo/pipeline/io/yaml_reader.hpp"
 
 namespace netvmo::sim {
@@ -190,7 +191,7 @@ void write_outputs(const SimScenario& s, const SimResult& r, const fs::path& dir
     // First element of xi_bar sin(theta_bar) of each world-frame estimate (the paper's Fig. 6),
     // one column per camera.
     io::AtomicFile ori(dir / "orientation_x.csv");
-    est << "t,camera,px,py,pz,rx,ry,rz\n";
+    est << io::kSimulationEstimatesHeader << '\n';
     ori << 't';
     for (const auto& c : s.cameras) ori << ",camera " << c.id;
     ori << '\n';

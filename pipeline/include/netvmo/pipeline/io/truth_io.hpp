@@ -16,6 +16,9 @@
 //               the reason the target was not used), reason the same in words (empty when
 //               detected); margin and corners empty when detected = 0
 //
+// And one file of the results: estimates.csv (netvmo run, demo, launch, merge, simulate), each
+// camera's estimate of the average target pose in the world, read back by netvmo trajectories.
+//
 // The header must match exactly; every error is an InputError "<file>:<line>: <column>: ...".
 #pragma once
 
@@ -130,6 +133,33 @@ std::string format_truth_row(const render::FrameTruth& t);
 /// target_<id>.csv (id: its primary tag's; the same columns) for a later one of network.yaml's
 /// `targets:`.
 std::string target_truth_file(const NetworkConfig& net, size_t target);
+
+/// The ground-truth file of the target whose primary tag is `tag_id` (target_truth_file's rule
+/// by the id: `primary` for the first of network.yaml's targets).
+std::string target_truth_file(int tag_id, bool primary);
+
+/// estimates.csv of a run on images (run, demo, launch, merge): one row per camera and frame (or
+/// per camera image, cameras on their own clocks), with a `target` column (the target's primary
+/// tag id) when the run had several targets; the pose (position, rotation vector of R_wo) empty
+/// while the camera has no estimate.
+inline constexpr const char* kEstimatesHeader = "frame,t,camera,delta,px,py,pz,rx,ry,rz";
+inline constexpr const char* kEstimatesTargetsHeader =
+    "frame,t,target,camera,delta,px,py,pz,rx,ry,rz";
+/// estimates.csv of netvmo simulate: t,camera and the pose.
+inline constexpr const char* kSimulationEstimatesHeader = "t,camera,px,py,pz,rx,ry,rz";
+struct EstimateRow {
+  int frame = -1;   ///< -1: not in the file (simulate)
+  double t = 0.0;   ///< [s]
+  int target = -1;  ///< the target's primary tag id; -1: one target (no target column)
+  int camera = 0;
+  bool delta = false;           ///< the camera detected the target (false where not in the file)
+  std::optional<obs::SE3> g_w;  ///< the camera's estimate g_bar_w,i; empty: none yet
+  int line = 0;                 ///< in the file, for messages
+};
+/// Reads estimates.csv in any of its three forms (by its header). Errors name the file, line and
+/// column: a header that is none of the three, a field that is not a number, a camera id <= 0,
+/// a pose given in part.
+std::vector<EstimateRow> read_estimates_csv(const std::filesystem::path& file);
 
 /// One target.csv line (without newline): position and rotation vector with 9 digits.
 std::string format_target_row(int frame, double t, const obs::SE3& g_wo);
