@@ -6,7 +6,7 @@
 // the time in seconds, the position in metres and the orientation as a unit quaternion (Hamilton,
 // scalar last, qw >= 0), the pose being the target's in the world frame (g_wo, DESIGN.md's
 // frames). One file per camera (its estimate g_bar_w,i over the frames it has one) and, from the
-// dataset's ground truth (target.csv), the true target pose, with the same times, so that
+// dataset's ground truth (target.csv), the true target pose, on the same clock, so that
 //
 //   evo_ape tum truth.txt cam_1.txt
 //
