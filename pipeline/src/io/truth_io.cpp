@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <initializer_list>
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
@@ -31,18 +32,24 @@ std::vector<std::string> split(const std::string& line) {
   return out;
 }
 
-/// Reads a CSV with an exact header and calls `row(fields, fail)` for each non-empty line.
+/// Reads a CSV whose header is exactly one of `headers` and calls `row(fields, names, where)`
+/// for each non-empty line, `names` being the matched header's columns.
 template <class F>
-void read_csv(const fs::path& file, const char* header, F row) {
+void read_csv(const fs::path& file, std::initializer_list<const char*> headers, F row) {
   std::ifstream in(file);
   if (!in) throw InputError(file.string() + ": cannot open (missing or unreadable)");
   std::string line;
   if (!std::getline(in, line)) throw InputError(file.string() + ": empty file, expected header");
   if (!line.empty() && line.back() == '\r') line.pop_back();
-  if (line != header)
-    throw InputError(file.string() + ":1: unexpected header '" + line + "', expected '" + header +
+  const auto match =
+      std::find_if(headers.begin(), headers.end(), [&](const char* h) { return line == h; });
+  if (match == headers.end()) {
+    std::string expected;
+    for (const char* h : headers) expected += std::string(expected.empty() ? "" : "' or '") + h;
+    throw InputError(file.string() + ":1: unexpected header '" + line + "', expected '" + expected +
                      "'");
-  const auto names = split(header);
+  }
+  const auto names = split(*match);
   int lineno = 1;
   while (std::getline(in, line)) {
     ++lineno;
@@ -54,6 +61,11 @@ void read_csv(const fs::path& file, const char* header, F row) {
                        std::to_string(fields.size()));
     row(fields, names, where);
   }
+}
+
+template <class F>
+void read_csv(const fs::path& file, const char* header, F row) {
+  read_csv(file, {header}, row);
 }
 
 double num(const std::vector<std::string>& f, const std::vector<std::string>& names, size_t i,
@@ -359,49 +371,38 @@ std::string target_truth_file(int tag_id, bool primary) {
 }
 
 std::vector<EstimateRow> read_estimates_csv(const fs::path& file) {
-  std::string header;
-  {
-    std::ifstream in(file);
-    if (!in) throw InputError(file.string() + ": cannot open (missing or unreadable)");
-    if (!std::getline(in, header))
-      throw InputError(file.string() + ": empty file, expected header");
-    if (!header.empty() && header.back() == '\r') header.pop_back();
-  }
-  const bool simulation = header == kSimulationEstimatesHeader;
-  const bool targets = header == kEstimatesTargetsHeader;
-  if (!simulation && !targets && header != kEstimatesHeader)
-    throw InputError(file.string() + ":1: unexpected header '" + header + "', expected '" +
-                     kEstimatesHeader + "', '" + kEstimatesTargetsHeader + "' or '" +
-                     kSimulationEstimatesHeader + "'");
   std::vector<EstimateRow> rows;
-  read_csv(file, header.c_str(), [&](const auto& f, const auto& names, const std::string& where) {
-    EstimateRow r;
-    size_t i = 0;
-    if (!simulation) r.frame = integer(f, names, i++, where);
-    r.t = num(f, names, i++, where);
-    if (targets) r.target = integer(f, names, i++, where);
-    r.camera = integer(f, names, i, where);
-    if (r.camera <= 0)
-      throw InputError(where + ": camera: expected a positive camera id, got '" + f[i] + "'");
-    ++i;
-    if (!simulation) r.delta = flag(f, names, i++, where);
-    size_t empty = 0;
-    for (size_t k = i; k < i + 6; ++k) empty += f[k].empty();
-    if (empty > 0 && empty < 6) {
-      size_t k = i;
-      while (!f[k].empty()) ++k;
-      throw InputError(where + ": " + names[k] +
-                       ": empty while other columns of the pose are given (all six of px..rz, "
-                       "or none)");
-    }
-    if (empty == 0)
-      r.g_w = obs::make_pose(obs::Vec3(num(f, names, i, where), num(f, names, i + 1, where),
-                                       num(f, names, i + 2, where)),
-                             obs::Vec3(num(f, names, i + 3, where), num(f, names, i + 4, where),
-                                       num(f, names, i + 5, where)));
-    r.line = std::stoi(where.substr(where.rfind(':') + 1));
-    rows.push_back(r);
-  });
+  read_csv(
+      file, {kEstimatesHeader, kEstimatesTargetsHeader, kSimulationEstimatesHeader},
+      [&](const auto& f, const std::vector<std::string>& names, const std::string& where) {
+        const bool simulation = names.front() == "t", targets = names[2] == "target";
+        EstimateRow r;
+        size_t i = 0;
+        if (!simulation) r.frame = integer(f, names, i++, where);
+        r.t = num(f, names, i++, where);
+        if (targets) r.target = integer(f, names, i++, where);
+        r.camera = integer(f, names, i, where);
+        if (r.camera <= 0)
+          throw InputError(where + ": camera: expected a positive camera id, got '" + f[i] + "'");
+        ++i;
+        if (!simulation) r.delta = flag(f, names, i++, where);
+        size_t empty = 0;
+        for (size_t k = i; k < i + 6; ++k) empty += f[k].empty();
+        if (empty > 0 && empty < 6) {
+          size_t k = i;
+          while (!f[k].empty()) ++k;
+          throw InputError(where + ": " + names[k] +
+                           ": empty while other columns of the pose are given (all six of px..rz, "
+                           "or none)");
+        }
+        if (empty == 0)
+          r.g_w = obs::make_pose(obs::Vec3(num(f, names, i, where), num(f, names, i + 1, where),
+                                           num(f, names, i + 2, where)),
+                                 obs::Vec3(num(f, names, i + 3, where), num(f, names, i + 4, where),
+                                           num(f, names, i + 5, where)));
+        r.line = std::stoi(where.substr(where.rfind(':') + 1));
+        rows.push_back(r);
+      });
   return rows;
 }
 
