@@ -108,6 +108,8 @@ TEST(Cli, ACameraOfResampledFramesIsWarnedAboutOnce) {
   EXPECT_EQ(count(r.err), 1) << r.err;
   const std::string summary = slurp(dir / "run" / "summary.json");
   EXPECT_EQ(count(summary), 1) << summary;
+  // One clock: the files' t is frame / fps (docs/images.md, summary.json's time_origin_s).
+  EXPECT_NE(summary.find("\"time_origin_s\": null"), std::string::npos) << summary;
   EXPECT_NE(summary.find("camera 2: " + warning), std::string::npos);
   EXPECT_EQ(summary.find("camera 1: " + warning), std::string::npos);
 }

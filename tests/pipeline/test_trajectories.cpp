@@ -172,6 +172,19 @@ TEST(Trajectories, EveryCameraWithAnEstimateAndTheTruthReadBack) {
   const auto shifted = read_tum(f.out / "truth.txt");
   ASSERT_EQ(shifted.size(), rows.size());
   for (size_t k = 0; k < rows.size(); ++k) expect_pose(shifted[k], rows[k].t - 0.05, rows[k].g_wo);
+  // Results on one clock (time_origin_s null): t = frame / fps, whatever times the dataset lists
+  // (here 10 s later than that).
+  test::write_text(f.results / "summary.json", "{\"time_origin_s\": null, \"fps\": 30}\n");
+  std::string later = std::string(io::kTargetHeader) + "\n";
+  for (const auto& r : rows) later += io::format_target_row(r.frame, r.t + 10.0, r.g_wo) + "\n";
+  test::write_text(f.dataset / "target.csv", later);
+  fs::remove_all(f.out);
+  fs::create_directories(f.out);
+  write_trajectories(f.results, f.dataset, f.out);
+  const auto by_frame = read_tum(f.out / "truth.txt");
+  ASSERT_EQ(by_frame.size(), rows.size());
+  for (size_t k = 0; k < rows.size(); ++k)
+    expect_pose(by_frame[k], rows[k].frame / 30.0, rows[k].g_wo);
   // Without a dataset, no truth.
   fs::remove_all(f.out);
   fs::create_directories(f.out);
@@ -258,6 +271,9 @@ TEST(Trajectories, BadInputNamesFileLineAndColumnAndWritesNothing) {
   test::write_text(summary, "{\"time_origin_s\": \"soon\"}");
   test::expect_input_error([&] { write_trajectories(f.results, f.dataset, f.out); },
                            {summary.string(), "time_origin_s", "soon"});
+  test::write_text(summary, "{\"time_origin_s\": null}");
+  test::expect_input_error([&] { write_trajectories(f.results, f.dataset, f.out); },
+                           {summary.string(), "fps:"});
   test::write_text(summary, "{\"time_origin_s\": ");
   test::expect_input_error([&] { write_trajectories(f.results, f.dataset, f.out); },
                            {summary.string(), "not a JSON object"});

@@ -176,7 +176,7 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& source,
     grid = run::time_grid(source, frames);
   }
   const double t0 = own_clocks ? grid.t0 : 0.0;
-  result.time_origin_s = t0;
+  if (own_clocks) result.time_origin_s = t0;
   if (own_clocks) {
     result.source_frames.assign(static_cast<size_t>(frames), std::vector<int>(n, -1));
     for (size_t i = 0; i < n; ++i) {

@@ -373,6 +373,7 @@ void run_union(Pipeline& p, const FrameHook& hook, ImageRunResult& result) {
     return a.t < b.t || (a.t == b.t && a.camera < b.camera);
   });
   result.union_of_timestamps = true;
+  result.time_origin_s = 0.0;  // the images' own times
   result.source_frames.assign(static_cast<size_t>(grid.frames), std::vector<int>(n, -1));
 
   const bool moving = source.cameras_move();

@@ -59,7 +59,8 @@ json run_summary(const sources::NetworkSource& source, const ImageRunSettings& o
   s["dataset"] = source.name();
   s["frames"] = h.size();
   s["fps"] = net.fps;
-  s["time_origin_s"] = result.time_origin_s;  // the dataset time of t = 0 in the files
+  // The files' clock: t = the dataset's time less this, or (null) t = frame / fps.
+  s["time_origin_s"] = result.time_origin_s ? json(*result.time_origin_s) : json(nullptr);
   s["estimator"] = options.runner.estimator;
   s["k_e"] = options.runner.k_e;
   s["k_s"] = options.runner.k_s;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 
@@ -48,20 +49,34 @@ void append(Pending& p, double t, const obs::SE3& g, const std::string& where) {
   p.last_where = where;
 }
 
-// summary.json's time_origin_s: the dataset time of the results' t = 0 (0 without the file or
-// the key: results that keep the dataset's times, or simulate's, which has no dataset).
-double time_origin(const fs::path& results) {
+// The results' clock, from their summary.json: where a dataset time t of target.csv's row of
+// frame f falls on it. time_origin_s a number: t less it (cameras on their own clocks); null:
+// f / fps (one clock). Without the file or the key (simulate's results, or written before the
+// key existed), t itself.
+std::function<double(int, double)> results_clock(const fs::path& results) {
+  const auto as_is = [](int, double t) { return t; };
   const fs::path file = results / "summary.json";
   std::ifstream in(file);
-  if (!in) return 0.0;
+  if (!in) return as_is;
   const nlohmann::json j = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
   if (j.is_discarded() || !j.is_object()) throw InputError(file.string() + ": not a JSON object");
-  if (!j.contains("time_origin_s")) return 0.0;
+  if (!j.contains("time_origin_s")) return as_is;
   const nlohmann::json& v = j["time_origin_s"];
+  if (v.is_null()) {
+    const nlohmann::json fps = j.value("fps", nlohmann::json());
+    if (!fps.is_number() || !(fps.get<double>() > 0))
+      throw InputError(file.string() +
+                       ": fps: expected a number > 0 (time_origin_s is null: t = "
+                       "frame / fps), got " +
+                       fps.dump());
+    const double rate = fps.get<double>();
+    return [rate](int frame, double) { return frame / rate; };
+  }
   if (!v.is_number() || !std::isfinite(v.get<double>()))
-    throw InputError(file.string() + ": time_origin_s: expected a number of seconds, got " +
+    throw InputError(file.string() + ": time_origin_s: expected a number of seconds or null, got " +
                      v.dump());
-  return v.get<double>();
+  const double origin = v.get<double>();
+  return [origin](int, double t) { return t - origin; };
 }
 
 std::string prefix(int target) {
@@ -94,7 +109,7 @@ std::vector<TrajectoryFile> write_trajectories(const fs::path& results,
     files.push_back(std::move(p));
   }
   // The truth on the results' clock (target.csv keeps the dataset's times).
-  const double origin = dataset ? time_origin(results) : 0.0;
+  const auto clock = results_clock(results);
   if (dataset)
     for (size_t j = 0; j < targets.size(); ++j) {
       const fs::path file = *dataset / io::target_truth_file(targets[j], j == 0);
@@ -103,7 +118,8 @@ std::vector<TrajectoryFile> write_trajectories(const fs::path& results,
       p.file.target = targets[j];
       p.file.name = prefix(targets[j]) + "truth.txt";
       for (const io::TargetTruthRow& r : io::read_target_csv(file))
-        append(p, r.t - origin, r.g_wo, file.string() + ": frame " + std::to_string(r.frame));
+        append(p, clock(r.frame, r.t), r.g_wo,
+               file.string() + ": frame " + std::to_string(r.frame));
       files.push_back(std::move(p));
     }
   std::vector<TrajectoryFile> written;

@@ -77,10 +77,11 @@ struct ImageRunResult {
   std::vector<OwnClockRecord> own_estimates;
   /// With own_estimates: [grid frame][camera] the camera's own frame held there (-1: none yet).
   std::vector<std::vector<int>> source_frames;
-  /// The dataset time [s] that t = 0 of the result's files stands for: 0 where they keep the
-  /// dataset's times (run), the grid's t0 where they count from it (merge of cameras on their
-  /// own clocks). summary.json's time_origin_s.
-  double time_origin_s = 0.0;
+  /// The clock of the result's files (their `t` column), summary.json's time_origin_s. Cameras
+  /// on their own clocks: t = the dataset's time (timestamps.csv's) less this, 0 for run, the
+  /// grid's t0 for a merge (it counts from the earliest image). Empty: one clock, t = frame / fps
+  /// whatever times the dataset lists.
+  std::optional<double> time_origin_s;
   /// `netvmo run` on cameras on their own clocks: the observer advanced on the union of their
   /// image times (run_images); summary.json says so.
   bool union_of_timestamps = false;

@@ -36,9 +36,10 @@ struct TrajectoryFile {
 /// Reads `results`/estimates.csv (netvmo run, demo, launch, merge or simulate) and, with a
 /// dataset, its ground truth (target.csv, target_<id>.csv for a later target), and writes into
 /// `out`: cam_<id>.txt per camera and truth.txt; with several targets, target_<tag>_cam_<id>.txt
-/// and target_<tag>_truth.txt. The truth's times are put on the results' clock: target.csv's
-/// times less summary.json's time_origin_s (merged cameras on their own clocks count from the
-/// earliest image; 0 without the key). A camera that never had an estimate gets no file.
+/// and target_<tag>_truth.txt. The truth's times are put on the results' clock (summary.json's
+/// time_origin_s): target.csv's times less it where cameras ran on their own clocks, frame / fps
+/// where it is null (one clock), as they are without the key. A camera that never had an
+/// estimate gets no file.
 /// Everything is read and checked before the first file is written (InputError naming the file,
 /// line and column; a time that does not increase along a trajectory is one, since TUM tools
 /// match poses by time).
