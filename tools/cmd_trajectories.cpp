@@ -1,10 +1,14 @@
-// netvmo trajectories RESULTS [--dataset DATASET] [--out DIR]
-// A result folder's estimates.csv (and the dataset's ground truth) as TUM trajectory files.
+// netvmo trajectories RESULTS [--dataset DATASET] [--out DIR] [--reference REF] [--align]
+// [--max-dt S]
+// A result folder's estimates.csv (and the dataset's ground truth) as TUM trajectory files, and
+// each camera's absolute trajectory error against the truth or a reference.
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <optional>
 
 #include "commands.hpp"
+#include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/output_dir.hpp"
 #include "netvmo/pipeline/run/trajectories.hpp"
 
@@ -12,7 +16,8 @@ namespace netvmo::tools {
 
 void add_trajectories(CLI::App& app, int& exit_code) {
   struct Options {
-    std::string results, dataset, out;
+    std::string results, dataset, out, reference;
+    run::TrajectoryComparisonSettings compare;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = add_command(
@@ -25,11 +30,25 @@ void add_trajectories(CLI::App& app, int& exit_code) {
       "unit quaternion, qw >= 0); with --dataset also truth.txt, the true target pose from its\n"
       "target.csv. With several targets: target_<tag>_cam_<id>.txt and target_<tag>_truth.txt.\n"
       "E.g. evo_ape tum OUT/truth.txt OUT/cam_1.txt (docs/images.md, \"Trajectory files\").\n"
+      "With --dataset or --reference, every camera's absolute trajectory error against it\n"
+      "(matched in time within --max-dt; with --align after a rigid alignment) is\n"
+      "printed and written to OUT/comparison.json.\n"
       "Written in OUT.partial-<pid> and swapped into place.");
   cmd->add_option("RESULTS", o->results, "result folder holding estimates.csv")->required();
   cmd->add_option("--dataset", o->dataset,
                   "the dataset the results were run on: also write its true target pose");
   cmd->add_option("--out", o->out, "output folder (default RESULTS/trajectories)");
+  cmd->add_option("--reference", o->reference,
+                  "a TUM file of the target's pose (e.g. from motion capture): compare every "
+                  "camera with it instead of the dataset's truth");
+  cmd->add_flag("--align", o->compare.align,
+                "align each camera's trajectory onto the reference first (a rigid motion: the mean "
+                "of the orientations' differences, then of the positions'), for a reference in "
+                "another frame than the rig's world");
+  cmd->add_option("--max-dt", o->compare.max_dt,
+                  "[s] a pose is matched with the reference pose nearest in time within this")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   cmd->callback([o, &exit_code]() {
     exit_code = guarded("trajectories", [&]() {
       const std::string out = o->out.empty() ? o->results + "/trajectories" : o->out;
@@ -38,12 +57,25 @@ void add_trajectories(CLI::App& app, int& exit_code) {
         io::check_output_apart(out, o->dataset);
         dataset = o->dataset;
       }
+      std::optional<std::filesystem::path> reference;
+      if (!o->reference.empty()) reference = o->reference;
+      if (!dataset && !reference && o->compare.align)
+        throw InputError("--align: nothing to compare with (give --reference or --dataset)");
       io::OutputDir dir(out, "trajectories");
       const auto files = run::write_trajectories(o->results, dataset, dir.path());
+      const auto compared = run::write_comparisons(dir.path(), files, reference, o->compare);
       dir.commit();
       std::printf("wrote %s:", out.c_str());
       for (const auto& f : files) std::printf(" %s (%zu poses)", f.name.c_str(), f.poses);
       std::printf("%s\n", files.empty() ? " nothing (no camera had an estimate)" : "");
+      if (!compared.empty())
+        std::printf("absolute trajectory error%s (comparison.json):\n%-28s %8s %10s %10s %10s\n",
+                    o->compare.align ? ", aligned" : "", "file", "matched", "pos_rmse_m",
+                    "pos_max_m", "rot_rmse_deg");
+      for (const auto& c : compared)
+        std::printf("%-28s %8zu %10.4f %10.4f %10.3f\n", c.file.name.c_str(), c.comparison.matched,
+                    c.comparison.position_rmse, c.comparison.position_max,
+                    c.comparison.rotation_rmse * 180.0 / M_PI);
       return 0;
     });
   });

@@ -358,6 +358,68 @@ TEST_F(SmallDataset, RosCalibrationFilesGiveTheSameSummary) {
   EXPECT_EQ(std::count(c.err.begin(), c.err.end(), '\n'), 1) << c.err;
 }
 
+// netvmo trajectories --dataset: every camera's absolute trajectory error against the true target
+// pose (run::compare_trajectory, on the TUM files it writes) is the run's own evaluation of its
+// estimate against the truth (summary.json, networked vs_true), to the files' 9 decimals; aligned,
+// a small rigid motion; a bad reference is one line, and the comparison already written stays.
+TEST_F(SmallDataset, TrajectoryErrorsAgainstTheTruthAreTheRunsOwn) {
+  const fs::path rendered = *dir_ / "rendered", results = *dir_ / "run_trajectories";
+  auto c = test::run_netvmo(
+      "run " + rendered.string() + " --out " + results.string() + " --no-overlays --no-plots",
+      *dir_);
+  ASSERT_EQ(c.code, 0) << c.err;
+  const std::string trajectories =
+      "trajectories " + results.string() + " --dataset " + rendered.string();
+  c = test::run_netvmo(trajectories, *dir_);
+  ASSERT_EQ(c.code, 0) << c.err;
+  EXPECT_NE(c.out.find("absolute trajectory error"), std::string::npos) << c.out;
+  const fs::path comparison = results / "trajectories" / "comparison.json";
+  const auto summary = nlohmann::json::parse(slurp(results / "summary.json"));
+  const auto compared = nlohmann::json::parse(slurp(comparison));
+  EXPECT_EQ(compared["aligned"], false);
+  ASSERT_EQ(compared["cameras"].size(), 5u);
+  ASSERT_EQ(summary["cameras"].size(), 5u);
+  for (size_t i = 0; i < 5; ++i) {
+    const auto& got = compared["cameras"][i];
+    const auto& want = summary["cameras"][i]["networked"]["vs_true"];
+    EXPECT_EQ(got["camera"], summary["cameras"][i]["id"]);
+    EXPECT_EQ(got["reference"], "truth.txt");
+    EXPECT_EQ(got["matched"], want["frames"]);
+    EXPECT_EQ(got["unmatched"], 0);
+    EXPECT_NEAR(got["position_mean_m"].get<double>(), want["mean_position_m"].get<double>(), 1e-8)
+        << "camera " << got["camera"];
+    EXPECT_NEAR(got["rotation_mean_deg"].get<double>(), want["mean_orientation_deg"].get<double>(),
+                1e-6)
+        << "camera " << got["camera"];
+    EXPECT_GT(got["position_mean_m"].get<double>(), 0.0);
+  }
+  // Aligned (the static target's positions are one point; the orientations give the rotation):
+  // a rigid motion of the size of the cameras' errors, and the rotation errors no larger.
+  c = test::run_netvmo(trajectories + " --align", *dir_);
+  ASSERT_EQ(c.code, 0) << c.err;
+  const auto aligned = nlohmann::json::parse(slurp(comparison));
+  EXPECT_EQ(aligned["aligned"], true);
+  for (size_t i = 0; i < 5; ++i) {
+    const auto& a = aligned["cameras"][i];
+    std::vector<double> p = a["alignment"]["translation_m"],
+                        w = a["alignment"]["rotation_vector_rad"];
+    EXPECT_LT(std::hypot(p[0], p[1], p[2]), 0.2) << "camera " << a["camera"];
+    EXPECT_LT(std::hypot(w[0], w[1], w[2]), 5 * M_PI / 180) << "camera " << a["camera"];
+    EXPECT_LE(a["rotation_rmse_deg"].get<double>(),
+              1.01 * compared["cameras"][i]["rotation_rmse_deg"].get<double>());
+  }
+  // A reference that cannot be read: one line, and the comparison already written stays.
+  const std::string before = slurp(comparison);
+  c = test::run_netvmo(trajectories + " --reference " + (*dir_ / "none.txt").string(), *dir_);
+  EXPECT_EQ(c.code, 1);
+  test::expect_one_line(c.err, {(*dir_ / "none.txt").string(), "cannot open"});
+  EXPECT_EQ(slurp(comparison), before);
+  c = test::run_netvmo("trajectories " + results.string() + " --align", *dir_);
+  EXPECT_EQ(c.code, 1);
+  test::expect_one_line(c.err, {"--align", "--reference"});
+  EXPECT_EQ(slurp(comparison), before);
+}
+
 TEST_F(SmallDataset, BadInputGivesOneClearLineAndKeepGoingBlindsTheCamera) {
   const fs::path bad = *dir_ / "bad";
   fs::copy(*dir_ / "rendered", bad, fs::copy_options::recursive);

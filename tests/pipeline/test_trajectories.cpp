@@ -27,7 +27,7 @@ struct TumPose {
 };
 
 // A TUM file's lines; each must hold exactly eight numbers.
-std::vector<TumPose> read_tum(const fs::path& file) {
+std::vector<TumPose> parse_tum(const fs::path& file) {
   std::vector<TumPose> out;
   std::ifstream in(file);
   EXPECT_TRUE(in.good()) << file;
@@ -149,14 +149,14 @@ TEST(Trajectories, EveryCameraWithAnEstimateAndTheTruthReadBack) {
   EXPECT_EQ(files[2].name, "truth.txt");
   EXPECT_FALSE(fs::exists(f.out / "cam_3.txt")) << "camera 3 never had an estimate";
   for (int c : {1, 2}) {
-    const auto got = read_tum(f.out / ("cam_" + std::to_string(c) + ".txt"));
+    const auto got = parse_tum(f.out / ("cam_" + std::to_string(c) + ".txt"));
     ASSERT_EQ(got.size(), f.estimates[c].size()) << "camera " << c;
     EXPECT_EQ(files[static_cast<size_t>(c - 1)].poses, got.size());
     for (size_t k = 0; k < got.size(); ++k)
       expect_pose(got[k], f.estimates[c][k].first, f.estimates[c][k].second);
   }
   // target.csv keeps 9 digits: the truth read back to that.
-  const auto truth = read_tum(f.out / "truth.txt");
+  const auto truth = parse_tum(f.out / "truth.txt");
   ASSERT_EQ(truth.size(), f.truth.size());
   const auto rows = io::read_target_csv(f.dataset / "target.csv");
   for (size_t k = 0; k < truth.size(); ++k) {
@@ -169,7 +169,7 @@ TEST(Trajectories, EveryCameraWithAnEstimateAndTheTruthReadBack) {
   fs::remove_all(f.out);
   fs::create_directories(f.out);
   write_trajectories(f.results, f.dataset, f.out);
-  const auto shifted = read_tum(f.out / "truth.txt");
+  const auto shifted = parse_tum(f.out / "truth.txt");
   ASSERT_EQ(shifted.size(), rows.size());
   for (size_t k = 0; k < rows.size(); ++k) expect_pose(shifted[k], rows[k].t - 0.05, rows[k].g_wo);
   // Results on one clock (time_origin_s null): t = frame / fps, whatever times the dataset lists
@@ -181,7 +181,7 @@ TEST(Trajectories, EveryCameraWithAnEstimateAndTheTruthReadBack) {
   fs::remove_all(f.out);
   fs::create_directories(f.out);
   write_trajectories(f.results, f.dataset, f.out);
-  const auto by_frame = read_tum(f.out / "truth.txt");
+  const auto by_frame = parse_tum(f.out / "truth.txt");
   ASSERT_EQ(by_frame.size(), rows.size());
   for (size_t k = 0; k < rows.size(); ++k)
     expect_pose(by_frame[k], rows[k].frame / 30.0, rows[k].g_wo);
@@ -220,20 +220,36 @@ TEST(Trajectories, SeveralTargetsEachTheirOwnFiles) {
   for (const auto& f : files) names.push_back(f.name);
   EXPECT_EQ(names, (std::vector<std::string>{"target_3_cam_1.txt", "target_7_cam_1.txt",
                                              "target_3_truth.txt", "target_7_truth.txt"}));
-  const auto truth7 = read_tum(dir / "out" / "target_7_truth.txt");
-  const auto cam7 = read_tum(dir / "out" / "target_7_cam_1.txt");
+  const auto truth7 = parse_tum(dir / "out" / "target_7_truth.txt");
+  const auto cam7 = parse_tum(dir / "out" / "target_7_cam_1.txt");
   ASSERT_EQ(truth7.size(), 3u);
   ASSERT_EQ(cam7.size(), 3u);
   for (int k = 0; k < 3; ++k) {
     EXPECT_LT((truth7[static_cast<size_t>(k)].p - pose_at(k, 17).translation()).norm(), 1e-8);
     EXPECT_LT((cam7[static_cast<size_t>(k)].p - pose_at(k, 7).translation()).norm(), 1e-5);
   }
+  // Each target's cameras compared with that target's truth; one reference for several targets
+  // is refused.
+  const auto compared = write_comparisons(dir / "out", files, std::nullopt, {});
+  ASSERT_EQ(compared.size(), 2u);
+  EXPECT_EQ(compared[1].reference, "target_7_truth.txt");
+  EXPECT_EQ(compared[1].comparison.matched, 3u);
+  double worst = 0.0;
+  for (int k = 0; k < 3; ++k)
+    worst = std::max(worst, (pose_at(k, 17).translation() - pose_at(k, 7).translation()).norm());
+  EXPECT_NEAR(compared[1].comparison.position_max, worst, 1e-5);
+  EXPECT_TRUE(fs::exists(dir / "out" / "comparison.json"));
+  test::expect_input_error(
+      [&] { write_comparisons(dir / "out", files, dir / "out" / "target_3_truth.txt", {}); },
+      {"target_3_truth.txt", "several"});
   // Without target_7.csv: that target's truth is not known, the first's still written.
   fs::remove(dir / "dataset" / "target_7.csv");
   fs::remove_all(dir / "out");
   fs::create_directories(dir / "out");
-  EXPECT_EQ(write_trajectories(dir / "results", dir / "dataset", dir / "out").size(), 3u);
+  const auto without = write_trajectories(dir / "results", dir / "dataset", dir / "out");
+  EXPECT_EQ(without.size(), 3u);
   EXPECT_FALSE(fs::exists(dir / "out" / "target_7_truth.txt"));
+  EXPECT_EQ(write_comparisons(dir / "out", without, std::nullopt, {}).size(), 1u);
 }
 
 // Bad input: one line naming the file, line and column, and no file written.
@@ -283,6 +299,138 @@ TEST(Trajectories, BadInputNamesFileLineAndColumnAndWritesNothing) {
                            {est.string(), "cannot open"});
 }
 
+// A TUM file as other tools write it: comments, blank lines and commas; its poses with the
+// quaternion normalised. Each malformed line is named with its file and line number.
+TEST(Trajectories, ReadTumSkipsCommentsAndNamesEveryBadLine) {
+  const auto dir = test::scratch_dir("trajectories_read_tum");
+  const fs::path file = dir / "ref.txt";
+  const double h = std::sqrt(0.5);
+  test::write_text(file,
+                   "# timestamp tx ty tz qx qy qz qw\n\n"
+                   "1.5 0.1 0.2 0.3 0 0 0 1\n"
+                   "  2.0,1,2,3,0," +
+                       std::to_string(h) + ",0," + std::to_string(h) +
+                       "\n"
+                       "2.25\t1 2 3 0 0 0 1.0005\n");
+  const auto rows = read_tum(file);
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0].line, 3);
+  EXPECT_EQ(rows[1].line, 4);
+  EXPECT_DOUBLE_EQ(rows[1].t, 2.0);
+  EXPECT_LT((rows[1].g.translation() - obs::Vec3(1, 2, 3)).norm(), 1e-12);
+  EXPECT_LT(angle_between(rows[1].g.linear(),
+                          Eigen::AngleAxisd(M_PI / 2, obs::Vec3::UnitY()).toRotationMatrix()),
+            1e-6);
+  EXPECT_LT((rows[2].g.linear() - obs::Mat3::Identity()).norm(), 1e-12) << "normalised";
+  const auto expect_error = [&](const std::string& line, std::initializer_list<std::string> n) {
+    test::write_text(file, "1 0 0 0 0 0 0 1\n" + line + "\n");
+    test::expect_input_error([&] { read_tum(file); }, n);
+  };
+  expect_error("2 0 0 0 0 0 1", {file.string() + ":2:", "expected 8 numbers", "got 7"});
+  expect_error("2 0 0 0 0 0 0 1 5", {file.string() + ":2:", "got 9"});
+  expect_error("2 0 0x 0 0 0 0 1", {file.string() + ":2:", "field 3", "'0x'"});
+  expect_error("2 0 0 nan 0 0 0 1", {file.string() + ":2:", "field 4", "finite"});
+  expect_error("1 0 0 0 0 0 0 1", {file.string() + ":2:", "not after"});
+  expect_error("2 0 0 0 0 0 0 0.5", {file.string() + ":2:", "norm 0.5"});
+  test::write_text(file, "# nothing\n");
+  test::expect_input_error([&] { read_tum(file); }, {file.string(), "no pose"});
+  test::expect_input_error([&] { read_tum(dir / "none.txt"); },
+                           {(dir / "none.txt").string(), "cannot open"});
+}
+
+// compare_trajectory against closed forms, on a helix (radius 1, rising 0.3 m/s, turning) at
+// 100 Hz and an estimate at 30 Hz, 2 ms after the reference's poses:
+// - the estimate displaced by d: every position error |d|, no rotation error;
+// - the estimate rotated by theta about the world z axis: every rotation error theta (a
+//   conjugate has the same angle) and every position error 2 sin(theta/2) (the helix's radius
+//   is 1);
+// - aligned, the rigid motion is found (its inverse) and the errors vanish, also for a target
+//   that stays at one point.
+TEST(Trajectories, ComparisonIsTheClosedFormAndTheAlignmentUndoesARigidMotion) {
+  std::vector<TumRow> reference;
+  for (int j = 0; j <= 300; ++j) {
+    const double t = j / 100.0;
+    TumRow r;
+    r.t = t;
+    r.g = obs::make_pose(obs::Vec3(std::cos(t), std::sin(t), 0.3 * t), obs::Vec3(0.2, -0.1, t));
+    reference.push_back(r);
+  }
+  const auto estimate_of = [&](const obs::SE3& motion) {
+    std::vector<TumRow> e;
+    for (int j = 0; j <= 300; j += 3) {  // every third: 33.3 Hz
+      TumRow r = reference[static_cast<size_t>(j)];
+      r.t += 0.002;
+      r.g = motion * r.g;
+      e.push_back(r);
+    }
+    return e;
+  };
+  TrajectoryComparisonSettings plain;
+  const obs::Vec3 d(0.03, -0.04, 0.12);  // |d| = 0.13
+  const auto shifted = compare_trajectory(
+      reference, estimate_of(obs::make_pose(d, obs::Vec3::Zero())), plain, "shifted");
+  EXPECT_EQ(shifted.matched, 101u);
+  EXPECT_EQ(shifted.unmatched, 0u);
+  EXPECT_NEAR(shifted.position_rmse, 0.13, 1e-12);
+  EXPECT_NEAR(shifted.position_mean, 0.13, 1e-12);
+  EXPECT_NEAR(shifted.position_max, 0.13, 1e-12);
+  EXPECT_LT(shifted.rotation_max, 1e-7);
+  const double theta = 0.25;
+  const obs::SE3 turn = obs::make_pose(obs::Vec3::Zero(), obs::Vec3(0, 0, theta));
+  const auto turned = compare_trajectory(reference, estimate_of(turn), plain, "turned");
+  EXPECT_NEAR(turned.position_rmse, 2 * std::sin(theta / 2), 1e-12);
+  EXPECT_NEAR(turned.position_max, 2 * std::sin(theta / 2), 1e-12);
+  EXPECT_NEAR(turned.rotation_rmse, theta, 1e-9);
+  EXPECT_NEAR(turned.rotation_mean, theta, 1e-9);
+  EXPECT_NEAR(turned.rotation_max, theta, 1e-9);
+
+  TrajectoryComparisonSettings aligned;
+  aligned.align = true;
+  const obs::SE3 motion = obs::make_pose(obs::Vec3(1.5, -2.0, 0.7), obs::Vec3(0.3, -0.5, 1.1));
+  const auto undone = compare_trajectory(reference, estimate_of(motion), aligned, "moved");
+  EXPECT_LT((undone.alignment * motion).translation().norm(), 1e-9);
+  EXPECT_LT(obs::rotvec(undone.alignment * motion).norm(), 1e-9);
+  EXPECT_LT(undone.position_max, 1e-9);
+  EXPECT_LT(undone.rotation_max, 1e-8);
+  // Aligned, a displacement is undone too; unaligned (the same motion), it is all error.
+  EXPECT_LT(compare_trajectory(reference, estimate_of(obs::make_pose(d, obs::Vec3::Zero())),
+                               aligned, "shifted")
+                .position_max,
+            1e-9);
+  EXPECT_GT(compare_trajectory(reference, estimate_of(motion), plain, "moved").position_rmse, 1.0);
+
+  // Matching in time: a pose past the reference's end is left out; none within max_dt is an
+  // error, as are an alignment from fewer than 3 poses and from positions on one line.
+  auto late = estimate_of(obs::SE3::Identity());
+  TumRow past = late.back();
+  past.t = 3.5;
+  late.push_back(past);
+  const auto with_late = compare_trajectory(reference, late, plain, "late");
+  EXPECT_EQ(with_late.matched, 101u);
+  EXPECT_EQ(with_late.unmatched, 1u);
+  TrajectoryComparisonSettings tight;
+  tight.max_dt = 0.001;
+  test::expect_input_error([&] { compare_trajectory(reference, late, tight, "the pair"); },
+                           {"the pair", "no estimated pose", "0.001"});
+  // A target that stays at one point and turns: the positions alone would leave the alignment's
+  // rotation free; the orientations give it.
+  std::vector<TumRow> still = reference;
+  for (auto& r : still) r.g.translation() = obs::Vec3(0.4, -0.2, 1.5);
+  std::vector<TumRow> still_moved = still;
+  for (auto& r : still_moved) r.g = motion.inverse() * r.g;
+  const auto still_undone = compare_trajectory(still, still_moved, aligned, "still");
+  EXPECT_LT((still_undone.alignment * motion.inverse()).translation().norm(), 1e-9);
+  EXPECT_LT(obs::rotvec(still_undone.alignment * motion.inverse()).norm(), 1e-9);
+  EXPECT_LT(still_undone.position_max, 1e-9);
+  // Orientations whose differences cancel (the identity and a half turn): no unique mean.
+  std::vector<TumRow> half = {reference[0], reference[1]};
+  half[1].g.linear() =
+      reference[1].g.linear() * Eigen::AngleAxisd(M_PI, obs::Vec3::UnitZ()).toRotationMatrix();
+  const std::vector<TumRow> est = {reference[0], reference[1]};
+  test::expect_input_error([&] { compare_trajectory(half, est, aligned, "the pair"); },
+                           {"the pair", "not unique"});
+}
+
 // The command on netvmo simulate's output (the paper's Section 5): every camera's file holds its
 // estimates.csv rows, in order; run again, it replaces its own folder; it refuses to replace the
 // results and names a folder without estimates.csv, each in one line with a non-zero exit.
@@ -302,7 +450,7 @@ TEST(Cli, TrajectoriesOfASimulationAreItsEstimates) {
   for (const auto& r : io::read_estimates_csv(sim / "estimates.csv")) rows[r.camera].push_back(r);
   ASSERT_EQ(rows.size(), 5u);
   for (const auto& [camera, want] : rows) {
-    const auto got = read_tum(sim / "trajectories" / ("cam_" + std::to_string(camera) + ".txt"));
+    const auto got = parse_tum(sim / "trajectories" / ("cam_" + std::to_string(camera) + ".txt"));
     ASSERT_EQ(got.size(), want.size()) << "camera " << camera;
     for (size_t k = 0; k < got.size(); ++k) {
       ASSERT_TRUE(want[k].g_w.has_value());

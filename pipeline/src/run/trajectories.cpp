@@ -1,12 +1,16 @@
 #include "netvmo/pipeline/run/trajectories.hpp"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
@@ -128,6 +132,176 @@ std::vector<TrajectoryFile> write_trajectories(const fs::path& results,
     written.push_back(p.file);
   }
   return written;
+}
+
+namespace {
+
+// One number of a TUM line, the whole token, finite.
+double tum_number(const std::string& token, const std::string& where, int field) {
+  char* end = nullptr;
+  const double v = std::strtod(token.c_str(), &end);
+  if (token.empty() || *end != '\0' || !std::isfinite(v))
+    throw InputError(where + ": field " + std::to_string(field) +
+                     ": expected a finite number, got '" + token + "'");
+  return v;
+}
+
+}  // namespace
+
+std::vector<TumRow> read_tum(const fs::path& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file.string() + ": cannot open");
+  std::vector<TumRow> rows;
+  std::string line;
+  for (int n = 1; std::getline(in, line); ++n) {
+    std::replace(line.begin(), line.end(), ',', ' ');
+    std::istringstream fields(line);
+    std::vector<std::string> tokens;
+    for (std::string token; fields >> token;) tokens.push_back(token);
+    if (tokens.empty() || tokens[0][0] == '#') continue;
+    const std::string where = file.string() + ":" + std::to_string(n);
+    if (tokens.size() != 8)
+      throw InputError(where + ": expected 8 numbers 'timestamp tx ty tz qx qy qz qw', got " +
+                       std::to_string(tokens.size()));
+    double v[8];
+    for (int i = 0; i < 8; ++i) v[i] = tum_number(tokens[static_cast<size_t>(i)], where, i + 1);
+    TumRow r;
+    r.t = v[0];
+    r.line = n;
+    if (!rows.empty() && !(r.t > rows.back().t))
+      throw InputError(where + ": timestamp " + tokens[0] +
+                       " is not after the previous line's; a trajectory's times must increase");
+    Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
+    if (!(std::abs(q.norm() - 1.0) <= 1e-3))
+      throw InputError(where + ": quaternion (qx qy qz qw) has norm " + std::to_string(q.norm()) +
+                       ", not 1");
+    r.g.linear() = q.normalized().toRotationMatrix();
+    r.g.translation() = obs::Vec3(v[1], v[2], v[3]);
+    rows.push_back(r);
+  }
+  if (rows.empty()) throw InputError(file.string() + ": no pose");
+  return rows;
+}
+
+TrajectoryComparison compare_trajectory(const std::vector<TumRow>& reference,
+                                        const std::vector<TumRow>& estimate,
+                                        const TrajectoryComparisonSettings& settings,
+                                        const std::string& what) {
+  // Each estimated pose with the reference pose nearest in time (the reference's times increase).
+  std::vector<std::pair<const TumRow*, const TumRow*>> pairs;  // (reference, estimate)
+  TrajectoryComparison c;
+  for (const TumRow& e : estimate) {
+    const auto after = std::lower_bound(reference.begin(), reference.end(), e.t,
+                                        [](const TumRow& r, double t) { return r.t < t; });
+    const TumRow* best = nullptr;
+    if (after != reference.end()) best = &*after;
+    if (after != reference.begin() && (!best || e.t - (after - 1)->t < best->t - e.t))
+      best = &*(after - 1);
+    if (best && std::abs(best->t - e.t) <= settings.max_dt)
+      pairs.emplace_back(best, &e);
+    else
+      ++c.unmatched;
+  }
+  c.matched = pairs.size();
+  if (pairs.empty())
+    throw InputError(what + ": no estimated pose has a reference pose within " +
+                     std::to_string(settings.max_dt) + " s (are they on one clock?)");
+  if (settings.align) {
+    // The rigid motion A from the estimate's frame to the reference's: every matched pair says
+    // R_ref = R_A R_est and p_ref = R_A p_est + t_A. R_A is the chordal L2 mean of the pairs'
+    // R_ref R_est^T: the rotation nearest their sum in the Frobenius norm, U diag(1, 1, det UV^T)
+    // V^T of the sum's SVD (Hartley, Trumpf, Dai and Li, "Rotation averaging", IJCV 2013);
+    // t_A the mean of p_ref - R_A p_est, least squares given R_A.
+    obs::Mat3 sum = obs::Mat3::Zero();
+    for (const auto& [r, e] : pairs) sum += r->g.linear() * e->g.linear().transpose();
+    const Eigen::JacobiSVD<obs::Mat3> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    if (!(svd.singularValues()(1) > 1e-9 * svd.singularValues()(0)))
+      throw InputError(what +
+                       ": the matched orientations disagree too much for one alignment (their "
+                       "chordal mean is not unique); compare without aligning");
+    obs::Mat3 d = obs::Mat3::Identity();
+    d(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1.0 : 1.0;
+    const obs::Mat3 rot = svd.matrixU() * d * svd.matrixV().transpose();
+    obs::Vec3 shift = obs::Vec3::Zero();
+    for (const auto& [r, e] : pairs) shift += r->g.translation() - rot * e->g.translation();
+    c.alignment.linear() = rot;
+    c.alignment.translation() = shift / static_cast<double>(pairs.size());
+  }
+  double sum_p2 = 0.0, sum_p = 0.0, sum_r2 = 0.0, sum_r = 0.0;
+  for (const auto& [r, e] : pairs) {
+    const obs::SE3 g = c.alignment * e->g;
+    const double dp = (r->g.translation() - g.translation()).norm();
+    const double dr = obs::log_so3(r->g.linear().transpose() * g.linear()).norm();
+    sum_p2 += dp * dp;
+    sum_p += dp;
+    sum_r2 += dr * dr;
+    sum_r += dr;
+    c.position_max = std::max(c.position_max, dp);
+    c.rotation_max = std::max(c.rotation_max, dr);
+  }
+  const auto n = static_cast<double>(pairs.size());
+  c.position_rmse = std::sqrt(sum_p2 / n);
+  c.position_mean = sum_p / n;
+  c.rotation_rmse = std::sqrt(sum_r2 / n);
+  c.rotation_mean = sum_r / n;
+  return c;
+}
+
+std::vector<CameraComparison> write_comparisons(const fs::path& out,
+                                                const std::vector<TrajectoryFile>& files,
+                                                const std::optional<fs::path>& reference,
+                                                const TrajectoryComparisonSettings& settings) {
+  std::map<int, std::string> truth_of;  // by target
+  for (const TrajectoryFile& f : files)
+    if (f.camera < 0) truth_of[f.target] = f.name;
+  std::set<int> targets;
+  for (const TrajectoryFile& f : files) targets.insert(f.target);
+  if (reference && targets.size() > 1)
+    throw InputError(reference->string() +
+                     ": a reference is compared with the results of one target; these have "
+                     "several (compare each target's files with their truth, --dataset)");
+  std::vector<TumRow> given;
+  if (reference) given = read_tum(*reference);
+  std::vector<CameraComparison> out_rows;
+  for (const TrajectoryFile& f : files) {
+    if (f.camera < 0) continue;
+    const auto truth = truth_of.find(f.target);
+    if (!reference && truth == truth_of.end()) continue;
+    CameraComparison row{f, reference ? reference->string() : truth->second, {}};
+    const std::vector<TumRow> ref = reference ? given : read_tum(out / truth->second);
+    row.comparison = compare_trajectory(
+        ref, read_tum(out / f.name), settings,
+        "camera " + std::to_string(f.camera) + " (" + f.name + ") against " + row.reference);
+    out_rows.push_back(std::move(row));
+  }
+  if (out_rows.empty()) return out_rows;
+  nlohmann::json j;
+  j["max_dt_s"] = settings.max_dt;
+  j["aligned"] = settings.align;
+  j["cameras"] = nlohmann::json::array();
+  constexpr double deg = 180.0 / M_PI;
+  for (const CameraComparison& r : out_rows) {
+    const TrajectoryComparison& c = r.comparison;
+    const obs::Vec3 p = c.alignment.translation(), w = obs::rotvec(c.alignment);
+    j["cameras"].push_back(
+        {{"file", r.file.name},
+         {"camera", r.file.camera},
+         {"target", r.file.target < 0 ? nlohmann::json(nullptr) : nlohmann::json(r.file.target)},
+         {"reference", r.reference},
+         {"matched", c.matched},
+         {"unmatched", c.unmatched},
+         {"position_rmse_m", c.position_rmse},
+         {"position_mean_m", c.position_mean},
+         {"position_max_m", c.position_max},
+         {"rotation_rmse_deg", c.rotation_rmse * deg},
+         {"rotation_mean_deg", c.rotation_mean * deg},
+         {"rotation_max_deg", c.rotation_max * deg},
+         {"alignment",
+          {{"translation_m", {p.x(), p.y(), p.z()}},
+           {"rotation_vector_rad", {w.x(), w.y(), w.z()}}}}});
+  }
+  io::write_file_atomic(out / "comparison.json", j.dump(2) + "\n");
+  return out_rows;
 }
 
 }  // namespace netvmo::run

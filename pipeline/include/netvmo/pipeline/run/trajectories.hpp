@@ -47,4 +47,67 @@ std::vector<TrajectoryFile> write_trajectories(const std::filesystem::path& resu
                                                const std::optional<std::filesystem::path>& dataset,
                                                const std::filesystem::path& out);
 
+/// A pose of a TUM file.
+struct TumRow {
+  double t = 0.0;
+  obs::SE3 g = obs::SE3::Identity();  ///< the quaternion normalised
+  int line = 0;                       ///< in its file, from 1
+};
+
+/// A TUM file: lines of eight numbers separated by spaces or tabs (commas too, as some tools
+/// write them); empty lines and lines starting with '#' are skipped. Times must increase, and the
+/// quaternion's norm be within 1e-3 of 1 (it is normalised). InputError naming the file and line
+/// otherwise, or when the file holds no pose.
+std::vector<TumRow> read_tum(const std::filesystem::path& file);
+
+/// How an estimated trajectory is compared with a reference (compare_trajectory).
+struct TrajectoryComparisonSettings {
+  /// [s] each estimated pose is matched with the reference pose nearest in time, if at most this
+  /// far (evo's default t_max_diff).
+  double max_dt = 0.01;
+  /// Align the estimate onto the reference first, for a reference in another frame than the
+  /// rig's world (a motion-capture system's): the rigid motion A (no scale) with R_A the chordal
+  /// mean of the matched pairs' R_ref R_est^T and t_A the mean of p_ref - R_A p_est. Unlike
+  /// evo's --align (Umeyama's, on the positions alone) the rotation comes from the orientations,
+  /// so it is determined for a target that barely moves, as netvmo's targets often do.
+  /// Off: both are taken in one frame (the dataset's truth).
+  bool align = false;
+};
+
+/// The absolute trajectory error of an estimate against a reference, over the matched poses:
+/// position error |p_ref - (A p_est)| and rotation error angle(R_ref^T R_A R_est), A the
+/// alignment.
+struct TrajectoryComparison {
+  size_t matched = 0;    ///< estimated poses with a reference pose within max_dt
+  size_t unmatched = 0;  ///< the others (not in the figures)
+  obs::SE3 alignment = obs::SE3::Identity();  ///< A: reference frame <- estimate's frame
+  double position_rmse = 0.0, position_mean = 0.0, position_max = 0.0;  ///< [m]
+  double rotation_rmse = 0.0, rotation_mean = 0.0, rotation_max = 0.0;  ///< [rad]
+};
+
+/// Compares `estimate` with `reference` (both as read_tum gives them; `what` names the pair in
+/// errors). InputError when no pose matches, or with `align` when the matched orientations have
+/// no unique chordal mean.
+TrajectoryComparison compare_trajectory(const std::vector<TumRow>& reference,
+                                        const std::vector<TumRow>& estimate,
+                                        const TrajectoryComparisonSettings& settings,
+                                        const std::string& what);
+
+/// A written camera file against its reference (write_comparisons).
+struct CameraComparison {
+  TrajectoryFile file;
+  std::string reference;  ///< the reference file as given, or the truth's file name in `out`
+  TrajectoryComparison comparison;
+};
+
+/// Compares every camera file write_trajectories wrote into `out` (`files`) with `reference`, or
+/// without it with its target's truth file there (cameras of a target without one are left
+/// out), and writes `out`/comparison.json: the settings and, per camera, the matches, the errors
+/// (m, degrees) and the alignment. `reference` needs results of one target (InputError
+/// otherwise). Nothing to compare (no reference, no truth written) writes nothing.
+std::vector<CameraComparison> write_comparisons(
+    const std::filesystem::path& out, const std::vector<TrajectoryFile>& files,
+    const std::optional<std::filesystem::path>& reference,
+    const TrajectoryComparisonSettings& settings);
+
 }  // namespace netvmo::run
