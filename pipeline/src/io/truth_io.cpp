@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <initializer_list>
+#include <type_traits>
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
@@ -33,7 +34,8 @@ std::vector<std::string> split(const std::string& line) {
 }
 
 /// Reads a CSV whose header is exactly one of `headers` and calls `row(fields, names, where)`
-/// for each non-empty line, `names` being the matched header's columns.
+/// (or `row(fields, names, where, line)`, the line number) for each non-empty line, `names`
+/// being the matched header's columns.
 template <class F>
 void read_csv(const fs::path& file, std::initializer_list<const char*> headers, F row) {
   std::ifstream in(file);
@@ -59,7 +61,11 @@ void read_csv(const fs::path& file, std::initializer_list<const char*> headers, 
     if (fields.size() != names.size())
       throw InputError(where + ": expected " + std::to_string(names.size()) + " fields, got " +
                        std::to_string(fields.size()));
-    row(fields, names, where);
+    if constexpr (std::is_invocable_v<F&, const std::vector<std::string>&,
+                                      const std::vector<std::string>&, const std::string&, int>)
+      row(fields, names, where, lineno);
+    else
+      row(fields, names, where);
   }
 }
 
@@ -374,7 +380,8 @@ std::vector<EstimateRow> read_estimates_csv(const fs::path& file) {
   std::vector<EstimateRow> rows;
   read_csv(
       file, {kEstimatesHeader, kEstimatesTargetsHeader, kSimulationEstimatesHeader},
-      [&](const auto& f, const std::vector<std::string>& names, const std::string& where) {
+      [&](const auto& f, const std::vector<std::string>& names, const std::string& where,
+          int line) {
         const bool simulation = names.front() == "t", targets = names[2] == "target";
         EstimateRow r;
         size_t i = 0;
@@ -400,7 +407,7 @@ std::vector<EstimateRow> read_estimates_csv(const fs::path& file) {
                                            num(f, names, i + 2, where)),
                                  obs::Vec3(num(f, names, i + 3, where), num(f, names, i + 4, where),
                                            num(f, names, i + 5, where)));
-        r.line = std::stoi(where.substr(where.rfind(':') + 1));
+        r.line = line;
         rows.push_back(r);
       });
   return rows;
