@@ -66,14 +66,14 @@ void add_trajectories(CLI::App& app, int& exit_code) {
       const auto compared = run::write_comparisons(dir.path(), files, reference, o->compare);
       dir.commit();
       std::printf("wrote %s:", out.c_str());
-      for (const auto& f : files) std::printf(" %s (%zu poses)", f.name.c_str(), f.poses);
+      for (const auto& f : files) std::printf(" %s (%zu poses)", f.name.c_str(), f.rows.size());
       std::printf("%s\n", files.empty() ? " nothing (no camera had an estimate)" : "");
       if (!compared.empty())
         std::printf("absolute trajectory error%s (comparison.json):\n%-28s %8s %10s %10s %10s\n",
                     o->compare.align ? ", aligned" : "", "file", "matched", "pos_rmse_m",
                     "pos_max_m", "rot_rmse_deg");
       for (const auto& c : compared)
-        std::printf("%-28s %8zu %10.4f %10.4f %10.3f\n", c.file.name.c_str(), c.comparison.matched,
+        std::printf("%-28s %8zu %10.4f %10.4f %10.3f\n", c.file.c_str(), c.comparison.matched,
                     c.comparison.position_rmse, c.comparison.position_max,
                     c.comparison.rotation_rmse * 180.0 / M_PI);
       return 0;

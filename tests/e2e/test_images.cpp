@@ -359,9 +359,10 @@ TEST_F(SmallDataset, RosCalibrationFilesGiveTheSameSummary) {
 }
 
 // netvmo trajectories --dataset: every camera's absolute trajectory error against the true target
-// pose (run::compare_trajectory, on the TUM files it writes) is the run's own evaluation of its
-// estimate against the truth (summary.json, networked vs_true), to the files' 9 decimals; aligned,
-// a small rigid motion; a bad reference is one line, and the comparison already written stays.
+// pose (run::compare_trajectory, on the poses of the TUM files it writes) is the run's own
+// evaluation of its estimate against the truth (summary.json, networked vs_true), to 1e-8 m
+// (estimates.csv's digits); aligned, a small rigid motion; a bad reference is one line, and the
+// comparison already written stays.
 TEST_F(SmallDataset, TrajectoryErrorsAgainstTheTruthAreTheRunsOwn) {
   const fs::path rendered = *dir_ / "rendered", results = *dir_ / "run_trajectories";
   auto c = test::run_netvmo(

@@ -35,21 +35,20 @@ namespace {
 struct Pending {
   TrajectoryFile file;
   std::string text;
-  double last_t = 0.0;
   std::string last_where;
 };
 
 // Appends a pose to a trajectory; its time must come after the trajectory's last.
 void append(Pending& p, double t, const obs::SE3& g, const std::string& where) {
-  if (p.file.poses > 0 && !(t > p.last_t)) {
+  std::vector<TumRow>& rows = p.file.rows;
+  if (!rows.empty() && !(t > rows.back().t)) {
     char buf[160];
     std::snprintf(buf, sizeof buf, ": t: %.9g s is not after the previous pose's %.9g s (%s)", t,
-                  p.last_t, p.last_where.c_str());
+                  rows.back().t, p.last_where.c_str());
     throw InputError(where + buf);
   }
   p.text += tum_line(t, g) + "\n";
-  ++p.file.poses;
-  p.last_t = t;
+  rows.push_back({t, g, static_cast<int>(rows.size()) + 1});
   p.last_where = where;
 }
 
@@ -108,7 +107,7 @@ std::vector<TrajectoryFile> write_trajectories(const fs::path& results,
   if (targets.empty()) throw InputError(estimates.string() + ": no rows");
   std::vector<Pending> files;
   for (auto& [key, p] : cameras) {
-    if (p.file.poses == 0) continue;  // never an estimate
+    if (p.file.rows.empty()) continue;  // never an estimate
     p.file.name = prefix(p.file.target) + "cam_" + std::to_string(p.file.camera) + ".txt";
     files.push_back(std::move(p));
   }
@@ -127,9 +126,9 @@ std::vector<TrajectoryFile> write_trajectories(const fs::path& results,
       files.push_back(std::move(p));
     }
   std::vector<TrajectoryFile> written;
-  for (const Pending& p : files) {
+  for (Pending& p : files) {
     io::write_file_atomic(out / p.file.name, p.text);
-    written.push_back(p.file);
+    written.push_back(std::move(p.file));
   }
   return written;
 }
@@ -251,9 +250,9 @@ std::vector<CameraComparison> write_comparisons(const fs::path& out,
                                                 const std::vector<TrajectoryFile>& files,
                                                 const std::optional<fs::path>& reference,
                                                 const TrajectoryComparisonSettings& settings) {
-  std::map<int, std::string> truth_of;  // by target
+  std::map<int, const TrajectoryFile*> truth_of;  // by target
   for (const TrajectoryFile& f : files)
-    if (f.camera < 0) truth_of[f.target] = f.name;
+    if (f.camera < 0) truth_of[f.target] = &f;
   std::set<int> targets;
   for (const TrajectoryFile& f : files) targets.insert(f.target);
   if (reference && targets.size() > 1)
@@ -267,10 +266,10 @@ std::vector<CameraComparison> write_comparisons(const fs::path& out,
     if (f.camera < 0) continue;
     const auto truth = truth_of.find(f.target);
     if (!reference && truth == truth_of.end()) continue;
-    CameraComparison row{f, reference ? reference->string() : truth->second, {}};
-    const std::vector<TumRow> ref = reference ? given : read_tum(out / truth->second);
+    CameraComparison row{
+        f.name, f.target, f.camera, reference ? reference->string() : truth->second->name, {}};
     row.comparison = compare_trajectory(
-        ref, read_tum(out / f.name), settings,
+        reference ? given : truth->second->rows, f.rows, settings,
         "camera " + std::to_string(f.camera) + " (" + f.name + ") against " + row.reference);
     out_rows.push_back(std::move(row));
   }
@@ -284,9 +283,9 @@ std::vector<CameraComparison> write_comparisons(const fs::path& out,
     const TrajectoryComparison& c = r.comparison;
     const obs::Vec3 p = c.alignment.translation(), w = obs::rotvec(c.alignment);
     j["cameras"].push_back(
-        {{"file", r.file.name},
-         {"camera", r.file.camera},
-         {"target", r.file.target < 0 ? nlohmann::json(nullptr) : nlohmann::json(r.file.target)},
+        {{"file", r.file},
+         {"camera", r.camera},
+         {"target", r.target < 0 ? nlohmann::json(nullptr) : nlohmann::json(r.target)},
          {"reference", r.reference},
          {"matched", c.matched},
          {"unmatched", c.unmatched},

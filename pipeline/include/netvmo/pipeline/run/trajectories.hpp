@@ -25,12 +25,19 @@ namespace netvmo::run {
 /// One TUM line (without newline): the time with 6 decimals, position and quaternion with 9.
 std::string tum_line(double t, const obs::SE3& g_wo);
 
+/// A pose of a TUM file.
+struct TumRow {
+  double t = 0.0;
+  obs::SE3 g = obs::SE3::Identity();  ///< the quaternion normalised
+  int line = 0;                       ///< in its file, from 1
+};
+
 /// A trajectory file written by write_trajectories.
 struct TrajectoryFile {
-  std::string name;  ///< file name in the output folder
-  int target = -1;   ///< the target's primary tag id; -1: the run had one target
-  int camera = -1;   ///< -1: the ground truth
-  size_t poses = 0;  ///< lines written
+  std::string name;          ///< file name in the output folder
+  int target = -1;           ///< the target's primary tag id; -1: the run had one target
+  int camera = -1;           ///< -1: the ground truth
+  std::vector<TumRow> rows;  ///< its poses, one per line, as given (the file rounds them)
 };
 
 /// Reads `results`/estimates.csv (netvmo run, demo, launch, merge or simulate) and, with a
@@ -46,13 +53,6 @@ struct TrajectoryFile {
 std::vector<TrajectoryFile> write_trajectories(const std::filesystem::path& results,
                                                const std::optional<std::filesystem::path>& dataset,
                                                const std::filesystem::path& out);
-
-/// A pose of a TUM file.
-struct TumRow {
-  double t = 0.0;
-  obs::SE3 g = obs::SE3::Identity();  ///< the quaternion normalised
-  int line = 0;                       ///< in its file, from 1
-};
 
 /// A TUM file: lines of eight numbers separated by spaces or tabs (commas too, as some tools
 /// write them); empty lines and lines starting with '#' are skipped. Times must increase, and the
@@ -95,13 +95,15 @@ TrajectoryComparison compare_trajectory(const std::vector<TumRow>& reference,
 
 /// A written camera file against its reference (write_comparisons).
 struct CameraComparison {
-  TrajectoryFile file;
+  std::string file;  ///< the camera's file name in `out`
+  int target = -1;   ///< as TrajectoryFile
+  int camera = -1;
   std::string reference;  ///< the reference file as given, or the truth's file name in `out`
   TrajectoryComparison comparison;
 };
 
-/// Compares every camera file write_trajectories wrote into `out` (`files`) with `reference`, or
-/// without it with its target's truth file there (cameras of a target without one are left
+/// Compares every camera trajectory write_trajectories wrote into `out` (`files`) with
+/// `reference`, or without it with its target's truth (cameras of a target without one are left
 /// out), and writes `out`/comparison.json: the settings and, per camera, the matches, the errors
 /// (m, degrees) and the alignment. `reference` needs results of one target (InputError
 /// otherwise). Nothing to compare (no reference, no truth written) writes nothing.
