@@ -1,5 +1,5 @@
 // netvmo trajectories RESULTS [--dataset DATASET] [--out DIR] [--reference REF] [--align]
-// [--max-dt S]
+// [--max-dt S] [--reference-time-offset S]
 // A result folder's estimates.csv (and the dataset's ground truth) as TUM trajectory files, and
 // each camera's absolute trajectory error against the truth or a reference.
 #include <cmath>
@@ -49,6 +49,10 @@ void add_trajectories(CLI::App& app, int& exit_code) {
                   "[s] a pose is matched with the reference pose nearest in time within this")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--reference-time-offset", o->compare.reference_time_offset,
+                  "[s] added to the reference's times to put them on the results' clock (for a "
+                  "reference recorded on another clock)")
+      ->capture_default_str();
   cmd->callback([o, &exit_code]() {
     exit_code = guarded("trajectories", [&]() {
       const std::string out = o->out.empty() ? o->results + "/trajectories" : o->out;
@@ -59,6 +63,10 @@ void add_trajectories(CLI::App& app, int& exit_code) {
       }
       std::optional<std::filesystem::path> reference;
       if (!o->reference.empty()) reference = o->reference;
+      if (!reference && o->compare.reference_time_offset != 0.0)
+        throw InputError(
+            "--reference-time-offset: needs --reference (the dataset's truth is on the results' "
+            "clock)");
       if (!dataset && !reference && o->compare.align)
         throw InputError("--align: nothing to compare with (give --reference or --dataset)");
       io::OutputDir dir(out, "trajectories");

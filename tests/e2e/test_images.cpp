@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -409,6 +410,35 @@ TEST_F(SmallDataset, TrajectoryErrorsAgainstTheTruthAreTheRunsOwn) {
     EXPECT_LE(a["rotation_rmse_deg"].get<double>(),
               1.01 * compared["cameras"][i]["rotation_rmse_deg"].get<double>());
   }
+  // The truth as a reference on a clock 50 s ahead: refused until --reference-time-offset moves
+  // it back, then the same errors as against the dataset's truth.
+  const fs::path ahead = *dir_ / "truth_ahead.txt";
+  {
+    std::ifstream in(results / "trajectories" / "truth.txt");
+    std::ofstream o(ahead);
+    std::string line;
+    while (std::getline(in, line)) {
+      if (line.empty() || line[0] == '#') continue;
+      const size_t space = line.find(' ');
+      o << std::setprecision(17) << std::stod(line.substr(0, space)) + 50.0 << line.substr(space)
+        << '\n';
+    }
+  }
+  const std::string with_ahead = "trajectories " + results.string() + " --reference " +
+                                 ahead.string() + " --out " + (*dir_ / "ahead_out").string();
+  c = test::run_netvmo(with_ahead, *dir_);
+  EXPECT_EQ(c.code, 1);
+  test::expect_one_line(c.err, {ahead.string(), "no estimated pose", "--reference-time-offset"});
+  c = test::run_netvmo(with_ahead + " --reference-time-offset -50", *dir_);
+  ASSERT_EQ(c.code, 0) << c.err;
+  const auto moved = nlohmann::json::parse(slurp(*dir_ / "ahead_out" / "comparison.json"));
+  EXPECT_EQ(moved["reference_time_offset_s"], -50.0);
+  ASSERT_EQ(moved["cameras"].size(), 5u);
+  for (size_t i = 0; i < 5; ++i) {
+    EXPECT_EQ(moved["cameras"][i]["matched"], compared["cameras"][i]["matched"]);
+    EXPECT_NEAR(moved["cameras"][i]["position_mean_m"].get<double>(),
+                compared["cameras"][i]["position_mean_m"].get<double>(), 1e-8);
+  }
   // A reference that cannot be read: one line, and the comparison already written stays.
   const std::string before = slurp(comparison);
   c = test::run_netvmo(trajectories + " --reference " + (*dir_ / "none.txt").string(), *dir_);
@@ -418,6 +448,10 @@ TEST_F(SmallDataset, TrajectoryErrorsAgainstTheTruthAreTheRunsOwn) {
   c = test::run_netvmo("trajectories " + results.string() + " --align", *dir_);
   EXPECT_EQ(c.code, 1);
   test::expect_one_line(c.err, {"--align", "--reference"});
+  EXPECT_EQ(slurp(comparison), before);
+  c = test::run_netvmo(trajectories + " --reference-time-offset 2", *dir_);
+  EXPECT_EQ(c.code, 1);
+  test::expect_one_line(c.err, {"--reference-time-offset", "needs --reference"});
   EXPECT_EQ(slurp(comparison), before);
 }
 

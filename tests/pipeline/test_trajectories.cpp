@@ -412,6 +412,38 @@ TEST(Trajectories, ComparisonIsTheClosedFormAndTheAlignmentUndoesARigidMotion) {
   tight.max_dt = 0.001;
   test::expect_input_error([&] { compare_trajectory(reference, late, tight, "the pair"); },
                            {"the pair", "no estimated pose", "0.001"});
+  // A reference on another clock (100 s ahead): nothing matches until its times are moved back,
+  // then every pose matches its own as before. Moved by 10 ms less, every estimated pose but the
+  // first (2 ms after its own) is nearer the reference pose before its own, one step of the
+  // helix back.
+  std::vector<TumRow> ahead = reference;
+  for (auto& r : ahead) r.t += 100.0;
+  const auto displaced = estimate_of(obs::make_pose(d, obs::Vec3::Zero()));
+  test::expect_input_error([&] { compare_trajectory(ahead, displaced, plain, "the pair"); },
+                           {"the pair", "no estimated pose", "--reference-time-offset"});
+  TrajectoryComparisonSettings back = plain;
+  back.reference_time_offset = -100.0;
+  const auto moved_back = compare_trajectory(ahead, displaced, back, "moved back");
+  EXPECT_EQ(moved_back.matched, 101u);
+  EXPECT_EQ(moved_back.unmatched, 0u);
+  EXPECT_NEAR(moved_back.position_rmse, 0.13, 1e-12);
+  EXPECT_LT(moved_back.rotation_max, 1e-7);
+  back.reference_time_offset = -100.0 + 0.01;
+  const auto one_back = compare_trajectory(ahead, displaced, back, "one back");
+  EXPECT_EQ(one_back.matched, 101u);  // the first with its own, the only one within 10 ms
+  EXPECT_EQ(one_back.unmatched, 0u);
+  // The figures of the pairs (reference pose j - 1, estimate j), and (0, 0), computed here pair
+  // by pair.
+  double sum_p2 = 0.0, rot_max = 0.0;
+  for (int j = 0; j <= 300; j += 3) {
+    const obs::SE3& r = reference[static_cast<size_t>(std::max(j - 1, 0))].g;
+    const obs::SE3& e = reference[static_cast<size_t>(j)].g;
+    sum_p2 += (r.translation() - (e.translation() + d)).squaredNorm();
+    rot_max = std::max(rot_max, obs::log_so3(r.linear().transpose() * e.linear()).norm());
+  }
+  EXPECT_NEAR(one_back.position_rmse, std::sqrt(sum_p2 / 101.0), 1e-12);
+  EXPECT_NEAR(one_back.rotation_max, rot_max, 1e-12);
+  EXPECT_GT(one_back.rotation_max, 1e-3);  // a step of the helix turns it by about 0.01 rad
   // A target that stays at one point and turns: the positions alone would leave the alignment's
   // rotation free; the orientations give it.
   std::vector<TumRow> still = reference;

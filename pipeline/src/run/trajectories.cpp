@@ -189,14 +189,16 @@ TrajectoryComparison compare_trajectory(const std::vector<TumRow>& reference,
   // Each estimated pose with the reference pose nearest in time (the reference's times increase).
   std::vector<std::pair<const TumRow*, const TumRow*>> pairs;  // (reference, estimate)
   TrajectoryComparison c;
+  // Times on the reference's clock: t_ref + reference_time_offset is on the estimate's.
   for (const TumRow& e : estimate) {
-    const auto after = std::lower_bound(reference.begin(), reference.end(), e.t,
-                                        [](const TumRow& r, double t) { return r.t < t; });
+    const double t = e.t - settings.reference_time_offset;
+    const auto after = std::lower_bound(reference.begin(), reference.end(), t,
+                                        [](const TumRow& r, double t_r) { return r.t < t_r; });
     const TumRow* best = nullptr;
     if (after != reference.end()) best = &*after;
-    if (after != reference.begin() && (!best || e.t - (after - 1)->t < best->t - e.t))
+    if (after != reference.begin() && (!best || t - (after - 1)->t < best->t - t))
       best = &*(after - 1);
-    if (best && std::abs(best->t - e.t) <= settings.max_dt)
+    if (best && std::abs(best->t - t) <= settings.max_dt)
       pairs.emplace_back(best, &e);
     else
       ++c.unmatched;
@@ -204,7 +206,12 @@ TrajectoryComparison compare_trajectory(const std::vector<TumRow>& reference,
   c.matched = pairs.size();
   if (pairs.empty())
     throw InputError(what + ": no estimated pose has a reference pose within " +
-                     std::to_string(settings.max_dt) + " s (are they on one clock?)");
+                     std::to_string(settings.max_dt) + " s" +
+                     (settings.reference_time_offset != 0.0
+                          ? " after the reference's times are moved by " +
+                                std::to_string(settings.reference_time_offset) + " s"
+                          : std::string()) +
+                     " (are they on one clock? --reference-time-offset moves the reference's)");
   if (settings.align) {
     // The rigid motion A from the estimate's frame to the reference's: every matched pair says
     // R_ref = R_A R_est and p_ref = R_A p_est + t_A. R_A is the chordal L2 mean of the pairs'
@@ -276,6 +283,7 @@ std::vector<CameraComparison> write_comparisons(const fs::path& out,
   if (out_rows.empty()) return out_rows;
   nlohmann::json j;
   j["max_dt_s"] = settings.max_dt;
+  j["reference_time_offset_s"] = settings.reference_time_offset;
   j["aligned"] = settings.align;
   j["cameras"] = nlohmann::json::array();
   constexpr double deg = 180.0 / M_PI;

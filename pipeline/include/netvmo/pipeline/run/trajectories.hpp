@@ -65,6 +65,10 @@ struct TrajectoryComparisonSettings {
   /// [s] each estimated pose is matched with the reference pose nearest in time, if at most this
   /// far (evo's default t_max_diff).
   double max_dt = 0.01;
+  /// [s] added to the reference's times to put them on the results' clock before matching, for
+  /// a reference recorded on another clock (motion capture started at another instant): a
+  /// reference pose at t_ref is matched as if taken at t_ref + reference_time_offset.
+  double reference_time_offset = 0.0;
   /// Align the estimate onto the reference first, for a reference in another frame than the
   /// rig's world (a motion-capture system's): the rigid motion A (no scale) with R_A the chordal
   /// mean of the matched pairs' R_ref R_est^T and t_A the mean of p_ref - R_A p_est. Unlike
