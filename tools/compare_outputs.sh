@@ -19,6 +19,10 @@
 #   calibrate with a map (datasets/calib_map.yaml rendered, its map datasets/calib_map_tags.yaml)
 #       and without (datasets/calib_moved.yaml rendered, 20 frames, --keep-going): every output
 #       file (calibration.json without its wall times, "seconds") and the lines printed
+#   render datasets/unsync.yaml (cameras on their own clocks) and run on it, on the union of
+#       their image times: the rendering and the run's outputs as above; the same for
+#       datasets/moving_cameras.yaml with cameras 2 and 3 put on their own clocks (25 frames/s
+#       from 13 ms, 15 frames/s from 47 ms), 30 frames
 #   (not the output folders' .lock files: they hold the writer's pid)
 # Exit status 0 when everything is identical; a CSV file whose every field is the same number
 # written differently (e.g. -0 and 0) counts as identical and is listed; otherwise the
@@ -116,6 +120,15 @@ produce() {  # produce NETVMO NAME: outputs in $work/NAME, produced under one co
     --quiet >/dev/null
   "$bin" calibrate "$out/calib_moved_dataset" --out "$out/calibrate_moved" --no-plots \
     --keep-going >"$out/calibrate_moved.txt" 2>/dev/null
+  # Cameras on their own clocks: the run on the union of their image times.
+  "$bin" render "$top/datasets/unsync.yaml" --out "$out/unsync_dataset" --quiet >/dev/null
+  "$bin" run "$out/unsync_dataset" --out "$out/run_unsync" --no-overlays --no-plots >/dev/null 2>&1
+  sed -e 's/^  - id: 2$/&\n    fps: 25\n    start: 0.013/' -e 's/^  - id: 3$/&\n    fps: 15\n    start: 0.047/' \
+    "$top/datasets/moving_cameras.yaml" >"$work/moving_unsync.yaml"
+  "$bin" render "$work/moving_unsync.yaml" --out "$out/moving_unsync_dataset" --frames 30 \
+    --quiet >/dev/null
+  "$bin" run "$out/moving_unsync_dataset" --out "$out/run_moving_unsync" --no-overlays \
+    --no-plots >/dev/null 2>&1
   for c in calibrate_map calibrate_moved; do
     grep -v '"seconds":' "$out/$c/calibration.json" >"$out/$c/calibration.noseconds.json"
     rm "$out/$c/calibration.json"
@@ -125,7 +138,7 @@ produce() {  # produce NETVMO NAME: outputs in $work/NAME, produced under one co
   rm -f "$out"/launch/nodes/*.log "$out"/launch/nodes/*.json "$out/launch/cyclonedds.xml" \
     "$out/launch/messages.json" "$out/launch/exchange.json"
   # Wall-clock timings differ from run to run; everything else must not.
-  for r in run run_lossy run_zero_offset launch; do
+  for r in run run_lossy run_zero_offset launch run_unsync run_moving_unsync; do
     awk '/^  "timing": \{/ {skip = 1} !skip {print} skip && /^  \},?$/ {skip = 0}' \
       "$out/$r/summary.json" > "$out/$r/summary.notiming.json"
     rm "$out/$r/summary.json"

@@ -357,133 +357,177 @@ struct Event {
 };
 
 // Cameras on their own clocks: the observer advances on the union of their image times (see
-// run_images in the header).
-void run_union(Pipeline& p, const FrameHook& hook, ImageRunResult& result) {
-  sources::NetworkSource& source = p.source;
-  const ImageRunSettings& options = p.options;
-  const size_t n = p.n, T = p.targets.size();
-  TimeGrid grid = time_grid(source);
-  if (options.max_frames) grid.frames = std::min(grid.frames, *options.max_frames);
-  const double t_end = grid.time(grid.frames - 1);
-  std::vector<Event> events;
-  for (size_t i = 0; i < n; ++i)
-    for (const auto& [k, t] : sources::camera_images(source, i))
-      if (t <= t_end + 1e-9) events.push_back({t, i, k});
-  std::stable_sort(events.begin(), events.end(), [](const Event& a, const Event& b) {
-    return a.t < b.t || (a.t == b.t && a.camera < b.camera);
-  });
-  result.union_of_timestamps = true;
-  result.time_origin_s = 0.0;  // the images' own times
-  result.source_frames.assign(static_cast<size_t>(grid.frames), std::vector<int>(n, -1));
+// run_images in the header). Up to each grid time it takes every camera's images in time order;
+// an image changes only its camera's delta_i and measurement, held until its next image. Every
+// grid time is recorded with what the cameras hold then.
+class UnionRun {
+ public:
+  UnionRun(Pipeline& p, ImageRunResult& result)
+      : p_(p),
+        result_(result),
+        moving_(p.source.cameras_move()),
+        grid_(time_grid(p.source)),
+        held_(p.targets.size()) {
+    if (p.options.max_frames) grid_.frames = std::min(grid_.frames, *p.options.max_frames);
+    events_ = events_until(p.source, grid_.time(grid_.frames - 1));
+    net_start_ = network_start(events_, p.n);
+    for (auto& h : held_) h.resize(p.n);
+    held_cams_ = p.frames_for(p.n);
+    held_images_.resize(p.n);
+    held_frame_.assign(p.n, -1);
+    now_ = events_.empty() ? grid_.t0 : std::min(grid_.t0, events_.front().t);
+    result.union_of_timestamps = true;
+    result.time_origin_s = 0.0;  // the images' own times
+    result.source_frames.assign(static_cast<size_t>(grid_.frames), std::vector<int>(p.n, -1));
+  }
 
-  const bool moving = source.cameras_move();
-  const auto motion_at = [&](double t, double t_next) {
-    std::vector<obs::SE3> g(n);
-    std::vector<obs::Vec6> V(n, obs::Vec6::Zero());
-    for (size_t i = 0; i < n; ++i) {
-      g[i] = source.camera_believed_at(i, t);
-      if (!options.ignore_camera_velocity && t_next > t)
-        V[i] = camera_velocity(g[i], source.camera_believed_at(i, t_next), t_next - t);
+  void run(const FrameHook& hook) {
+    const auto t_start = Clock::now();
+    Progress progress("run", grid_.frames, p_.options.progress);
+    for (int k = 0; k < grid_.frames; ++k) {
+      const double tk = grid_.time(k);
+      for (; next_ < events_.size() && events_[next_].t <= tk + 1e-9; ++next_) {
+        if (next_ == detected_end_) detect_from(next_);
+        take(next_, tk);
+      }
+      record(k, hook, progress);
     }
-    for (auto& r : p.runners) r->set_camera_motion(g, V);
-  };
-  // The network starts once every camera has taken its first image (the latest first image of
-  // a camera that has any): earlier images only set their cameras' held measurements, so every
+    progress.finish();
+    result_.seconds = seconds_since(t_start);
+    p_.add_stage_seconds(result_);
+  }
+
+ private:
+  // Every camera's images up to t_end, in time order (among equal times, by camera).
+  static std::vector<Event> events_until(sources::NetworkSource& source, double t_end) {
+    std::vector<Event> events;
+    for (size_t i = 0; i < source.network().cameras.size(); ++i)
+      for (const auto& [k, t] : sources::camera_images(source, i))
+        if (t <= t_end + 1e-9) events.push_back({t, i, k});
+    std::stable_sort(events.begin(), events.end(), [](const Event& a, const Event& b) {
+      return a.t < b.t || (a.t == b.t && a.camera < b.camera);
+    });
+    return events;
+  }
+  // The network starts once every camera has taken its first image (the latest first image of a
+  // camera that has any): earlier images only set their cameras' held measurements, so every
   // camera that sees the target starts from its own PnP pose, as in a synchronised run, instead
   // of from a neighbour that happened to start first.
-  double net_start = -std::numeric_limits<double>::infinity();
-  std::vector<bool> has_image(n, false);
-  for (const auto& e : events)
-    if (!has_image[e.camera]) {
-      has_image[e.camera] = true;
-      net_start = std::max(net_start, e.t);
-    }
-  // held[j][i]: camera i's latest measurement of target j, and its front end's result.
-  std::vector<std::vector<obs::Measurement>> held(T, std::vector<obs::Measurement>(n));
-  auto held_cams = p.frames_for(n);
-  // Between two times: pieces of at most one grid step, each with the sub-step rule.
-  const auto advance = [&](double from, double to) {
-    const double span = to - std::max(from, net_start);
-    if (!(span > 0)) return;
-    const int pieces = std::max(1, static_cast<int>(std::ceil(span / grid.dt - 1e-9)));
-    for (size_t j = 0; j < T; ++j)
-      for (int q = 0; q < pieces; ++q) p.runners[j]->advance(span / pieces, held[j]);
-  };
-
-  std::vector<cv::Mat> held_images(n);
-  std::vector<int> held_frame(n, -1);
-  // The front end runs ahead in batches of events [fe_base, fe_done): each worker takes its
-  // cameras' images in time order.
-  const size_t batch = std::max<size_t>(2 * n, 8);
-  std::vector<cv::Mat> images;
-  std::vector<std::vector<frontend::Observation>> cams;
-  std::vector<std::exception_ptr> errors;
-  size_t next_event = 0, fe_base = 0, fe_done = 0;
-  double now = events.empty() ? grid.t0 : std::min(grid.t0, events.front().t);
-  const auto t_start = Clock::now();
-  Progress progress("run", grid.frames, options.progress);
-  for (int k = 0; k < grid.frames; ++k) {
-    const double tk = grid.time(k);
-    // Every event up to this grid time, in order.
-    for (; next_event < events.size() && events[next_event].t <= tk + 1e-9; ++next_event) {
-      if (next_event == fe_done) {
-        fe_base = fe_done;
-        fe_done = std::min(events.size(), fe_base + batch);
-        images.assign(fe_done - fe_base, cv::Mat());
-        cams = p.frames_for(fe_done - fe_base);
-        errors.assign(fe_done - fe_base, nullptr);
-        const auto t_fe = Clock::now();
-        p.in_parallel([&](int w) {
-          for (size_t e = fe_base; e < fe_done; ++e)
-            if (static_cast<int>(events[e].camera % static_cast<size_t>(p.workers)) == w)
-              errors[e - fe_base] = p.observe(w, events[e].camera, events[e].frame,
-                                              images[e - fe_base], cams, e - fe_base);
-        });
-        result.seconds_front_end += seconds_since(t_fe);
+  static double network_start(const std::vector<Event>& events, size_t n) {
+    double start = -std::numeric_limits<double>::infinity();
+    std::vector<bool> has_image(n, false);
+    for (const auto& e : events)
+      if (!has_image[e.camera]) {
+        has_image[e.camera] = true;
+        start = std::max(start, e.t);
       }
-      const Event& ev = events[next_event];
-      const size_t b = next_event - fe_base, i = ev.camera;
-      p.report(errors[b], i, ev.frame, result);
-      const auto t_obs = Clock::now();
-      advance(now, ev.t);
-      now = std::max(now, ev.t);
-      if (moving) motion_at(now, tk);
-      // Only this camera's delta_i and measurement change (held until its next image); the
-      // truth at its image time is for the exact error model.
-      for (size_t j = 0; j < T; ++j) {
-        held_cams[j][i] = cams[j][b];
-        held[j][i] = measurement_of(held_cams[j][i], source.target_truth_at(ev.t, j),
-                                    source.camera_truth_at(i, ev.t));
-        // estimates.csv: the camera's estimate at its image's time.
-        const auto est = p.runners[j]->estimate_world(i);
-        result.target(j).own_estimates.push_back({ev.frame, ev.t, i, held[j][i].delta,
-                                                  est.has_value(),
-                                                  est.value_or(obs::SE3::Identity())});
-      }
-      held_images[i] = images[b];
-      held_frame[i] = ev.frame;
-      result.seconds_observer += seconds_since(t_obs);
-    }
-    const auto t_obs = Clock::now();
-    advance(now, tk);
-    now = std::max(now, tk);
-    if (moving) motion_at(now, k + 1 < grid.frames ? grid.time(k + 1) : now);
-    std::vector<std::optional<obs::SE3>> true_wi(n);
-    for (size_t i = 0; i < n; ++i) true_wi[i] = source.camera_truth_at(i, tk);
-    std::vector<const FrameRecord*> records(T);
-    for (size_t j = 0; j < T; ++j) {
-      const auto target = source.target_truth_at(tk, j);
-      records[j] =
-          &p.runners[j]->record(k, tk, measurements_of(held_cams[j], target, true_wi), target);
-    }
-    result.source_frames[static_cast<size_t>(k)] = held_frame;
-    result.seconds_observer += seconds_since(t_obs);
-    p.frame_done(k, held_images, held_cams, records, hook, result, progress);
+    return start;
   }
-  progress.finish();
-  result.seconds = seconds_since(t_start);
-  p.add_stage_seconds(result);
-}
+  // The front end runs ahead in batches of events [detected_base_, detected_end_): each worker
+  // takes its cameras' images in time order.
+  void detect_from(size_t first) {
+    const size_t batch = std::max<size_t>(2 * p_.n, 8);
+    detected_base_ = first;
+    detected_end_ = std::min(events_.size(), first + batch);
+    const size_t size = detected_end_ - detected_base_;
+    images_.assign(size, cv::Mat());
+    cams_ = p_.frames_for(size);
+    errors_.assign(size, nullptr);
+    const auto t_fe = Clock::now();
+    p_.in_parallel([&](int w) {
+      for (size_t e = detected_base_; e < detected_end_; ++e)
+        if (static_cast<int>(events_[e].camera % static_cast<size_t>(p_.workers)) == w)
+          errors_[e - detected_base_] =
+              p_.observe(w, events_[e].camera, events_[e].frame, images_[e - detected_base_], cams_,
+                         e - detected_base_);
+    });
+    result_.seconds_front_end += seconds_since(t_fe);
+  }
+  // Event e, before grid time tk: the network advanced to its time, then its camera's held
+  // measurement replaced (the truth at the image's time is for the exact error model).
+  void take(size_t e, double tk) {
+    const Event& ev = events_[e];
+    const size_t b = e - detected_base_, i = ev.camera;
+    p_.report(errors_[b], i, ev.frame, result_);
+    const auto t_obs = Clock::now();
+    advance_to(ev.t);
+    if (moving_) set_camera_motion(now_, tk);
+    for (size_t j = 0; j < p_.targets.size(); ++j) {
+      held_cams_[j][i] = cams_[j][b];
+      held_[j][i] = measurement_of(held_cams_[j][i], p_.source.target_truth_at(ev.t, j),
+                                   p_.source.camera_truth_at(i, ev.t));
+      // estimates.csv: the camera's estimate at its image's time.
+      const auto est = p_.runners[j]->estimate_world(i);
+      result_.target(j).own_estimates.push_back({ev.frame, ev.t, i, held_[j][i].delta,
+                                                 est.has_value(),
+                                                 est.value_or(obs::SE3::Identity())});
+    }
+    held_images_[i] = images_[b];
+    held_frame_[i] = ev.frame;
+    result_.seconds_observer += seconds_since(t_obs);
+  }
+  // Grid time k: the network advanced to it and every target's frame recorded with what the
+  // cameras hold.
+  void record(int k, const FrameHook& hook, Progress& progress) {
+    const auto t_obs = Clock::now();
+    const double tk = grid_.time(k);
+    advance_to(tk);
+    if (moving_) set_camera_motion(now_, k + 1 < grid_.frames ? grid_.time(k + 1) : now_);
+    std::vector<std::optional<obs::SE3>> true_wi(p_.n);
+    for (size_t i = 0; i < p_.n; ++i) true_wi[i] = p_.source.camera_truth_at(i, tk);
+    std::vector<const FrameRecord*> records(p_.targets.size());
+    for (size_t j = 0; j < p_.targets.size(); ++j) {
+      const auto target = p_.source.target_truth_at(tk, j);
+      records[j] =
+          &p_.runners[j]->record(k, tk, measurements_of(held_cams_[j], target, true_wi), target);
+    }
+    result_.source_frames[static_cast<size_t>(k)] = held_frame_;
+    result_.seconds_observer += seconds_since(t_obs);
+    p_.frame_done(k, held_images_, held_cams_, records, hook, result_, progress);
+  }
+  // The network from now_ to `to` (not before it starts) in pieces of at most one grid step,
+  // each with the sub-step rule; now_ moves to `to` if that is later.
+  void advance_to(double to) {
+    const double span = to - std::max(now_, net_start_);
+    if (span > 0) {
+      const int pieces = std::max(1, static_cast<int>(std::ceil(span / grid_.dt - 1e-9)));
+      for (size_t j = 0; j < p_.targets.size(); ++j)
+        for (int q = 0; q < pieces; ++q) p_.runners[j]->advance(span / pieces, held_[j]);
+    }
+    now_ = std::max(now_, to);
+  }
+  // Every camera's believed pose at t and, unless ignored, its velocity towards t_next.
+  void set_camera_motion(double t, double t_next) {
+    std::vector<obs::SE3> g(p_.n);
+    std::vector<obs::Vec6> V(p_.n, obs::Vec6::Zero());
+    for (size_t i = 0; i < p_.n; ++i) {
+      g[i] = p_.source.camera_believed_at(i, t);
+      if (!p_.options.ignore_camera_velocity && t_next > t)
+        V[i] = camera_velocity(g[i], p_.source.camera_believed_at(i, t_next), t_next - t);
+    }
+    for (auto& r : p_.runners) r->set_camera_motion(g, V);
+  }
+
+  Pipeline& p_;
+  ImageRunResult& result_;
+  const bool moving_;  ///< the cameras move: their poses and velocities are set at every step
+  TimeGrid grid_;
+  std::vector<Event> events_;
+  double net_start_ = 0.0;
+  double now_ = 0.0;  ///< the time the network has advanced to
+  size_t next_ = 0;   ///< the next event to take
+  // held_[j][i]: camera i's latest measurement of target j, and its front end's result, image
+  // and frame.
+  std::vector<std::vector<obs::Measurement>> held_;
+  std::vector<std::vector<frontend::Observation>> held_cams_;
+  std::vector<cv::Mat> held_images_;
+  std::vector<int> held_frame_;
+  // The batch of events the front end has detected: [detected_base_, detected_end_).
+  size_t detected_base_ = 0, detected_end_ = 0;
+  std::vector<cv::Mat> images_;
+  std::vector<std::vector<frontend::Observation>> cams_;
+  std::vector<std::exception_ptr> errors_;
+};
 
 }  // namespace
 
@@ -518,7 +562,7 @@ ImageRunResult run_images(sources::NetworkSource& source, const ImageRunSettings
     for (size_t j = 0; j < T; ++j) result.target(j).history = p.runners[j]->history();
   };
   if (own_clocks) {
-    run_union(p, hook, result);
+    UnionRun(p, result).run(hook);
     histories();
     p.add_resampling_warnings(result);
     return result;
