@@ -282,15 +282,13 @@ cv::Mat Dataset::read(size_t camera_index, int frame) {
   return m;
 }
 
-Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera, bool keep_going) {
-  if (!fs::is_directory(dir)) throw InputError(dir.string() + ": dataset folder not found");
-  Dataset ds;
-  ds.dir = dir;
-  ds.network = io::load_network_config(dir / "network.yaml");
-  const bool bag = ros::RosBag::is_bag(dir);
-  const std::int64_t origin = bag ? check_bag_topics(dir, ds.network) : 0;
+namespace {
+
+// A bag's note on its clock (`origin`, ns); topics in network.yaml refused for a folder that is
+// not a bag.
+void check_topics(Dataset& ds, bool bag, std::int64_t origin) {
   if (bag)
-    ds.notes.push_back(dir.string() + " is a rosbag2 bag: every camera's images are its " +
+    ds.notes.push_back(ds.dir.string() + " is a rosbag2 bag: every camera's images are its " +
                        "image_topic's messages, their times header.stamp less " +
                        std::to_string(origin / 1'000'000'000) + "." +
                        std::to_string(1'000'000'000 + origin % 1'000'000'000).substr(1) +
@@ -300,90 +298,103 @@ Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera, bool k
          {std::pair{"image_topic", ds.network.cameras[i].image_topic},
           std::pair{"camera_info_topic", ds.network.cameras[i].camera_info_topic}})
       if (topic)
-        throw InputError((dir / "network.yaml").string() + ": cameras[" + std::to_string(i) + "]." +
-                         key + ": only a rosbag2 bag's dataset (" + dir.string() +
+        throw InputError((ds.dir / "network.yaml").string() + ": cameras[" + std::to_string(i) +
+                         "]." + key + ": only a rosbag2 bag's dataset (" + ds.dir.string() +
                          " has no metadata.yaml) or a live folder (launch, node --live) names "
                          "topics");
+}
 
-  std::set<std::string> declared;
-  for (const auto& cc : ds.network.cameras) {
-    const std::string name = "cam_" + std::to_string(cc.id);
-    declared.insert(name);
-    DatasetCamera cam;
-    cam.id = cc.id;
-    if (only_camera && cc.id != *only_camera) {
-      ds.cameras.push_back(std::move(cam));
-      continue;
-    }
-    // Calibration
-    if (auto calib = find_calibration(dir, cc.id)) {
-      cam.calib = std::move(*calib);
-    } else if (bag && cc.camera_info_topic) {
-      cam.calib = bag_calibration(dir, *cc.camera_info_topic);
-    } else {
-      throw InputError(calibration_not_found(dir, cc.id) +
-                       (bag ? "; network.yaml names no camera_info_topic for it" : ""));
-    }
-    // Frames: a bag's image topic, or exactly one entry of one registered stream kind (image
-    // folder, video, ...).
-    std::vector<std::pair<const StreamKind*, fs::path>> found;
-    for (const auto* kind : stream_kinds())
-      for (const auto& p : kind->entries(dir, name)) found.emplace_back(kind, p);
-    if (bag) {
-      if (!found.empty())
-        throw InputError(found[0].second.string() + ": camera " + std::to_string(cc.id) +
-                         " has both this " + std::string(found[0].first->name()) +
-                         " and the bag's topic " + *cc.image_topic + "; keep one");
-      try {
-        cam.source = open_bag_topic(dir, *cc.image_topic, origin);
-      } catch (const InputError& e) {
-        if (!keep_going) throw;
-        ds.warnings.push_back(std::string(e.what()) + "; camera " + std::to_string(cc.id) +
-                              " is blind for the whole run (--keep-going)");
-        cam.source = std::make_unique<UnreadableStream>(dir.string() + ":" + *cc.image_topic);
-      }
-      ds.cameras.push_back(std::move(cam));
-      continue;
-    }
-    if (found.empty()) {
-      std::string kinds;
-      for (const auto* kind : stream_kinds())
-        kinds += std::string(kinds.empty() ? "" : " or ") + std::string(kind->description());
-      throw InputError((dir / name).string() + ": no frames for camera " + std::to_string(cc.id) +
-                       " of network.yaml (expected " + kinds + ")");
-    }
-    if (found.size() > 1)
-      throw InputError(found[1].second.string() + ": camera " + std::to_string(cc.id) +
-                       " has both " + found[0].second.filename().string() + " (" +
-                       std::string(found[0].first->name()) + ") and " +
-                       found[1].second.filename().string() + " (" +
-                       std::string(found[1].first->name()) + "); keep one");
-    try {
-      cam.source = found[0].first->open(found[0].second);
-    } catch (const InputError& e) {
-      if (!keep_going) throw;
-      ds.warnings.push_back(std::string(e.what()) + "; camera " + std::to_string(cc.id) +
-                            " is blind for the whole run (--keep-going)");
-      cam.source = std::make_unique<UnreadableStream>(found[0].second);
-      ds.cameras.push_back(std::move(cam));
-      continue;
-    }
-    const auto missing = cam.source->missing_frames();
-    if (!missing.empty())
-      ds.warnings.push_back(cam.source->path().string() + ": " + std::to_string(missing.size()) +
-                            " missing frame(s) (" + list_frames(missing) + "); camera " +
-                            std::to_string(cc.id) + " is blind there");
-    ds.cameras.push_back(std::move(cam));
+// What open_camera needs of the dataset.
+struct CameraOpening {
+  const fs::path& dir;
+  bool bag = false;
+  std::int64_t origin = 0;  ///< a bag's time origin (ns)
+  bool keep_going = false;
+  std::vector<std::string>& warnings;
+};
+
+// Called in the handler of a stream's InputError `e`: with keep_going a blind camera (a
+// warning), otherwise the error rethrown as it was.
+std::unique_ptr<CameraStream> blind_or_throw(const InputError& e, int id, const fs::path& what,
+                                             const CameraOpening& o) {
+  if (!o.keep_going) throw;
+  o.warnings.push_back(std::string(e.what()) + "; camera " + std::to_string(id) +
+                       " is blind for the whole run (--keep-going)");
+  return std::make_unique<UnreadableStream>(what);
+}
+
+// Camera cc's calibration and frames: a bag's image topic, or exactly one entry cam_<id> of one
+// registered stream kind (image folder, video, ...).
+DatasetCamera open_camera(const io::CameraConfig& cc, const CameraOpening& o) {
+  const fs::path& dir = o.dir;
+  const std::string name = "cam_" + std::to_string(cc.id);
+  DatasetCamera cam;
+  cam.id = cc.id;
+  if (auto calib = find_calibration(dir, cc.id)) {
+    cam.calib = std::move(*calib);
+  } else if (o.bag && cc.camera_info_topic) {
+    cam.calib = bag_calibration(dir, *cc.camera_info_topic);
+  } else {
+    throw InputError(calibration_not_found(dir, cc.id) +
+                     (o.bag ? "; network.yaml names no camera_info_topic for it" : ""));
   }
-  // Entries for cameras network.yaml does not declare are ignored, with a warning.
-  for (const auto& e : fs::directory_iterator(dir)) {
+  std::vector<std::pair<const StreamKind*, fs::path>> found;
+  for (const auto* kind : stream_kinds())
+    for (const auto& p : kind->entries(dir, name)) found.emplace_back(kind, p);
+  if (o.bag) {
+    if (!found.empty())
+      throw InputError(found[0].second.string() + ": camera " + std::to_string(cc.id) +
+                       " has both this " + std::string(found[0].first->name()) +
+                       " and the bag's topic " + *cc.image_topic + "; keep one");
+    try {
+      cam.source = open_bag_topic(dir, *cc.image_topic, o.origin);
+    } catch (const InputError& e) {
+      cam.source = blind_or_throw(e, cc.id, dir.string() + ":" + *cc.image_topic, o);
+    }
+    return cam;
+  }
+  if (found.empty()) {
+    std::string kinds;
+    for (const auto* kind : stream_kinds())
+      kinds += std::string(kinds.empty() ? "" : " or ") + std::string(kind->description());
+    throw InputError((dir / name).string() + ": no frames for camera " + std::to_string(cc.id) +
+                     " of network.yaml (expected " + kinds + ")");
+  }
+  if (found.size() > 1)
+    throw InputError(found[1].second.string() + ": camera " + std::to_string(cc.id) + " has both " +
+                     found[0].second.filename().string() + " (" +
+                     std::string(found[0].first->name()) + ") and " +
+                     found[1].second.filename().string() + " (" +
+                     std::string(found[1].first->name()) + "); keep one");
+  try {
+    cam.source = found[0].first->open(found[0].second);
+  } catch (const InputError& e) {
+    cam.source = blind_or_throw(e, cc.id, found[0].second, o);
+    return cam;
+  }
+  const auto missing = cam.source->missing_frames();
+  if (!missing.empty())
+    o.warnings.push_back(cam.source->path().string() + ": " + std::to_string(missing.size()) +
+                         " missing frame(s) (" + list_frames(missing) + "); camera " +
+                         std::to_string(cc.id) + " is blind there");
+  return cam;
+}
+
+// Entries for cameras network.yaml does not declare are ignored, with a warning.
+void warn_undeclared(Dataset& ds) {
+  std::set<std::string> declared;
+  for (const auto& cc : ds.network.cameras) declared.insert("cam_" + std::to_string(cc.id));
+  for (const auto& e : fs::directory_iterator(ds.dir)) {
     const std::string stem = e.path().stem().string();
-    if (!only_camera && stem.rfind("cam_", 0) == 0 && all_digits(stem.substr(4)) &&
-        !declared.count(stem))
+    if (stem.rfind("cam_", 0) == 0 && all_digits(stem.substr(4)) && !declared.count(stem))
       ds.warnings.push_back(e.path().string() + ": camera " + stem.substr(4) +
                             " is not in network.yaml; ignored");
   }
-  // Frame count rule (over the cameras at the dataset's fps; the others keep their own count).
+}
+
+// The frame count rule (dataset.hpp), over the cameras at the dataset's fps (the others keep
+// their own count), and a warning for each of those with fewer or more frames.
+void set_frame_count(Dataset& ds) {
   const auto own_clock = [&](size_t i) { return ds.network.camera_fps(i) != ds.network.fps; };
   int longest = 0, longest_any = 0;
   for (size_t i = 0; i < ds.cameras.size(); ++i) {
@@ -408,6 +419,30 @@ Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera, bool k
                             " has " + std::to_string(n) + " frames but network.yaml says frames: " +
                             std::to_string(ds.frame_count) + "; the extra frames are ignored");
   }
+}
+
+}  // namespace
+
+Dataset open_dataset(const fs::path& dir, std::optional<int> only_camera, bool keep_going) {
+  if (!fs::is_directory(dir)) throw InputError(dir.string() + ": dataset folder not found");
+  Dataset ds;
+  ds.dir = dir;
+  ds.network = io::load_network_config(dir / "network.yaml");
+  const bool bag = ros::RosBag::is_bag(dir);
+  const std::int64_t origin = bag ? check_bag_topics(dir, ds.network) : 0;
+  check_topics(ds, bag, origin);
+  const CameraOpening opening{dir, bag, origin, keep_going, ds.warnings};
+  for (const auto& cc : ds.network.cameras) {
+    if (only_camera && cc.id != *only_camera) {  // another process's camera: its id alone
+      DatasetCamera other;
+      other.id = cc.id;
+      ds.cameras.push_back(std::move(other));
+    } else {
+      ds.cameras.push_back(open_camera(cc, opening));
+    }
+  }
+  if (!only_camera) warn_undeclared(ds);
+  set_frame_count(ds);
   read_timestamps(ds);
   read_camera_poses(ds);
   return ds;
