@@ -362,6 +362,76 @@ std::vector<bool> linked_cameras(const std::vector<std::set<size_t>>& moment_cam
   return linked;
 }
 
+// Which cameras and moments have an initial pose (initial_poses).
+struct Known {
+  std::vector<bool> cams, bodies;
+};
+
+// Initial poses (ba.X of the cameras `linked` to the reference, ba.Y of the moments): per image
+// g_ib from PnP; breadth first from the reference camera `ref` (its X set), each new pose the
+// candidate with the smallest robust cost over what is already known.
+Known initial_poses(Ba& ba, const std::vector<bool>& linked, size_t ref, double huber_px) {
+  const auto images = by_image(ba);
+  std::map<std::pair<size_t, size_t>, obs::SE3> g_io;  // (camera, moment) -> g_ib
+  for (const auto& [key, group] : images)
+    if (auto g = image_pnp(group)) g_io[{key.first, group[0]->body}] = *g;
+  const size_t n = ba.X.size();
+  std::vector<bool> cam_known(n, false), body_known(ba.Y.size(), false);
+  cam_known[ref] = true;
+  for (bool grew = true; grew;) {
+    grew = false;
+    for (size_t k = 0; k < ba.Y.size(); ++k) {
+      if (body_known[k]) continue;
+      for (const auto& [key, g] : g_io)
+        if (key.second == k && cam_known[key.first]) {
+          // Y_k = g_wb = X B(t) g_ib.
+          const size_t cam = key.first;  // structured bindings are not captured before C++20
+          const auto& o = *std::find_if(ba.seen.begin(), ba.seen.end(), [&](const TagSeen& t) {
+            return t.cam == cam && t.body == k;
+          });
+          ba.Y[k] = ba.X[key.first] * o.B_inv.inverse() * g;
+          body_known[k] = grew = true;
+          break;
+        }
+    }
+    for (size_t i = 0; i < n; ++i) {
+      if (cam_known[i] || !linked[i]) continue;
+      std::vector<obs::SE3> cands;
+      for (const auto& [key, g] : g_io)
+        if (key.first == i && body_known[key.second]) {
+          const size_t body = key.second;  // structured bindings are not captured before C++20
+          const auto& o = *std::find_if(ba.seen.begin(), ba.seen.end(), [&](const TagSeen& t) {
+            return t.cam == i && t.body == body;
+          });
+          cands.push_back(ba.Y[key.second] * g.inverse() * o.B_inv);  // X = Y g_ib^-1 B^-1
+        }
+      double best = 1e300;
+      for (const auto& X : cands) {
+        const double c = robust_cost(ba, i, X, huber_px, &body_known);
+        if (c < best) best = c, ba.X[i] = X;
+      }
+      if (!cands.empty()) cam_known[i] = grew = true;
+    }
+  }
+  return {cam_known, body_known};
+}
+
+// sigma^2 = sum r^2 / (m - n) over the used observations: m residuals (2 per corner), n free
+// parameters (6 per moment and per camera used, less the reference's); 0 when m <= n.
+double residual_variance(const Ba& ba) {
+  double sum = 0;
+  int m = 0;
+  std::set<size_t> cams_used, bodies_used;
+  for (const auto& o : ba.seen)
+    if (o.used) {
+      for (int k = 0; k < 4; ++k) sum += ba.residual(o, k).squaredNorm(), m += 2;
+      cams_used.insert(o.cam);
+      bodies_used.insert(o.body);
+    }
+  const int params = 6 * int(bodies_used.size() + cams_used.size() - 1);
+  return m > params ? sum / (m - params) : 0.0;
+}
+
 CalibrationResult calibrate_without_map(sources::Dataset& ds, const CalibrationSettings& s) {
   CalibrationResult result;
   init_result(ds, result);
@@ -420,49 +490,9 @@ CalibrationResult calibrate_without_map(sources::Dataset& ds, const CalibrationS
   ba.cam_fixed[size_t(ref)] = true;
   result.cameras[size_t(ref)].reference = true;
 
-  // Initial poses: per image g_ib from PnP; breadth first from the reference, each new pose the
-  // candidate with the smallest robust cost over what is already known.
-  const auto images = by_image(ba);
-  std::map<std::pair<size_t, size_t>, obs::SE3> g_io;  // (camera, moment) -> g_ib
-  for (const auto& [key, group] : images)
-    if (auto g = image_pnp(group)) g_io[{key.first, group[0]->body}] = *g;
-  std::vector<bool> cam_known(n, false), body_known(ba.Y.size(), false);
-  cam_known[size_t(ref)] = true;
-  for (bool grew = true; grew;) {
-    grew = false;
-    for (size_t k = 0; k < ba.Y.size(); ++k) {
-      if (body_known[k]) continue;
-      for (const auto& [key, g] : g_io)
-        if (key.second == k && cam_known[key.first]) {
-          // Y_k = g_wb = X B(t) g_ib.
-          const size_t cam = key.first;  // structured bindings are not captured before C++20
-          const auto& o = *std::find_if(ba.seen.begin(), ba.seen.end(), [&](const TagSeen& t) {
-            return t.cam == cam && t.body == k;
-          });
-          ba.Y[k] = ba.X[key.first] * o.B_inv.inverse() * g;
-          body_known[k] = grew = true;
-          break;
-        }
-    }
-    for (size_t i = 0; i < n; ++i) {
-      if (cam_known[i] || !linked[i]) continue;
-      std::vector<obs::SE3> cands;
-      for (const auto& [key, g] : g_io)
-        if (key.first == i && body_known[key.second]) {
-          const size_t body = key.second;  // structured bindings are not captured before C++20
-          const auto& o = *std::find_if(ba.seen.begin(), ba.seen.end(), [&](const TagSeen& t) {
-            return t.cam == i && t.body == body;
-          });
-          cands.push_back(ba.Y[key.second] * g.inverse() * o.B_inv);  // X = Y g_ib^-1 B^-1
-        }
-      double best = 1e300;
-      for (const auto& X : cands) {
-        const double c = robust_cost(ba, i, X, s.huber_px, &body_known);
-        if (c < best) best = c, ba.X[i] = X;
-      }
-      if (!cands.empty()) cam_known[i] = grew = true;
-    }
-  }
+  const Known known = initial_poses(ba, linked, size_t(ref), s.huber_px);
+  const auto& cam_known = known.cams;
+  const auto& body_known = known.bodies;
   for (size_t i = 0; i < n; ++i)
     if (linked[i] && !cam_known[i] && result.cameras[i].reason.empty())
       result.cameras[i].reason = "no PnP pose of the body in its shared moments";
@@ -473,18 +503,7 @@ CalibrationResult calibrate_without_map(sources::Dataset& ds, const CalibrationS
   solve(ba, s);
   std::vector<bool> cov_ok;
   const auto cov = camera_covariances(ba, cov_ok);
-  // sigma^2 = sum r^2 / (m - n): m residuals (2 per corner), n free parameters.
-  double sum = 0;
-  int m = 0;
-  std::set<size_t> cams_used, bodies_used;
-  for (const auto& o : ba.seen)
-    if (o.used) {
-      for (int k = 0; k < 4; ++k) sum += ba.residual(o, k).squaredNorm(), m += 2;
-      cams_used.insert(o.cam);
-      bodies_used.insert(o.body);
-    }
-  const int params = 6 * int(bodies_used.size() + cams_used.size() - 1);
-  const double s2 = m > params ? sum / (m - params) : 0.0;
+  const double s2 = residual_variance(ba);
   result.sigma_px = std::sqrt(s2);
   const double solve_s = seconds_since(t0);
   for (auto& c : result.cameras) c.seconds += solve_s / double(n);
