@@ -50,6 +50,68 @@ RenderClock render_clock(const render::SceneDescription& scene, int frames) {
   return c;
 }
 
+// Per camera image: its time (timestamps.csv), the believed pose (cameras.csv, what the camera
+// thinks it is) and the true (rendering) pose, for evaluation: g_io,true = g_wi,true^-1 g_wo.
+void write_camera_files(const render::Renderer& r, const RenderClock& clock, const fs::path& out) {
+  const render::SceneDescription& scene = r.scene();
+  io::AtomicFile stamps(out / "timestamps.csv"), believed(out / "cameras.csv"),
+      truth(out / "truth_cameras.csv");
+  stamps << kTimestampsHeader << "\n";
+  believed << kCameraPosesHeader << "\n";
+  truth << kCameraPosesHeader << "\n";
+  for (int ci = 0; ci < r.camera_count(); ++ci) {
+    const auto& times = clock.times[size_t(ci)];
+    const auto& own = clock.own_frame[size_t(ci)];
+    for (int f = 0; f < static_cast<int>(times.size()); ++f) {
+      const int id = scene.cameras[size_t(ci)].id;
+      const int u = static_cast<int>(std::find(own.begin(), own.end(), f) - own.begin());
+      stamps << format_timestamp_row(id, f, times[size_t(f)]) << "\n";
+      believed << format_camera_pose_row(id, f, r.time_of(u), r.believed_camera_pose(ci, u))
+               << "\n";
+      truth << format_camera_pose_row(id, f, r.time_of(u), r.camera_pose(ci, u)) << "\n";
+    }
+  }
+  stamps.commit();
+  believed.commit();
+  truth.commit();
+}
+
+// Camera `camera`'s image `frame` as cam_<id>/<frame>.png, or .jpg at the camera's
+// sensor.jpeg_quality (OpenCV's encoder); `buffer` holds the encoded bytes.
+void write_image(const render::CameraSpec& camera, int frame, const cv::Mat& img,
+                 const fs::path& out, std::vector<uchar>& buffer) {
+  const int quality = camera.sensor.jpeg_quality;
+  const char* ext = quality > 0 ? ".jpg" : ".png";
+  const std::vector<int> params =
+      quality > 0 ? std::vector<int>{cv::IMWRITE_JPEG_QUALITY, quality} : std::vector<int>{};
+  if (!cv::imencode(ext, img, buffer, params))
+    throw InputError(std::string("cannot encode ") + ext + " for camera " +
+                     std::to_string(camera.id));
+  char name[32];
+  std::snprintf(name, sizeof name, "%06d%s", frame, ext);
+  io::write_file_atomic(out / ("cam_" + std::to_string(camera.id)) / name,
+                        std::string(reinterpret_cast<const char*>(buffer.data()), buffer.size()));
+}
+
+// A dataset rewritten with fewer frames must not keep the old run's extra images: every
+// cam_<id>/NNNNNN.png or .jpg from the camera's own image count on is removed.
+void remove_stale_images(const render::SceneDescription& scene, const RenderClock& clock,
+                         const fs::path& out) {
+  for (size_t ci = 0; ci < scene.cameras.size(); ++ci) {
+    const int own = static_cast<int>(clock.times[ci].size());
+    for (const auto& e :
+         fs::directory_iterator(out / ("cam_" + std::to_string(scene.cameras[ci].id)))) {
+      const std::string name = e.path().filename().string();
+      if (name.size() == 10 &&
+          (name.compare(6, 4, ".png") == 0 || name.compare(6, 4, ".jpg") == 0) &&
+          name.find_first_not_of("0123456789") == 6 && std::stoi(name.substr(0, 6)) >= own) {
+        std::error_code ec;
+        fs::remove(e.path(), ec);
+      }
+    }
+  }
+}
+
 }  // namespace
 
 DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const DatasetSettings& opt) {
@@ -59,11 +121,6 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
   // of the union of every camera's image times, and each camera renders only its own.
   const RenderClock clock = render_clock(scene, frames);
   if (!scene.one_clock()) r.set_frame_times(clock.frames);
-  const auto render_frame = [&](int ci, int k) {
-    return static_cast<int>(
-        std::find(clock.own_frame[size_t(ci)].begin(), clock.own_frame[size_t(ci)].end(), k) -
-        clock.own_frame[size_t(ci)].begin());
-  };
   io::ensure_directory(out);
   io::ensure_directory(out / "calib");
   for (const auto& c : scene.cameras) {
@@ -73,30 +130,7 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
   }
   const NetworkConfig net = scene_network_config(scene, frames);
   io::write_file_atomic(out / "network.yaml", network_yaml(net));
-  {
-    // Per camera image: its time (timestamps.csv), the believed pose (cameras.csv, what the
-    // camera thinks it is) and the true (rendering) pose, for evaluation:
-    // g_io,true = g_wi,true^-1 g_wo.
-    io::AtomicFile stamps(out / "timestamps.csv"), believed(out / "cameras.csv"),
-        truth(out / "truth_cameras.csv");
-    stamps << kTimestampsHeader << "\n";
-    believed << kCameraPosesHeader << "\n";
-    truth << kCameraPosesHeader << "\n";
-    for (int ci = 0; ci < r.camera_count(); ++ci) {
-      const auto& times = clock.times[size_t(ci)];
-      for (int f = 0; f < static_cast<int>(times.size()); ++f) {
-        const int id = scene.cameras[size_t(ci)].id;
-        const int u = render_frame(ci, f);
-        stamps << format_timestamp_row(id, f, times[size_t(f)]) << "\n";
-        believed << format_camera_pose_row(id, f, r.time_of(u), r.believed_camera_pose(ci, u))
-                 << "\n";
-        truth << format_camera_pose_row(id, f, r.time_of(u), r.camera_pose(ci, u)) << "\n";
-      }
-    }
-    stamps.commit();
-    believed.commit();
-    truth.commit();
-  }
+  write_camera_files(r, clock, out);
 
   DatasetSummary summary;
   summary.frames = frames;
@@ -117,7 +151,7 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
   truth << kTruthHeader << "\n";
   const int render_frames = static_cast<int>(clock.frames.size());
   Progress progress("render", render_frames, opt.progress);
-  std::vector<uchar> png;
+  std::vector<uchar> encoded;
   for (int u = 0; u < render_frames; ++u) {
     r.set_frame(u);
     for (size_t j = 0; j < targets.size(); ++j)
@@ -125,19 +159,7 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
     for (int ci = 0; ci < r.camera_count(); ++ci) {
       const int f = clock.own_frame[size_t(ci)][size_t(u)];
       if (f < 0) continue;  // this camera takes no image at this time
-      const int id = scene.cameras[size_t(ci)].id;
-      const cv::Mat img = r.render(ci, u);
-      // A camera with sensor.jpeg_quality writes JPEG frames at that quality (OpenCV's encoder).
-      const int quality = scene.cameras[size_t(ci)].sensor.jpeg_quality;
-      const char* ext = quality > 0 ? ".jpg" : ".png";
-      const std::vector<int> params =
-          quality > 0 ? std::vector<int>{cv::IMWRITE_JPEG_QUALITY, quality} : std::vector<int>{};
-      if (!cv::imencode(ext, img, png, params))
-        throw InputError(std::string("cannot encode ") + ext + " for camera " + std::to_string(id));
-      char name[32];
-      std::snprintf(name, sizeof name, "%06d%s", f, ext);
-      io::write_file_atomic(out / ("cam_" + std::to_string(id)) / name,
-                            std::string(reinterpret_cast<const char*>(png.data()), png.size()));
+      write_image(scene.cameras[size_t(ci)], f, r.render(ci, u), out, encoded);
       render::FrameTruth t = r.truth(ci, u);
       t.frame = f;
       truth << format_truth_row(t) << "\n";
@@ -149,20 +171,7 @@ DatasetSummary write_dataset(render::Renderer& r, const fs::path& out, const Dat
   truth.commit();
   for (auto& t : targets) t->commit();
   progress.finish();
-  // A dataset rewritten with fewer frames must not keep the old run's extra images.
-  for (size_t ci = 0; ci < scene.cameras.size(); ++ci) {
-    const int own = static_cast<int>(clock.times[ci].size());
-    for (const auto& e :
-         fs::directory_iterator(out / ("cam_" + std::to_string(scene.cameras[ci].id)))) {
-      const std::string name = e.path().filename().string();
-      if (name.size() == 10 &&
-          (name.compare(6, 4, ".png") == 0 || name.compare(6, 4, ".jpg") == 0) &&
-          name.find_first_not_of("0123456789") == 6 && std::stoi(name.substr(0, 6)) >= own) {
-        std::error_code ec;
-        fs::remove(e.path(), ec);
-      }
-    }
-  }
+  remove_stale_images(scene, clock, out);
   return summary;
 }
 
