@@ -516,8 +516,9 @@ class UnionRun {
   double net_start_ = 0.0;
   double now_ = 0.0;  ///< the time the network has advanced to
   size_t next_ = 0;   ///< the next event to take
-  // held_[j][i]: camera i's latest measurement of target j, and its front end's result, image
-  // and frame.
+  // What camera i holds since its latest image: held_[j][i] its measurement of target j,
+  // held_cams_[j][i] its front end's result, held_images_[i] the image, held_frame_[i] its frame
+  // (-1 before the first).
   std::vector<std::vector<obs::Measurement>> held_;
   std::vector<std::vector<frontend::Observation>> held_cams_;
   std::vector<cv::Mat> held_images_;
