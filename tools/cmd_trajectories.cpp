@@ -63,6 +63,10 @@ void add_trajectories(CLI::App& app, int& exit_code) {
       }
       std::optional<std::filesystem::path> reference;
       if (!o->reference.empty()) reference = o->reference;
+      if (!std::isfinite(o->compare.reference_time_offset))
+        throw InputError(
+            "--reference-time-offset: " + std::to_string(o->compare.reference_time_offset) +
+            " s is not a finite number of seconds");
       if (!reference && o->compare.reference_time_offset != 0.0)
         throw InputError(
             "--reference-time-offset: needs --reference (the dataset's truth is on the results' "

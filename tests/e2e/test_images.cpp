@@ -453,6 +453,9 @@ TEST_F(SmallDataset, TrajectoryErrorsAgainstTheTruthAreTheRunsOwn) {
   EXPECT_EQ(c.code, 1);
   test::expect_one_line(c.err, {"--reference-time-offset", "needs --reference"});
   EXPECT_EQ(slurp(comparison), before);
+  c = test::run_netvmo(with_ahead + " --reference-time-offset nan", *dir_);
+  EXPECT_EQ(c.code, 1);
+  test::expect_one_line(c.err, {"--reference-time-offset", "not a finite number"});
 }
 
 TEST_F(SmallDataset, BadInputGivesOneClearLineAndKeepGoingBlindsTheCamera) {
