@@ -8,7 +8,6 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <iomanip>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -22,6 +21,7 @@
 #include "netvmo/pipeline/run/image_run.hpp"
 #include "netvmo/pipeline/run/overlay.hpp"
 #include "netvmo/pipeline/run/run_report.hpp"
+#include "netvmo/pipeline/run/trajectories.hpp"
 #include "netvmo/pipeline/sources/render_source.hpp"
 #include "netvmo/render/renderer.hpp"
 #include "test_util.hpp"
@@ -414,15 +414,9 @@ TEST_F(SmallDataset, TrajectoryErrorsAgainstTheTruthAreTheRunsOwn) {
   // it back, then the same errors as against the dataset's truth.
   const fs::path ahead = *dir_ / "truth_ahead.txt";
   {
-    std::ifstream in(results / "trajectories" / "truth.txt");
     std::ofstream o(ahead);
-    std::string line;
-    while (std::getline(in, line)) {
-      if (line.empty() || line[0] == '#') continue;
-      const size_t space = line.find(' ');
-      o << std::setprecision(17) << std::stod(line.substr(0, space)) + 50.0 << line.substr(space)
-        << '\n';
-    }
+    for (const run::TumRow& r : run::read_tum(results / "trajectories" / "truth.txt"))
+      o << run::tum_line(r.t + 50.0, r.g) << '\n';
   }
   const std::string with_ahead = "trajectories " + results.string() + " --reference " +
                                  ahead.string() + " --out " + (*dir_ / "ahead_out").string();

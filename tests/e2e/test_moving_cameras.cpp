@@ -22,6 +22,14 @@ using namespace netvmo;
 
 namespace {
 
+// The scene rendered into a dataset folder `dir`.
+void render_dataset(const render::SceneDescription& scene, const fs::path& dir) {
+  render::Renderer renderer(scene);
+  io::DatasetSettings o;
+  o.progress = false;
+  io::write_dataset(renderer, dir, o);
+}
+
 // The worst of every camera's final error to g* (the last frame's), and each one.
 run::PoseError final_errors(const run::ImageRunResult& r, std::vector<run::PoseError>* per_camera) {
   const auto& last = r.history.back();
@@ -66,12 +74,7 @@ TEST(EndToEnd, MovingCamerasConvergeToGStarAndNeedTheirVelocity) {
   auto scene =
       io::load_render_scenario(fs::path(NETVMO_SOURCE_DIR) / "datasets" / "moving_cameras.yaml");
   scene.imaging.spp = 1;
-  {
-    render::Renderer renderer(scene);
-    io::DatasetSettings o;
-    o.progress = false;
-    io::write_dataset(renderer, dir, o);
-  }
+  render_dataset(scene, dir);
   // The folder holds one believed and one true pose per camera image; frame 0's believed pose
   // is network.yaml's.
   const auto believed = io::read_camera_poses_csv(dir / "cameras.csv");
@@ -149,12 +152,7 @@ TEST(EndToEnd, MovingCamerasOnTheirOwnClocksConvergeOnTheUnionOfTheirTimes) {
   scene.cameras[1].start = 0.013;
   scene.cameras[2].fps = 15.0;
   scene.cameras[2].start = 0.047;
-  {
-    render::Renderer renderer(scene);
-    io::DatasetSettings o;
-    o.progress = false;
-    io::write_dataset(renderer, dir, o);
-  }
+  render_dataset(scene, dir);
   auto source = sources::open_dataset_source(dir);
   ASSERT_TRUE(source->cameras_move());
   ASSERT_TRUE(sources::clock_mismatch(*source));

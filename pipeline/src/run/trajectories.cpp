@@ -15,6 +15,7 @@
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
 #include "netvmo/pipeline/io/truth_io.hpp"
+#include "netvmo/pipeline/run/run_report.hpp"
 
 namespace netvmo::run {
 namespace fs = std::filesystem;
@@ -235,9 +236,9 @@ TrajectoryComparison compare_trajectory(const std::vector<TumRow>& reference,
   }
   double sum_p2 = 0.0, sum_p = 0.0, sum_r2 = 0.0, sum_r = 0.0;
   for (const auto& [r, e] : pairs) {
-    const obs::SE3 g = c.alignment * e->g;
-    const double dp = (r->g.translation() - g.translation()).norm();
-    const double dr = obs::log_so3(r->g.linear().transpose() * g.linear()).norm();
+    // The run's own error measures against the truth (summary.json's), the angle in radians.
+    const PoseError err = pose_error(c.alignment * e->g, r->g);
+    const double dp = err.position, dr = err.orientation_deg * M_PI / 180.0;
     sum_p2 += dp * dp;
     sum_p += dp;
     sum_r2 += dr * dr;
