@@ -10,6 +10,7 @@
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/calibration.hpp"
 #include "netvmo/pipeline/io/network_config.hpp"
+#include "netvmo/pipeline/io/number_text.hpp"
 #include "netvmo/pipeline/io/truth_io.hpp"
 #include "synth.hpp"
 #include "test_util.hpp"
@@ -580,6 +581,25 @@ TEST(DetectionsIo, StatusColumn) {
                      {"bad.csv:2", "status", "occluded", "border_mismatch"});
   write(dir / "bad2.csv", header + "0,1,0,0,detected,,,,,,,,,,\n");
   expect_input_error([&] { read_detections_csv(dir / "bad2.csv"); }, {"bad2.csv:2", "status"});
+}
+
+// One rule for what a number is, shared by every reader: the whole token, finite, in range.
+TEST(NumberText, AWholeFiniteTokenInRangeIsANumber) {
+  EXPECT_EQ(io::parse_finite("2.5"), 2.5);
+  EXPECT_EQ(io::parse_finite("-1e-3"), -1e-3);
+  EXPECT_EQ(io::parse_finite("+4"), 4.0);
+  EXPECT_EQ(io::parse_finite(" 7"), 7.0);  // leading white space, as strtod reads it
+  EXPECT_EQ(io::parse_finite("0.29999999999999999"), 0.3);  // exact_text's digits read back
+  for (const char* bad :
+       {"", " ", "x", "2.5 ", "2.5x", "1,5", "nan", "inf", "-inf", "1e999", "1e-999", "0x"})
+    EXPECT_FALSE(io::parse_finite(bad).has_value()) << "'" << bad << "'";
+  EXPECT_EQ(io::parse_int("3"), 3);
+  EXPECT_EQ(io::parse_int("3.0"), 3);
+  EXPECT_EQ(io::parse_int("1e2"), 100);
+  EXPECT_EQ(io::parse_int("-2147483648"), -2147483647 - 1);
+  EXPECT_EQ(io::parse_int("2147483647"), 2147483647);
+  for (const char* bad : {"3.5", "2147483648", "-2147483649", "1e10", "x", "", "nan"})
+    EXPECT_FALSE(io::parse_int(bad).has_value()) << "'" << bad << "'";
 }
 
 }  // namespace

@@ -1,8 +1,6 @@
 #include "netvmo/pipeline/io/truth_io.hpp"
 
 #include <algorithm>
-#include <cerrno>
-#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -12,6 +10,7 @@
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/io/number_text.hpp"
 
 namespace netvmo::io {
 namespace fs = std::filesystem;
@@ -76,22 +75,17 @@ void read_csv(const fs::path& file, const char* header, F row) {
 
 double num(const std::vector<std::string>& f, const std::vector<std::string>& names, size_t i,
            const std::string& where) {
-  const char* s = f[i].c_str();
-  char* end = nullptr;
-  errno = 0;
-  const double v = std::strtod(s, &end);
-  if (f[i].empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v))
-    throw InputError(where + ": " + names[i] + ": expected a number, got '" + f[i] + "'");
-  return v;
+  const auto v = parse_finite(f[i]);
+  if (!v) throw InputError(where + ": " + names[i] + ": expected a number, got '" + f[i] + "'");
+  return *v;
 }
 
 int integer(const std::vector<std::string>& f, const std::vector<std::string>& names, size_t i,
             const std::string& where) {
-  const double v = num(f, names, i, where);
-  // Range first: converting a double outside int's range is undefined behaviour.
-  if (!(v >= INT_MIN && v <= INT_MAX) || v != std::floor(v))
-    throw InputError(where + ": " + names[i] + ": expected an integer, got '" + f[i] + "'");
-  return static_cast<int>(v);
+  num(f, names, i, where);  // not a number: that error
+  const auto v = parse_int(f[i]);
+  if (!v) throw InputError(where + ": " + names[i] + ": expected an integer, got '" + f[i] + "'");
+  return *v;
 }
 
 bool flag(const std::vector<std::string>& f, const std::vector<std::string>& names, size_t i,

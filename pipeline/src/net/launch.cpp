@@ -12,6 +12,7 @@
 #include "netvmo/observer/estimate_message.hpp"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/io/number_text.hpp"
 #include "netvmo/pipeline/io/output_dir.hpp"
 #include "netvmo/pipeline/net/node.hpp"
 #include "netvmo/pipeline/run/overlay.hpp"
@@ -39,12 +40,9 @@ NodeKill parse_node_kill(const std::string& spec, double restart_after,
   const auto at = spec.find('@');
   int id = -1;
   double t = -1;
-  try {
-    if (at != std::string::npos) {
-      id = std::stoi(spec.substr(0, at));
-      t = std::stod(spec.substr(at + 1));
-    }
-  } catch (const std::exception&) {
+  if (at != std::string::npos) {
+    id = io::parse_int(spec.substr(0, at)).value_or(-1);
+    t = io::parse_finite(spec.substr(at + 1)).value_or(-1);
   }
   if (at == std::string::npos || net.index_of(id) < 0 || !(t >= 0))
     throw InputError("--kill " + spec + ": expected ID@SECONDS with a camera id of " + net.source);
@@ -59,16 +57,9 @@ std::map<int, double> parse_clock_offsets(const std::string& spec, const io::Net
     const auto colon = item.find(':');
     int id = -1;
     double s = NAN;
-    try {
-      if (colon != std::string::npos) {
-        size_t used = 0;
-        id = std::stoi(item.substr(0, colon), &used);
-        if (used != colon) id = -1;
-        const std::string v = item.substr(colon + 1);
-        s = std::stod(v, &used);
-        if (used != v.size()) s = NAN;
-      }
-    } catch (const std::exception&) {
+    if (colon != std::string::npos) {
+      id = io::parse_int(item.substr(0, colon)).value_or(-1);
+      s = io::parse_finite(item.substr(colon + 1)).value_or(NAN);
     }
     if (colon == std::string::npos || net.index_of(id) < 0 || !std::isfinite(s) || out.count(id))
       throw InputError("--clock-offsets " + spec + ": '" + item +

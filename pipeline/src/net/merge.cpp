@@ -1,11 +1,10 @@
 #include <algorithm>
 #include <cmath>
-#include <fstream>
-#include <sstream>
 
 #include "netvmo/observer/observer_settings.hpp"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/net/node.hpp"
+#include "netvmo/pipeline/net/node_journal.hpp"
 
 namespace netvmo::net {
 namespace fs = std::filesystem;
@@ -13,101 +12,11 @@ using obs::SE3;
 
 namespace {
 
-struct Row {
-  int frame = 0;
-  double t = 0.0;
-  frontend::Observation cam;
-  bool initialized = false, indep = false;
-  SE3 est_w = SE3::Identity(), indep_w = SE3::Identity();
-};
-
-class Fields {
- public:
-  Fields(const std::string& line, const fs::path& file, int line_no)
-      : file_(file), line_no_(line_no) {
-    std::stringstream s(line);
-    std::string f;
-    while (std::getline(s, f, ',')) f_.push_back(f);
-  }
-  size_t size() const { return f_.size(); }
-  double num() {
-    if (k_ >= f_.size()) fail("too few fields");
-    char* end = nullptr;
-    const double v = std::strtod(f_[k_].c_str(), &end);
-    if (f_[k_].empty() || *end) fail("field " + std::to_string(k_ + 1) + " is not a number");
-    ++k_;
-    return v;
-  }
-  int integer() { return static_cast<int>(num()); }
-  SE3 pose() {
-    SE3 g = SE3::Identity();
-    for (int r = 0; r < 3; ++r) g.translation()(r) = num();
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) g.linear()(r, c) = num();
-    return g;
-  }
-  [[noreturn]] void fail(const std::string& what) const {
-    throw InputError(file_.string() + ":" + std::to_string(line_no_) + ": " + what);
-  }
-
- private:
-  std::vector<std::string> f_;
-  size_t k_ = 0;
-  fs::path file_;
-  int line_no_;
-};
-
-// A node's rows in the order written (frames strictly increasing). A node killed for good never
-// renamed its output: its finished frames are in the .partial file (only with allow_missing).
-std::vector<Row> read_node_csv(fs::path file, bool allow_missing) {
-  if (!fs::exists(file) && allow_missing) {
-    file = partial_path(file);
-    if (!fs::exists(file)) return {};  // never ran a frame
-  }
-  std::ifstream in(file);
-  if (!in) throw InputError(file.string() + ": node output not found");
-  std::string line;
-  std::getline(in, line);  // header
-  std::vector<Row> rows;
-  int line_no = 1;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (line.empty()) continue;
-    if (in.eof() && allow_missing) break;  // a .partial's last line cut off by the kill
-    Fields f(line, file, line_no);
-    Row r;
-    r.frame = f.integer();
-    if (!rows.empty() && r.frame <= rows.back().frame)
-      f.fail("frame " + std::to_string(r.frame) + " out of order");
-    r.t = f.num();
-    r.cam.delta = f.integer() != 0;
-    r.cam.read_failed = f.integer() != 0;
-    r.cam.status = static_cast<frontend::TargetStatus>(f.integer());
-    r.cam.tag_id = f.integer();
-    r.cam.hamming = f.integer();
-    r.cam.margin = f.num();
-    for (auto& c : r.cam.corners_px) {
-      c.x = f.num();
-      c.y = f.num();
-    }
-    for (int a = 0; a < 8; ++a) r.cam.f_normalized(a) = f.num();
-    const bool pnp = f.integer() != 0;
-    const SE3 g_io = f.pose();
-    if (pnp) r.cam.g_io_pnp = g_io;
-    r.initialized = f.integer() != 0;
-    r.est_w = f.pose();
-    r.indep = f.integer() != 0;
-    r.indep_w = f.pose();
-    rows.push_back(std::move(r));
-  }
-  return rows;
-}
-
 // One clock: row k of every node is frame k of the dataset. With allow_gaps a frame a node has
 // no row for (not running: killed, or before its restart) is blind and uninitialised.
-std::vector<const Row*> by_frame(const std::vector<Row>& rows, const fs::path& file, int frames,
-                                 bool allow_gaps) {
-  std::vector<const Row*> out(static_cast<size_t>(frames), nullptr);
+std::vector<const NodeRow*> by_frame(const std::vector<NodeRow>& rows, const fs::path& file,
+                                     int frames, bool allow_gaps) {
+  std::vector<const NodeRow*> out(static_cast<size_t>(frames), nullptr);
   for (const auto& r : rows) {
     if (r.frame >= frames)
       throw InputError(file.string() + ": frame " + std::to_string(r.frame) + ", expected " +
@@ -135,11 +44,11 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& source,
   // them, each on its camera's stamps.
   const bool live = source.frame_count() == 0;
   const bool own_clocks = live || sources::clock_mismatch(source).has_value();
-  std::vector<std::vector<Row>> rows;
+  std::vector<std::vector<NodeRow>> rows;
   std::vector<fs::path> files;
   for (const auto& c : net.cameras) {
     files.push_back(node_files(nodes_dir, c.id).csv);
-    rows.push_back(read_node_csv(files.back(), allow_gaps || own_clocks));
+    rows.push_back(read_node_journal(files.back(), allow_gaps || own_clocks));
     // Onto the reference clock (ClockAlignment::correction_s).
     if (clock_correction.size() > rows.size() - 1)
       for (auto& r : rows.back()) r.t -= clock_correction[rows.size() - 1];
@@ -160,7 +69,7 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& source,
   // is the grid time t0 + k / fps (t0: the earliest camera's first image), and each camera holds
   // its latest row at or before it; estimates.csv keeps every camera's own rows and times. The
   // merged files count time from t0 (the nodes' files keep the dataset's times).
-  std::vector<std::vector<const Row*>> held(n);
+  std::vector<std::vector<const NodeRow*>> held(n);
   run::TimeGrid grid;
   if (live) {  // the grid of the rows' times, as of the images' elsewhere
     double first = INFINITY, last = -INFINITY;
@@ -198,7 +107,7 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& source,
     for (size_t i = 0; i < n; ++i) held[i] = by_frame(rows[i], files[i], frames, allow_gaps);
   }
 
-  const Row none;  // blind and uninitialised
+  const NodeRow none;  // blind and uninitialised
   for (int k = 0; k < frames; ++k) {
     run::FrameRecord r;
     r.frame = k;
@@ -208,8 +117,8 @@ run::ImageRunResult merge_nodes(const sources::NetworkSource& source,
     r.cameras.resize(n);
     std::vector<frontend::Observation> cams(n);
     for (size_t i = 0; i < n; ++i) {
-      const Row* p = held[i][static_cast<size_t>(k)];
-      const Row& row = p ? *p : none;
+      const NodeRow* p = held[i][static_cast<size_t>(k)];
+      const NodeRow& row = p ? *p : none;
       cams[i] = row.cam;
       auto& c = r.cameras[i];
       const SE3& g_wi = net.cameras[i].g_wi;  // static cameras (moving ones: netvmo run)

@@ -15,6 +15,7 @@
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
 #include "netvmo/pipeline/net/faulty_transport.hpp"
+#include "netvmo/pipeline/net/node_journal.hpp"
 #include "netvmo/pipeline/net/ros_publisher.hpp"
 #include "netvmo/pipeline/net/socket_drops.hpp"
 #include "netvmo/pipeline/run/camera_step.hpp"
@@ -28,42 +29,6 @@ using obs::SE3;
 
 namespace {
 
-constexpr const char* kHeader =
-    "frame,t,delta,read_failed,status,tag_id,hamming,margin,c0x,c0y,c1x,c1y,c2x,c2y,c3x,c3y,"
-    "f0,f1,f2,f3,f4,f5,f6,f7,pnp,pnp_pose[12],initialized,est_w[12],indep,indep_w[12]";
-
-void put(std::string& s, double v) {
-  (s += ',') += io::exact_text(v);
-}
-
-void put_pose(std::string& s, const SE3& g) {
-  for (int r = 0; r < 3; ++r) put(s, g.translation()(r));
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) put(s, g.linear()(r, c));
-}
-
-std::string frame_row(int k, double t, const frontend::Observation& cam,
-                      const obs::CameraObserver& net, const obs::CameraObserver& ind) {
-  std::string s = std::to_string(k);
-  put(s, t);
-  s += "," + std::to_string(cam.delta ? 1 : 0) + "," + std::to_string(cam.read_failed ? 1 : 0) +
-       "," + std::to_string(static_cast<int>(cam.status)) + "," + std::to_string(cam.tag_id) + "," +
-       std::to_string(cam.hamming);
-  put(s, cam.margin);
-  for (const auto& c : cam.corners_px) {
-    put(s, c.x);
-    put(s, c.y);
-  }
-  for (int a = 0; a < 8; ++a) put(s, cam.f_normalized(a));
-  s += cam.g_io_pnp ? ",1" : ",0";
-  put_pose(s, cam.g_io_pnp ? *cam.g_io_pnp : SE3::Identity());
-  s += net.initialized() ? ",1" : ",0";
-  put_pose(s, net.estimate_world());
-  s += ind.initialized() ? ",1" : ",0";
-  put_pose(s, ind.estimate_world());
-  return s + "\n";
-}
-
 // A row of node_<id>_links.csv: the neighbours (their camera ids) whose estimate is in the
 // mutual term after frame k.
 std::string links_row(int k, double t, const obs::CameraObserver& net,
@@ -73,9 +38,7 @@ std::string links_row(int k, double t, const obs::CameraObserver& net,
     if (net.latest()[a] && net.latest()[a]->initialized)
       in_term += (in_term.empty() ? "" : " ") +
                  std::to_string(labels[static_cast<size_t>(net.neighbours()[a])]);
-  std::string row = std::to_string(k);
-  put(row, t);
-  return row + "," + in_term + "\n";
+  return std::to_string(k) + "," + io::exact_text(t) + "," + in_term + "\n";
 }
 
 // A frame on the camera's ROS 2 topics (run::ros_frame): its measurement, its estimate and the
@@ -517,7 +480,7 @@ NodeSummary Node::run(const fs::path& out_dir) {
     while (first < frames_ && frame_time(first) < now_cam) ++first;
   }
   summary_.first_frame = first;
-  RowJournal csv(files.csv, kHeader, o_.resume, first);
+  RowJournal csv(files.csv, kNodeJournalHeader, o_.resume, first);
   // The effective graph as this camera sees it: after each frame, the neighbours whose estimate
   // is in its mutual term (heard, initialised, not forgotten as stale).
   RowJournal links(files.links, "frame,t,neighbours", o_.resume, first);
@@ -541,7 +504,8 @@ NodeSummary Node::run(const fs::path& out_dir) {
                        " error model needs ground truth (rendered data)");
     exchange_rounds(k, z, start, join, exchange);
     const double t = frame_time(k) + clock_;
-    csv.row(frame_row(k, t, cam, *net_, *ind_));
+    csv.row(node_journal_row({k, t, cam, net_->initialized(), ind_->initialized(),
+                              net_->estimate_world(), ind_->estimate_world()}));
     links.row(links_row(k, t, *net_, labels_));
     csv.flush();
     links.flush();

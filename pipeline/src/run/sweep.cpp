@@ -9,6 +9,7 @@
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/io/number_text.hpp"
 #include "netvmo/pipeline/run/run_report.hpp"
 
 namespace netvmo::run {
@@ -112,11 +113,8 @@ std::optional<RecordedInputs> read_inputs_cache(const fs::path& file,
   for (int lineno = 3; std::getline(f, line); ++lineno) {
     std::vector<double> v;
     std::stringstream ss(line);
-    for (std::string cell; std::getline(ss, cell, ',');) {
-      char* end = nullptr;
-      v.push_back(std::strtod(cell.c_str(), &end));
-      if (cell.empty() || *end) v.push_back(std::nan(""));
-    }
+    for (std::string cell; std::getline(ss, cell, ',');)
+      v.push_back(io::parse_finite(cell).value_or(std::nan("")));
     const bool ok = v.size() == 24 &&
                     std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); }) &&
                     v[0] >= 0 && v[0] < frames && v[1] >= 0 && v[1] < n;
@@ -258,13 +256,13 @@ std::vector<double> parse_gain_list(const std::string& option, const std::string
   std::set<double> seen;
   std::stringstream ss(text);
   for (std::string item; std::getline(ss, item, ',');) {
-    char* end = nullptr;
-    const double v = std::strtod(item.c_str(), &end);
     const auto fail = [&](const std::string& why) {
       throw InputError(option + ": '" + item + "' " + why + " (expected e.g. " + option +
                        " 1,2,5)");
     };
-    if (item.empty() || *end || !std::isfinite(v)) fail("is not a number");
+    const auto number = io::parse_finite(item);
+    if (!number) fail("is not a number");
+    const double v = *number;
     if (v < 0 || (!allow_zero && v == 0)) fail(allow_zero ? "is negative" : "must be positive");
     if (!seen.insert(v).second) fail("is listed twice");
     out.push_back(v);

@@ -14,6 +14,7 @@
 
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/io/number_text.hpp"
 #include "netvmo/pipeline/io/truth_io.hpp"
 #include "netvmo/pipeline/run/run_report.hpp"
 
@@ -138,12 +139,11 @@ namespace {
 
 // One number of a TUM line, the whole token, finite.
 double tum_number(const std::string& token, const std::string& where, int field) {
-  char* end = nullptr;
-  const double v = std::strtod(token.c_str(), &end);
-  if (token.empty() || *end != '\0' || !std::isfinite(v))
+  const auto v = io::parse_finite(token);
+  if (!v)
     throw InputError(where + ": field " + std::to_string(field) +
                      ": expected a finite number, got '" + token + "'");
-  return v;
+  return *v;
 }
 
 }  // namespace

@@ -1,0 +1,26 @@
+#include "netvmo/pipeline/io/number_text.hpp"
+
+#include <cerrno>
+#include <climits>
+#include <cmath>
+#include <cstdlib>
+
+namespace netvmo::io {
+
+std::optional<double> parse_finite(const std::string& token) {
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(token.c_str(), &end);
+  if (token.empty() || end == token.c_str() || *end != '\0' || errno == ERANGE || !std::isfinite(v))
+    return std::nullopt;
+  return v;
+}
+
+std::optional<int> parse_int(const std::string& token) {
+  const auto v = parse_finite(token);
+  // Range first: converting a double outside int's range is undefined behaviour.
+  if (!v || !(*v >= INT_MIN && *v <= INT_MAX) || *v != std::floor(*v)) return std::nullopt;
+  return static_cast<int>(*v);
+}
+
+}  // namespace netvmo::io
