@@ -134,7 +134,7 @@ TEST(NodeJournal, ADamagedFieldIsOneLineNamingFileLineAndColumn) {
 
   expect(with(0, "1.5"), {"frame: expected an integer, got '1.5'"});
   expect(with(0, "0"), {"frame: 0 is not after the previous row's"});
-  expect(with(0, "-3"), {"frame: -3"});
+  expect(with(0, "-3"), {"frame: expected a frame index >= 0, got -3"});
   expect(with(0, "99999999999"), {"frame: expected an integer"});
   expect(with(1, "x"), {"t: expected a finite number, got 'x'"});
   expect(with(1, "nan"), {"t: expected a finite number, got 'nan'"});

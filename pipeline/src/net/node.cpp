@@ -14,6 +14,7 @@
 #include "netvmo/observer/exchange.hpp"
 #include "netvmo/pipeline/error.hpp"
 #include "netvmo/pipeline/io/atomic_file.hpp"
+#include "netvmo/pipeline/io/number_text.hpp"
 #include "netvmo/pipeline/net/faulty_transport.hpp"
 #include "netvmo/pipeline/net/node_journal.hpp"
 #include "netvmo/pipeline/net/ros_publisher.hpp"
@@ -91,9 +92,9 @@ class RowJournal {
       std::getline(in, line);  // header
       while (std::getline(in, line)) {
         if (in.eof()) break;  // the last line had no newline: cut off by the kill
-        char* end = nullptr;
-        const long k = std::strtol(line.c_str(), &end, 10);
-        if (end != line.c_str() && *end == ',' && k < first) kept += line + "\n";
+        const auto comma = line.find(',');
+        const auto k = io::parse_int(line.substr(0, comma));
+        if (comma != std::string::npos && k && *k < first) kept += line + "\n";
       }
     }
     out_.open(partial_, std::ios::trunc);

@@ -159,7 +159,8 @@ std::vector<NodeRow> read_node_journal(fs::path file, bool allow_missing) {
     Fields f(line, file, line_no, columns);
     NodeRow r;
     r.frame = f.integer();
-    if (r.frame < 0 || (!rows.empty() && r.frame <= rows.back().frame))
+    if (r.frame < 0) f.fail("frame: expected a frame index >= 0, got " + std::to_string(r.frame));
+    if (!rows.empty() && r.frame <= rows.back().frame)
       f.fail("frame: " + std::to_string(r.frame) + " is not after the previous row's");
     r.t = f.num();
     if (!rows.empty() && r.t < rows.back().t)
