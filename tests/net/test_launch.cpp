@@ -340,6 +340,25 @@ TEST_F(Launch, LockStepProcessesReproduceTheInProcessRun) {
   }
   fs::copy_file(launch / "nodes" / "node_2.json", gathered / "node_2.json",
                 fs::copy_options::overwrite_existing);
+  // A gathered node_2.csv damaged in one field (line 3's status, its fifth column, made 9): one
+  // line naming the file, the line and the column, and nothing written.
+  {
+    std::string text = test::slurp(gathered / "node_2.csv");
+    size_t at = 0;
+    for (int n = 0; n < 2; ++n) at = text.find('\n', at) + 1;  // line 3's start
+    for (int n = 0; n < 4; ++n) at = text.find(',', at) + 1;   // its fifth field
+    text.replace(at, text.find(',', at) - at, "9");
+    test::write_text(gathered / "node_2.csv", text);
+    const auto r = net_test::netvmo_bounded("merge " + gathered.string() + " --dataset " +
+                                                ds.string() + " --out " + (*dir_ / "bad").string(),
+                                            *dir_, 60);
+    EXPECT_NE(r.code, 0);
+    test::expect_one_line(r.err, {(gathered / "node_2.csv").string() + ":3: status: expected a "
+                                                                       "status 0..6, got '9'"});
+    EXPECT_FALSE(fs::exists(*dir_ / "bad"));
+    fs::copy_file(launch / "nodes" / "node_2.csv", gathered / "node_2.csv",
+                  fs::copy_options::overwrite_existing);
+  }
   fs::remove(gathered / "node_3.csv");
   const auto missing =
       net_test::netvmo_bounded("merge " + gathered.string() + " --dataset " + ds.string() +

@@ -1,6 +1,5 @@
 #include "netvmo/pipeline/io/number_text.hpp"
 
-#include <cerrno>
 #include <climits>
 #include <cmath>
 #include <cstdlib>
@@ -9,9 +8,10 @@ namespace netvmo::io {
 
 std::optional<double> parse_finite(const std::string& token) {
   char* end = nullptr;
-  errno = 0;
   const double v = std::strtod(token.c_str(), &end);
-  if (token.empty() || end == token.c_str() || *end != '\0' || errno == ERANGE || !std::isfinite(v))
+  // Overflow is +-HUGE_VAL, not finite. Underflow (strtod's ERANGE too) is kept: a subnormal
+  // number, as io::exact_text writes one, reads back as itself, and a smaller one as 0.
+  if (token.empty() || end == token.c_str() || *end != '\0' || !std::isfinite(v))
     return std::nullopt;
   return v;
 }

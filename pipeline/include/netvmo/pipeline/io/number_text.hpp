@@ -9,8 +9,9 @@
 namespace netvmo::io {
 
 /// The number `token` spells when the whole token is one (strtod's syntax: leading white space,
-/// a sign, decimal or exponent form), finite and within double's range (no overflow or
-/// underflow); nullopt otherwise (empty, trailing characters, nan, inf, 1e999, 1e-999).
+/// a sign, decimal or exponent form) and finite; nullopt otherwise (empty, trailing characters,
+/// nan, inf, 1e999). A number below double's smallest is read as strtod rounds it (a subnormal
+/// number, or 0), so that everything io::exact_text writes reads back as itself.
 std::optional<double> parse_finite(const std::string& token);
 
 /// The integer `token` spells: parse_finite's number, integral ("3", "3.0", "1e2") and within

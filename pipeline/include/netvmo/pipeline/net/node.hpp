@@ -93,7 +93,7 @@ struct NodeSummary {
 
 /// The files of camera `camera_id`'s node in the folder `dir` it writes to.
 struct NodeFiles {
-  std::filesystem::path csv;    ///< node_<id>.csv: one row per frame (node.cpp's header)
+  std::filesystem::path csv;    ///< node_<id>.csv: one row per frame (node_journal.hpp)
   std::filesystem::path links;  ///< node_<id>_links.csv: the effective graph after each frame
   std::filesystem::path json;   ///< node_<id>.json: statistics and the run's options
   std::filesystem::path log;    ///< node_<id>.log: its standard output and error (launch)
