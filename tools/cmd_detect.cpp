@@ -332,6 +332,13 @@ void add_detect(CLI::App& app, int& exit_code) {
                   "least this many px (on smaller cells flat tags look bowed), 0 to 1000")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1000.0));
+  cmd->add_option("--border-max-bent", o->det.border_max_bent,
+                  "Border check: a quad that fails with sides bowed as a flat tag's are not is "
+                  "checked again with its border sampled along the bowed sides, and kept with the "
+                  "bow taken off where that passes and no corner moves by more than this many px "
+                  "(a bent print; 0: off), 0 to 100")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 100.0));
   cmd->add_option("--refine", o->refinement,
                   "Corner refinement of the target: none, subpix (cv::cornerSubPix) or edges "
                   "(lines fitted to the border edges)")

@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "netvmo/pipeline/frontend/border_check.hpp"
 #include "netvmo/pipeline/frontend/photo_recall.hpp"
 #include "netvmo/pipeline/frontend/pnp.hpp"
 #include "netvmo/pipeline/io/image_file.hpp"
@@ -217,21 +218,43 @@ fs::path corpus_dir() {
 /// Recall against libapriltag over every photo below `dir` (a folder's calib.yaml is its photos'
 /// camera), every eligible loss printed with its reason; with `losses`, each as "<folder>/<file>
 /// id <id>: <reason>".
-PhotoRecall recall_over(const fs::path& dir, std::vector<std::string>* losses = nullptr) {
+// The loop of netvmo detect --photos over `dir`, every loss printed (and listed in `losses`).
+// Every kept tag's corners must lie within 1.65 px of libapriltag's (the front end reports the
+// print's cell grid, libapriltag the inked outline), or, where the frame check keeps
+// libapriltag's own quad as a bent print (BorderCheck::bent), of libapriltag's corners moved by
+// the bow (take_off_bow()): their straight sides miss the corners of a bent print by the bow.
+// Those tags are listed in `bent`.
+PhotoRecall recall_over(const fs::path& dir, std::vector<std::string>* losses = nullptr,
+                        std::vector<std::string>* bent = nullptr) {
   // The loop of netvmo detect --photos, with its one libapriltag decoding table for every photo.
   std::ostringstream rows;
   const auto found = run::detect_photos(
       dir, io::list_images(dir), run::DetectSettings{}, {}, rows,
       [](const std::string& line) { ADD_FAILURE() << line; },
       [&](const fs::path& photo, const std::vector<PhotoTagResult>& results) {
-        for (const auto& t : results)
+        for (const auto& t : results) {
+          const std::string name = photo.parent_path().filename().string() + "/" +
+                                   photo.filename().string() + " id " + std::to_string(t.ref.id);
           if (t.eligible && t.status != TargetStatus::detected) {
-            const std::string name = photo.parent_path().filename().string() + "/" +
-                                     photo.filename().string() + " id " + std::to_string(t.ref.id);
             std::printf("lost: %s (%.0f px): %s\n", name.c_str(), t.ref.narrowest,
                         t.reason.c_str());
             if (losses) losses->push_back(name + ": " + t.reason);
           }
+          if (t.status != TargetStatus::detected) continue;
+          if (!t.check.bent) {
+            EXPECT_LT(t.corner_difference, 1.65) << name;
+            continue;
+          }
+          const auto moved = take_off_bow(t.ref.corners, t.check.bow);
+          double d = 0.0;
+          for (size_t c = 0; c < 4; ++c) d = std::max(d, cv::norm(t.corners_px[c] - moved[c]));
+          std::printf(
+              "kept as a bent print: %s, corners %.2f px from libapriltag's, %.2f px "
+              "from libapriltag's moved by the bow\n",
+              name.c_str(), t.corner_difference, d);
+          EXPECT_LT(d, 1.65) << name;
+          if (bent) bent->push_back(name);
+        }
       });
   for (const auto& line : found.unreadable) ADD_FAILURE() << line;
   const PhotoRecall& total = found.total;
@@ -241,11 +264,11 @@ PhotoRecall recall_over(const fs::path& dir, std::vector<std::string>* losses = 
 }
 
 // Recall against libapriltag on every eligible tag of the corpus, with every loss listed.
-// The figure the front end reaches (docs/frontend.md) is asserted not to fall: 98.2 % of the
-// 395 eligible tags (388) measured when a side off its inner edge alone was first kept halfway
-// (97.0 % before, 92.4 % before the shared border deviation and the significance test; the goal,
-// 99 %, is not reached: the losses are listed); no kept tag's corners more than 1.6 px from
-// libapriltag's.
+// The figure the front end reaches (docs/frontend.md) is asserted not to fall: 98.5 % of the
+// 395 eligible tags (389) measured when a bent print was first checked along its bowed sides
+// (98.2 % before, 97.0 % before a side off its inner edge alone was kept halfway, 92.4 % before
+// the shared border deviation and the significance test; the goal, 99 %, is not reached: the
+// losses are listed); every kept tag's corners within 1.65 px of libapriltag's (recall_over()).
 TEST(RealPhotos, Corpus) {
   const fs::path dir = corpus_dir();
   if (!fs::is_directory(dir))
@@ -253,38 +276,29 @@ TEST(RealPhotos, Corpus) {
                  << "(datasets/real_photos/MANIFEST.md) and point NETVMO_REAL_PHOTOS at it";
   const PhotoRecall total = recall_over(dir);
   ASSERT_GT(total.eligible, 0);
-  EXPECT_GE(total.kept, 388);
-  for (double d : total.corner_differences) EXPECT_LT(d, 1.65);
+  EXPECT_GE(total.kept, 389);
 }
 
 // The part of the corpus this repository holds (datasets/real_photos/photos: 29 photos of 8 sets
 // from 5 repositories, chosen by set and file name, not by result; MANIFEST.md, "In this
 // repository"), so every CI run judges the front end on real photos. libapriltag finds 206
-// eligible tags there; the front end keeps 203 (98.5 %; 201 before a side off its inner edge
-// alone was kept halfway, 192 before the shared border deviation and the significance test, 202
-// before the straight-sides test) and may not keep fewer (the
-// goal, 99 %, is not reached: every loss is printed with its reason). The straight-sides test
-// rejects one of them, and only that one: id 3 of swatbotics_hallway/IMG_0613.jpg, a curled
-// sheet whose bowed sides put a corner 2.3 px from where its straight sides meet.
+// eligible tags there; the front end keeps 204 (99.0 %; 203 before a bent print was checked along
+// its bowed sides, 201 before a side off its inner edge alone was kept halfway, 192 before the
+// shared border deviation and the significance test) and may not keep fewer (every loss is
+// printed with its reason). One tag is kept as a bent print, and only that one: id 3 of
+// swatbotics_hallway/IMG_0613.jpg, a curled sheet whose bowed sides put a corner 2.3 px from
+// where its straight sides meet (rejected as bowed before): no flat tag there takes that path.
 TEST(RealPhotos, PhotosInTheRepository) {
   const fs::path dir = fs::path(NETVMO_SOURCE_DIR) / "datasets" / "real_photos" / "photos";
   ASSERT_TRUE(fs::is_directory(dir)) << dir;
-  std::vector<std::string> losses;
-  const PhotoRecall total = recall_over(dir, &losses);
+  std::vector<std::string> losses, bent;
+  const PhotoRecall total = recall_over(dir, &losses, &bent);
   EXPECT_EQ(total.photos, 29);
   EXPECT_EQ(total.eligible, 206) << "libapriltag's own eligible tags";
-  EXPECT_GE(total.kept, 203);
-  // Every loss listed, and the curled sheet the one rejected as bowed.
+  EXPECT_GE(total.kept, 204);
   EXPECT_EQ(losses.size(), static_cast<size_t>(total.eligible - total.kept));
-  int bowed = 0;
-  for (const std::string& loss : losses) {
-    if (loss.find("bowed") != std::string::npos) {
-      ++bowed;
-      EXPECT_EQ(loss.rfind("swatbotics_hallway/IMG_0613.jpg id 3: ", 0), 0u) << loss;
-    }
-  }
-  EXPECT_EQ(bowed, 1);
-  for (double d : total.corner_differences) EXPECT_LT(d, 1.65);
+  ASSERT_EQ(bent.size(), 1u);
+  EXPECT_EQ(bent[0], "swatbotics_hallway/IMG_0613.jpg id 3");
 }
 
 }  // namespace

@@ -2,6 +2,8 @@
 
 #include <apriltag/apriltag.h>
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -286,6 +288,20 @@ struct Bitmap {
   }
 };
 
+// A bent print's sides (check_border()'s stage 6): the quad is the one whose corners are where
+// the bowed outer edges end (take_off_bow(), `ends` in ideal pixels), and each side's outer edge
+// lies off that quad's side by the quadratic (side_bow_at()) less its chord between the ends.
+struct BentSides {
+  const QuadBow& bow;
+  std::array<cv::Point2d, 4> ends;
+  cv::Point2d off_side(size_t k, const cv::Point2d& p) const {
+    const SideBow& side = bow.sides[k];
+    const cv::Point2d a = ends[k], b = ends[(k + 1) % 4], ab = b - a;
+    const double f = (p - a).dot(ab) / ab.dot(ab);  // where along the side, 0 at a, 1 at b
+    return side_bow_at(side, p) - (1.0 - f) * side_bow_at(side, a) - f * side_bow_at(side, b);
+  }
+};
+
 // What the border's samples show, per side (side k runs from corner k to corner k + 1).
 struct SideSamples {
   std::array<size_t, 4> planned{};  ///< inner-edge points the bitmap places along the side
@@ -293,6 +309,8 @@ struct SideSamples {
   /// (object cell coordinates) each was measured, and one cell across the edge there [px].
   std::array<std::vector<double>, 4> offsets, ts, cells;
   std::array<std::vector<cv::Point2d>, 4> where;
+  /// Where each was expected, in ideal pixels, and the inward unit normal across the edge there.
+  std::array<std::vector<cv::Point2d>, 4> ideal_at, inward;
   std::vector<double> spreads;  ///< the inner edge's spread at the measured points [px]
   /// Pixels whose centre lies within 0.5 px of a side, and how many of them are intermediate.
   int near_side = 0, intermediate = 0;
@@ -302,7 +320,8 @@ struct SideSamples {
 // failed, outside) and the inner edge's offset next to each white data cell, fitted along the
 // side (thickness_error, thickness_se). False when the bitmap has no white data cell.
 bool sample_border(const cv::Mat& gray, int n, const Bitmap& white_at, const SquareToImage& map,
-                   const DetectorSettings& s, SideSamples& smp, BorderCheck& out) {
+                   const BentSides* follow, const DetectorSettings& s, SideSamples& smp,
+                   BorderCheck& out) {
   // Side k runs from corner k to corner k+1: start S, direction D, outward normal O (cells).
   const detail::SquareSides sides(n);
   const cv::Point2d* S = sides.start;
@@ -321,7 +340,9 @@ bool sample_border(const cv::Mat& gray, int n, const Bitmap& white_at, const Squ
   if (white_cells.empty()) return false;
   obj.insert(obj.end(), white_cells.begin(), white_cells.end());
   std::array<std::vector<double>, 4> edge_t;  // positions along side k of inner-edge points
+  std::array<size_t, 5> side_from{};          // side k's points: [side_from[k], side_from[k+1])
   for (int k = 0; k < 4; ++k) {
+    side_from[static_cast<size_t>(k)] = obj.size();
     for (int j = 0; j < m; ++j) {
       const cv::Point2d p = S[k] + ((j + 0.5) / kPerCell) * D[k];
       obj.push_back(p + 0.5 * O[k]);
@@ -339,7 +360,16 @@ bool sample_border(const cv::Mat& gray, int n, const Bitmap& white_at, const Squ
       }
     }
   }
-  const std::vector<cv::Point2d> img = map.map(obj);
+  side_from[4] = obj.size();
+  std::vector<cv::Point2d> ideal = map.map_ideal(obj);
+  // A bent print's border follows its bowed sides: every point of side k moved as the side's
+  // outer edge is, at the same place along it (a flat print's two border edges are parallel
+  // lines; a bent print's or an uncalibrated lens's, parallel curves).
+  if (follow)
+    for (size_t k = 0; k < 4; ++k)
+      for (size_t i = side_from[k]; i < side_from[k + 1]; ++i)
+        ideal[i] += follow->off_side(k, ideal[i]);
+  const std::vector<cv::Point2d> img = map.to_image(ideal);
   size_t at = 0;
   std::vector<double> white_level(white_cells.size());
   for (size_t i = 0; i < white_cells.size(); ++i) {
@@ -405,6 +435,7 @@ bool sample_border(const cv::Mat& gray, int n, const Bitmap& white_at, const Squ
     out.outside[ks] = outside;
     // Inner edge of the border next to white data cells.
     for (size_t i = 0; i < edge_t[ks].size(); ++i) {
+      const cv::Point2d e_ideal = ideal[at];
       const cv::Point2d e = img[at++], outer = img[at++], inner = img[at++];
       const double cell = cv::norm(inner - outer);  // one cell across the edge, in pixels
       if (!(cell > 0.0)) continue;
@@ -442,6 +473,8 @@ bool sample_border(const cv::Mat& gray, int n, const Bitmap& white_at, const Squ
         if (!clean_step(start, win, sv)) continue;
       }
       offsets[ks].push_back(sv);
+      smp.ideal_at[ks].push_back(e_ideal);
+      smp.inward[ks].push_back(nin);
       cells[ks].push_back(cell);
       ts[ks].push_back(edge_t[ks][i]);
       where[ks].push_back(S[k] + edge_t[ks][i] * D[k] - 1.0 * O[k]);
@@ -706,6 +739,63 @@ void judge_bow(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, i
   }
 }
 
+// How far the border's inner edge bows with its outer edge (BorderCheck::inner_bow): per side k
+// with 8 inner-edge points or more, the offsets measured against the straight sides,
+// r_i = a + b t_i + gamma_k p_i (least squares; p_i the offset the outer edge's bow predicts
+// there, side_bow_at() across the edge), gamma_k 1 where the inner edge bows as the outer one does
+// (a bent print) and 0 where it is straight (the outer edge's bow is something else: a side
+// partly on an occluder's outline); its standard error with one independent measurement per
+// data cell, as thickness_se. The sides' estimates combined, weighted by their precision (a side
+// whose bow predicts little at its inner-edge points has little weight). NaN where none.
+void inner_bow(const SideSamples& smp, const QuadBow& bow, double& gamma, double& se) {
+  double weight = 0.0, sum = 0.0;
+  for (size_t k = 0; k < 4; ++k) {
+    const auto& r = smp.offsets[k];
+    const size_t m = r.size();
+    if (m < 8) continue;
+    Eigen::Matrix3d XtX = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d Xty = Eigen::Vector3d::Zero();
+    std::vector<Eigen::Vector3d> X(m);
+    for (size_t i = 0; i < m; ++i) {
+      const double p = side_bow_at(bow.sides[k], smp.ideal_at[k][i]).dot(smp.inward[k][i]);
+      X[i] = Eigen::Vector3d(1.0, smp.ts[k][i], p);
+      XtX += X[i] * X[i].transpose();
+      Xty += r[i] * X[i];
+    }
+    if (!(std::abs(XtX.determinant()) > 1e-12)) continue;
+    const Eigen::Vector3d beta = XtX.ldlt().solve(Xty);
+    double rss = 0.0;
+    for (size_t i = 0; i < m; ++i) rss += std::pow(r[i] - X[i].dot(beta), 2);
+    const double per_cell = static_cast<double>(std::size(kThicknessT));
+    const double var = rss / static_cast<double>(m - 3) * per_cell * XtX.inverse()(2, 2);
+    if (!(var > 0.0) || !std::isfinite(var)) continue;
+    weight += 1.0 / var;
+    sum += beta(2) / var;
+  }
+  gamma = weight > 0.0 ? sum / weight : std::numeric_limits<double>::quiet_NaN();
+  se = weight > 0.0 ? 1.0 / std::sqrt(weight) : std::numeric_limits<double>::quiet_NaN();
+}
+
+// Whether a quad the check failed is worth checking again as a bent print: its bow measured on
+// cells of at least border_bow_min_cell (on smaller ones flat tags look bowed), not in a
+// point-sampled image, some corner's shift one a flat tag would not show (above
+// border_bow_correction and border_significance of its standard error), and none beyond
+// border_max_bent, up to which the shift puts the corners where the bowed sides end.
+bool bent_print(const QuadBow& bow, const BorderCheck& failed,
+                const std::array<cv::Point2d, 4>& corners, int n, const DetectorSettings& s) {
+  if (!(s.border_max_bent > 0.0) || !(s.border_bow_correction > 0.0) || !bow.measured ||
+      failed.aliased || narrowest_side(corners) / n < s.border_bow_min_cell)
+    return false;
+  bool bowed = false;
+  for (size_t k = 0; k < 4; ++k) {
+    const double shift = cv::norm(bow.corner_shift[k]);
+    if (!(shift <= s.border_max_bent)) return false;
+    bowed = bowed ||
+            (shift > s.border_bow_correction && shift > s.border_significance * bow.corner_se[k]);
+  }
+  return bowed;
+}
+
 }  // namespace
 
 BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners,
@@ -726,20 +816,52 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
   if (!map.ok()) return out;
   out.checked = true;
 
-  SideSamples samples;
-  if (!sample_border(gray, n, white_at, map, s, samples, out)) {
-    out.checked = false;
-    return out;
-  }
-  out.aliased = samples.near_side >= 16 && samples.intermediate < 0.1 * samples.near_side;
-  out.thickness_limit = s.border_max_thickness_error + (out.aliased ? kAliasedAllowance : 0.0);
-
-  shared_thinning(samples, s, out);
-  const std::array<double, 4> residual =
-      unexplained_thickness(gray, corners, n, white_at, map, s, samples, out);
-  judge_sides(residual, s, out);
-  judge_bow(gray, corners, n, calib, edges, s, out);
-  return out;
+  // Stages 1-5 on the quad's straight sides, or on a bent print's (`follow`).
+  SideSamples straight_samples;
+  const auto run = [&](const std::array<cv::Point2d, 4>& quad, const SquareToImage& to_image,
+                       const BentSides* follow) {
+    BorderCheck r = out;
+    SideSamples local;
+    SideSamples& samples = follow ? local : straight_samples;
+    if (!sample_border(gray, n, white_at, to_image, follow, s, samples, r)) {
+      r.checked = false;
+      return r;
+    }
+    r.aliased = samples.near_side >= 16 && samples.intermediate < 0.1 * samples.near_side;
+    r.thickness_limit = s.border_max_thickness_error + (r.aliased ? kAliasedAllowance : 0.0);
+    shared_thinning(samples, s, r);
+    const std::array<double, 4> residual =
+        unexplained_thickness(gray, quad, n, white_at, to_image, s, samples, r);
+    judge_sides(residual, s, r);
+    if (!follow) judge_bow(gray, quad, n, calib, edges, s, r);
+    return r;
+  };
+  BorderCheck straight = run(corners, map, nullptr);
+  if (straight.ok || !straight.checked) return straight;
+  // Stage 6: a bent print (DetectorSettings::border_max_bent), checked again on the quad whose
+  // corners are where its bowed sides end, every border sample moved off that quad's sides as
+  // the bowed outer edge is there.
+  const QuadBow bow =
+      straight.bow.measured ? straight.bow : quad_bow(gray, corners, n, calib, edges);
+  if (!bent_print(bow, straight, corners, n, s)) return straight;
+  // The inner edge must bow with the outer one: nearer gamma 1 than 0, measured well enough to
+  // tell the two apart (2 standard errors between them).
+  inner_bow(straight_samples, bow, straight.inner_bow, straight.inner_bow_se);
+  if (!(straight.inner_bow > 0.5 && straight.inner_bow_se <= 0.5)) return straight;
+  const std::array<cv::Point2d, 4> ends = take_off_bow(corners, bow, calib);
+  const SquareToImage bent_map(ends, n, calib);
+  if (!bent_map.ok()) return straight;
+  std::vector<cv::Point2d> ideal(ends.begin(), ends.end());
+  if (calib && calib->has_distortion()) ideal = io::ideal_pixels(ideal, *calib);
+  const BentSides follow{bow, {ideal[0], ideal[1], ideal[2], ideal[3]}};
+  BorderCheck bent = run(ends, bent_map, &follow);
+  if (!bent.ok) return straight;
+  bent.bow = bow;
+  bent.inner_bow = straight.inner_bow;
+  bent.inner_bow_se = straight.inner_bow_se;
+  bent.bent = true;
+  bent.bow_taken_off = true;
+  return bent;
 }
 
 std::array<cv::Point2d, 4> take_off_bow(const std::array<cv::Point2d, 4>& corners,

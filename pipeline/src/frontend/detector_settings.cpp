@@ -61,6 +61,8 @@ void validate(const DetectorSettings& s) {
     bad("border_realign_max must be in 0..100 (px; 0: off)");
   if (!(s.border_bow_min_cell >= 0.0 && s.border_bow_min_cell <= 1000.0))
     bad("border_bow_min_cell must be in 0..1000 (px)");
+  if (!(s.border_max_bent >= 0.0 && s.border_max_bent <= 100.0))
+    bad("border_max_bent must be in 0..100 (px; 0: off)");
   if (!(s.edge_bias_deadband >= 0.0)) bad("edge_bias_deadband must be >= 0");
   if (!(s.corner_sigma_px > 0.0 && std::isfinite(s.corner_sigma_px)))
     bad("corner_sigma_px must be > 0 and finite");

@@ -297,6 +297,12 @@ std::optional<CornerCovariance> refine_corners(const cv::Mat& gray,
   return std::nullopt;
 }
 
+cv::Point2d side_bow_at(const SideBow& side, const cv::Point2d& p) {
+  if (!(side.half > 0.0)) return {0.0, 0.0};
+  const double u = side.dir.dot(p - side.origin) / side.half;
+  return (side.coef[0] + u * (side.coef[1] + u * side.coef[2])) * side.normal;
+}
+
 QuadBow quad_bow(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, int border_cells,
                  const io::Calibration* calib, const EdgeSamples* given) {
   CV_Assert(gray.type() == CV_8UC1);
@@ -394,6 +400,11 @@ QuadBow quad_bow(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners,
     const Eigen::Matrix3d cov = correlation_inflation(r, rr, wk) * s2 * XtX.inverse();
     SideBow& side = out.sides[static_cast<size_t>(k)];
     side.samples = static_cast<int>(m);
+    side.origin = line.mean;
+    side.dir = line.dir;
+    side.normal = n;
+    side.half = h;
+    side.coef = {beta(0), beta(1), beta(2)};
     for (int e = 0; e < 2; ++e) {
       const cv::Point2d end = c[static_cast<size_t>((k + e) % 4)];
       const double u = line.dir.dot(end - line.mean) / h;

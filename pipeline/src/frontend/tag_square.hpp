@@ -57,14 +57,21 @@ class SquareToImage {
   }
   bool ok() const { return ok_; }
   std::vector<cv::Point2d> map(const std::vector<cv::Point2d>& obj) const {
+    return to_image(map_ideal(obj));
+  }
+  /// The homography alone: object points to undistorted (ideal) pixels.
+  std::vector<cv::Point2d> map_ideal(const std::vector<cv::Point2d>& obj) const {
     std::vector<cv::Point2d> out;
     out.reserve(obj.size());
     for (const auto& p : obj) {
       const cv::Vec3d q = H_ * cv::Vec3d(p.x, p.y, 1.0);
       out.emplace_back(q[0] / q[2], q[1] / q[2]);
     }
-    if (calib_) out = io::distorted_pixels(out, *calib_);
     return out;
+  }
+  /// Ideal pixels to image pixels (re-distorted where the calibration has distortion).
+  std::vector<cv::Point2d> to_image(std::vector<cv::Point2d> ideal) const {
+    return calib_ ? io::distorted_pixels(ideal, *calib_) : ideal;
   }
 
  private:

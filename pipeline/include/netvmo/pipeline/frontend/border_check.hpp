@@ -102,6 +102,16 @@ struct BorderCheck {
   /// The check passed and the bow is to be taken off the corners (take_off_bow();
   /// DetectorSettings::border_bow_correction, border_bow_min_cell).
   bool bow_taken_off = false;
+  /// Where the quad was considered as a bent print (DetectorSettings::border_max_bent): how far
+  /// the border's inner edge bows with its outer edge, 1 as a bent print's does, 0 where it is
+  /// straight (an occluder's outline bows the outer edge alone), the sides' estimates combined
+  /// by their precision, and its standard error. NaN where not measured.
+  double inner_bow = std::numeric_limits<double>::quiet_NaN();
+  double inner_bow_se = std::numeric_limits<double>::quiet_NaN();
+  /// Kept as a bent print: the quad failed with its straight sides, its inner edge bows with
+  /// the outer one (inner_bow above 0.5, standard error at most 0.5), and it passed with the
+  /// border sampled along its bowed sides (DetectorSettings::border_max_bent); bow_taken_off too.
+  bool bent = false;
 };
 
 /// The tag's bitmap as libapriltag prints it (apriltag_to_image): total_width x total_width
@@ -162,6 +172,11 @@ cv::Mat tag_pattern(const std::string& family, int id);
 /// where the sides' outer edges bow so that a corner lies more than border_max_bow px from
 /// where they end (quad_bow(); a bent card or distortion the calibration leaves: the quad's
 /// corners are then not the print's).
+/// Where the check fails, a bent print (DetectorSettings::border_max_bent): where the sides' bow
+/// is one a flat tag does not show and the border's inner edge bows with the outer one
+/// (`inner_bow`), the check runs again on the quad whose corners are where the bowed sides end,
+/// every border sample moved as the bowed outer edge lies off that quad's side; where it passes,
+/// that result with `bent` and `bow_taken_off` set.
 /// Families without a black border ring inside a white one (tagStandard41h12, ...) are not
 /// checked (`checked` false).
 /// `edges`: the edge-line fit's samples of these corners (refine_corners()), for the

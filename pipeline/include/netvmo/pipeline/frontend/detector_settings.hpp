@@ -123,6 +123,20 @@ struct DetectorSettings {
   /// BorderCheck.SharpenedSmallCellsLookBowed), 0.5-0.7 px on cells of 2.5 px (rendered in
   /// sRGB), at most 0.48 px from 3 px; 4 px keeps a cell's margin above those.
   double border_bow_min_cell = 4.0;
+  /// A bent print [px of a corner's shift; 0: off]. A print bent in the hand or curling off a
+  /// wall, or imaged through lens distortion the calibration leaves, bows its sides, and its
+  /// border's inner edge bows with the outer one: against the straight sides its border looks
+  /// thinner or thicker, or the straight sides miss its corners by more than border_max_bow.
+  /// Where the check fails, the sides' bow is one a flat tag would not show (as for
+  /// border_bow_correction, on cells of at least border_bow_min_cell) and no corner's shift
+  /// exceeds this, and the border's inner edge bows with the outer one (BorderCheck::inner_bow:
+  /// an occluder's outline bows the outer edge alone), the check runs again on the quad whose
+  /// corners are where the bowed sides end, every border sample moved as its side's outer edge
+  /// is bowed there; where that passes, the quad is kept with the bow taken off
+  /// (BorderCheck::bent). 4 px: up to there the shift puts the corners within 0.3-0.5 px of where
+  /// the bowed sides end (the bent side's image is a conic, the fit a parabola;
+  /// BorderCheck.QuadBowPutsTheCornersWhereTheBentSidesEnd).
+  double border_max_bent = 4.0;
   /// A side off its border's inner edge, undecided [px of corner movement; 0: off]. Where the
   /// check fails on the thickness of one side alone (every side's contrast passes, every other
   /// side deviates by at most half as much), either that side is off the print (an occluder's

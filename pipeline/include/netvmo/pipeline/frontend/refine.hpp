@@ -55,7 +55,17 @@ struct SideBow {
   std::array<double, 2> end_se{};
   int samples = 0;
   double blur = 0.0;  ///< sigma of the outer edge's blur across the side [px]
+  /// The quadratic itself (side_bow_at()): the outer edge lies coef[0] + coef[1] u + coef[2] u^2
+  /// along `normal` from the straight line through `origin` along the unit `dir`, at
+  /// u = (p - origin) . dir / half [ideal pixels].
+  cv::Point2d origin, dir, normal;
+  double half = 0.0;
+  std::array<double, 3> coef{};
 };
+
+/// Where a side's bowed outer edge lies from its straight line, at the point of the line nearest
+/// `p` (ideal pixels): the displacement along the line's normal. Zero for an unmeasured side.
+cv::Point2d side_bow_at(const SideBow& side, const cv::Point2d& p);
 
 /// The bow of a quad's four outer edges and where it puts the corners. A flat print imaged by a
 /// pinhole camera (distortion removed) has straight sides; a bent card, or distortion that the
