@@ -82,10 +82,9 @@ double num(const std::vector<std::string>& f, const std::vector<std::string>& na
 
 int integer(const std::vector<std::string>& f, const std::vector<std::string>& names, size_t i,
             const std::string& where) {
+  if (const auto v = parse_int(f[i])) return *v;
   num(f, names, i, where);  // not a number: that error
-  const auto v = parse_int(f[i]);
-  if (!v) throw InputError(where + ": " + names[i] + ": expected an integer, got '" + f[i] + "'");
-  return *v;
+  throw InputError(where + ": " + names[i] + ": expected an integer, got '" + f[i] + "'");
 }
 
 bool flag(const std::vector<std::string>& f, const std::vector<std::string>& names, size_t i,

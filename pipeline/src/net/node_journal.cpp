@@ -31,20 +31,23 @@ void put_pose(std::string& s, const SE3& g) {
     for (int c = 0; c < 3; ++c) put(s, g.linear()(r, c));
 }
 
-// Every column's name, the header's `name[12]` spelled out as name[0] .. name[11].
-std::vector<std::string> column_names() {
-  std::vector<std::string> names;
-  std::stringstream s(kNodeJournalHeader);
-  for (std::string col; std::getline(s, col, ',');) {
-    const auto bracket = col.find('[');
-    if (bracket == std::string::npos) {
-      names.push_back(col);
-      continue;
+// Every column's name, the header's `name[12]` spelled out as name[0] .. name[11]; computed once.
+const std::vector<std::string>& journal_columns() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> out;
+    std::stringstream s(kNodeJournalHeader);
+    for (std::string col; std::getline(s, col, ',');) {
+      const auto bracket = col.find('[');
+      if (bracket == std::string::npos) {
+        out.push_back(col);
+        continue;
+      }
+      const int n = std::stoi(col.substr(bracket + 1));
+      for (int k = 0; k < n; ++k)
+        out.push_back(col.substr(0, bracket) + "[" + std::to_string(k) + "]");
     }
-    const int n = std::stoi(col.substr(bracket + 1));
-    for (int k = 0; k < n; ++k)
-      names.push_back(col.substr(0, bracket) + "[" + std::to_string(k) + "]");
-  }
+    return out;
+  }();
   return names;
 }
 
@@ -97,10 +100,7 @@ class Fields {
   }
 
  private:
-  static const std::vector<std::string>& names() {
-    static const std::vector<std::string> n = column_names();
-    return n;
-  }
+  static const std::vector<std::string>& names() { return journal_columns(); }
   template <class T>
   T next(T v) {
     ++k_;
@@ -122,8 +122,9 @@ std::string node_journal_row(const NodeRow& row) {
   const frontend::Observation& cam = row.cam;
   std::string s = std::to_string(row.frame);
   put(s, row.t);
-  s += "," + std::to_string(cam.delta ? 1 : 0) + "," + std::to_string(cam.read_failed ? 1 : 0) +
-       "," + std::to_string(static_cast<int>(cam.status)) + "," + std::to_string(cam.tag_id) + "," +
+  put_flag(s, cam.delta);
+  put_flag(s, cam.read_failed);
+  s += "," + std::to_string(static_cast<int>(cam.status)) + "," + std::to_string(cam.tag_id) + "," +
        std::to_string(cam.hamming);
   put(s, cam.margin);
   for (const auto& c : cam.corners_px) {
@@ -151,7 +152,7 @@ std::vector<NodeRow> read_node_journal(fs::path file, bool allow_missing) {
   if (!std::getline(in, line) || line != kNodeJournalHeader)
     throw InputError(file.string() + ":1: not a node journal (its first line is not the header " +
                      std::string(kNodeJournalHeader) + ")");
-  const size_t columns = column_names().size();
+  const size_t columns = journal_columns().size();
   std::vector<NodeRow> rows;
   for (int line_no = 2; std::getline(in, line); ++line_no) {
     if (line.empty()) continue;
