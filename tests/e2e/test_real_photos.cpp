@@ -217,13 +217,11 @@ fs::path corpus_dir() {
 
 /// Recall against libapriltag over every photo below `dir` (a folder's calib.yaml is its photos'
 /// camera), every eligible loss printed with its reason; with `losses`, each as "<folder>/<file>
-/// id <id>: <reason>".
-// The loop of netvmo detect --photos over `dir`, every loss printed (and listed in `losses`).
-// Every kept tag's corners must lie within 1.65 px of libapriltag's (the front end reports the
-// print's cell grid, libapriltag the inked outline), or, where the frame check keeps
-// libapriltag's own quad as a bent print (BorderCheck::bent), of libapriltag's corners moved by
-// the bow (take_off_bow()): their straight sides miss the corners of a bent print by the bow.
-// Those tags are listed in `bent`.
+/// id <id>: <reason>". Every kept tag's corners must lie within 1.65 px of libapriltag's (the
+/// front end reports the print's cell grid, libapriltag the inked outline), or, where the frame
+/// check keeps libapriltag's own quad as a bent print (BorderCheck::bent), of libapriltag's
+/// corners moved by the bow (take_off_bow()): straight sides miss a bent print's corners by the
+/// bow. Those tags are listed in `bent`.
 PhotoRecall recall_over(const fs::path& dir, std::vector<std::string>* losses = nullptr,
                         std::vector<std::string>* bent = nullptr) {
   // The loop of netvmo detect --photos, with its one libapriltag decoding table for every photo.
