@@ -223,9 +223,11 @@ fs::path corpus_dir() {
 /// corners moved by the bow (take_off_bow()): straight sides miss a bent print's corners by the
 /// bow. Those tags are listed in `bent`.
 PhotoRecall recall_over(const fs::path& dir, std::vector<std::string>* losses = nullptr,
-                        std::vector<std::string>* bent = nullptr) {
+                        std::vector<std::string>* bent = nullptr,
+                        std::ostringstream* csv_rows = nullptr) {
   // The loop of netvmo detect --photos, with its one libapriltag decoding table for every photo.
-  std::ostringstream rows;
+  std::ostringstream own_rows;
+  std::ostringstream& rows = csv_rows ? *csv_rows : own_rows;
   const auto found = run::detect_photos(
       dir, io::list_images(dir), run::DetectSettings{}, {}, rows,
       [](const std::string& line) { ADD_FAILURE() << line; },
@@ -290,13 +292,38 @@ TEST(RealPhotos, PhotosInTheRepository) {
   const fs::path dir = fs::path(NETVMO_SOURCE_DIR) / "datasets" / "real_photos" / "photos";
   ASSERT_TRUE(fs::is_directory(dir)) << dir;
   std::vector<std::string> losses, bent;
-  const PhotoRecall total = recall_over(dir, &losses, &bent);
+  std::ostringstream rows;
+  const PhotoRecall total = recall_over(dir, &losses, &bent, &rows);
   EXPECT_EQ(total.photos, 29);
   EXPECT_EQ(total.eligible, 206) << "libapriltag's own eligible tags";
   EXPECT_GE(total.kept, 204);
   EXPECT_EQ(losses.size(), static_cast<size_t>(total.eligible - total.kept));
   ASSERT_EQ(bent.size(), 1u);
   EXPECT_EQ(bent[0], "swatbotics_hallway/IMG_0613.jpg id 3");
+  // photos.csv says so: `bent` 1 on that tag's row alone, its inner edge's bow beside it.
+  std::vector<std::string> header;
+  {
+    std::istringstream h(kPhotosHeader);
+    for (std::string c; std::getline(h, c, ',');) header.push_back(c);
+  }
+  const auto column = [&](const std::string& name) {
+    return static_cast<size_t>(std::find(header.begin(), header.end(), name) - header.begin());
+  };
+  const size_t bent_col = column("bent"), inner_col = column("inner_bow");
+  ASSERT_LT(inner_col, header.size());
+  std::istringstream in(rows.str());
+  int bent_rows = 0;
+  for (std::string line; std::getline(in, line);) {
+    std::vector<std::string> f;
+    std::istringstream l(line);
+    for (std::string c; std::getline(l, c, ',');) f.push_back(c);
+    ASSERT_GT(f.size(), inner_col) << line;
+    if (f[bent_col] != "1") continue;
+    ++bent_rows;
+    EXPECT_EQ(f[0] + " id " + f[1], "swatbotics_hallway/IMG_0613.jpg id 3") << line;
+    EXPECT_GT(std::stod(f[inner_col]), 0.5) << line;
+  }
+  EXPECT_EQ(bent_rows, 1);
 }
 
 }  // namespace

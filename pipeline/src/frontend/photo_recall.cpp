@@ -3,6 +3,7 @@
 #include <apriltag/apriltag.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <opencv2/imgproc.hpp>
@@ -117,7 +118,8 @@ const char* const kPhotosHeader =
     "file,id,hamming,libapriltag_margin,narrowest_px,fully_visible,eligible,status,"
     "corner_difference_px,reason,check_e0,check_e1,check_e2,check_e3,expected_e0,expected_e1,"
     "expected_e2,expected_e3,edge_bias_x,edge_bias_y,edge_blur,scatter_x,scatter_y,se0,se1,se2,"
-    "se3,shared_deviation,bow_px,bow_se,apriltag_x0,apriltag_y0,apriltag_x1,apriltag_y1,"
+    "se3,shared_deviation,bow_px,bow_se,bent,inner_bow,inner_bow_se,apriltag_x0,apriltag_y0,"
+    "apriltag_x1,apriltag_y1,"
     "apriltag_x2,apriltag_y2,apriltag_x3,apriltag_y3,x0,y0,x1,y1,x2,y2,x3,y3,check_reason,"
     "edge_pairs,repeated_pairs";
 
@@ -156,6 +158,15 @@ std::string format_photo_row(const std::string& file, const PhotoTagResult& t,
       if (cv::norm(b.bow.corner_shift[k]) > cv::norm(b.bow.corner_shift[w])) w = k;
     std::snprintf(buf, sizeof buf, "%.3f,%.3f,", cv::norm(b.bow.corner_shift[w]),
                   b.bow.corner_se[w]);
+    row += buf;
+  } else {
+    row += ",,";
+  }
+  // Kept as a bent print (BorderCheck::bent), and how far the border's inner edge bows with its
+  // outer one where that was measured (BorderCheck::inner_bow, its standard error; else empty).
+  row += b.bent ? "1," : "0,";
+  if (!std::isnan(b.inner_bow)) {
+    std::snprintf(buf, sizeof buf, "%.3f,%.3f,", b.inner_bow, b.inner_bow_se);
     row += buf;
   } else {
     row += ",,";
