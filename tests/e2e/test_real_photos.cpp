@@ -301,11 +301,7 @@ TEST(RealPhotos, PhotosInTheRepository) {
   ASSERT_EQ(bent.size(), 1u);
   EXPECT_EQ(bent[0], "swatbotics_hallway/IMG_0613.jpg id 3");
   // photos.csv says so: `bent` 1 on that tag's row alone, its inner edge's bow beside it.
-  std::vector<std::string> header;
-  {
-    std::istringstream h(kPhotosHeader);
-    for (std::string c; std::getline(h, c, ',');) header.push_back(c);
-  }
+  const std::vector<std::string> header = csv_fields(kPhotosHeader);
   const auto column = [&](const std::string& name) {
     return static_cast<size_t>(std::find(header.begin(), header.end(), name) - header.begin());
   };
@@ -314,9 +310,7 @@ TEST(RealPhotos, PhotosInTheRepository) {
   std::istringstream in(rows.str());
   int bent_rows = 0;
   for (std::string line; std::getline(in, line);) {
-    std::vector<std::string> f;
-    std::istringstream l(line);
-    for (std::string c; std::getline(l, c, ',');) f.push_back(c);
+    const std::vector<std::string> f = csv_fields(line);
     ASSERT_GT(f.size(), inner_col) << line;
     if (f[bent_col] != "1") continue;
     ++bent_rows;

@@ -697,6 +697,22 @@ void judge_sides(const std::array<double, 4>& residual, const DetectorSettings& 
   }
 }
 
+// A bow that a flat tag would not show (taken off, take_off_bow()): measured, not in a
+// point-sampled image (its staircase bends the sides), some corner's shift above
+// border_bow_correction and border_significance of its standard error, on cells of at least
+// border_bow_min_cell (on smaller ones a flat tag's data cells can fake it).
+bool bow_to_take_off(const QuadBow& bow, bool aliased, const std::array<cv::Point2d, 4>& corners,
+                     int n, const DetectorSettings& s) {
+  if (!bow.measured || aliased || !(s.border_bow_correction > 0.0)) return false;
+  bool bowed = false;
+  for (size_t k = 0; k < 4; ++k) {
+    const double shift = cv::norm(bow.corner_shift[k]);
+    bowed = bowed ||
+            (shift > s.border_bow_correction && shift > s.border_significance * bow.corner_se[k]);
+  }
+  return bowed && narrowest_side(corners) / n >= s.border_bow_min_cell;
+}
+
 // Stage 5: the sides' bow (quad_bow): a corner further from where the straight sides meet than
 // border_max_bow fails; a smaller bow that a flat tag would not show is marked to be taken off.
 void judge_bow(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, int n,
@@ -725,18 +741,8 @@ void judge_bow(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, i
       out.reason = buf;
     }
   }
-  // A bow that a flat tag would not show is taken off (take_off_bow()): above
-  // border_bow_correction, significant, and measured on cells wide enough that the data cells
-  // next to the border cannot fake it. Not in a point-sampled image.
-  if (out.ok && out.bow.measured && !out.aliased && s.border_bow_correction > 0.0) {
-    bool bowed = false;
-    for (size_t k = 0; k < 4; ++k) {
-      const double shift = cv::norm(out.bow.corner_shift[k]);
-      bowed = bowed || (shift > s.border_bow_correction &&
-                        shift > s.border_significance * out.bow.corner_se[k]);
-    }
-    out.bow_taken_off = bowed && narrowest_side(corners) / n >= s.border_bow_min_cell;
-  }
+  // A bow that a flat tag would not show is taken off (take_off_bow()).
+  if (out.ok) out.bow_taken_off = bow_to_take_off(out.bow, out.aliased, corners, n, s);
 }
 
 // How far the border's inner edge bows with its outer edge (BorderCheck::inner_bow): per side k
@@ -776,24 +782,16 @@ void inner_bow(const SideSamples& smp, const QuadBow& bow, double& gamma, double
   se = weight > 0.0 ? 1.0 / std::sqrt(weight) : std::numeric_limits<double>::quiet_NaN();
 }
 
-// Whether a quad the check failed is worth checking again as a bent print: its bow measured on
-// cells of at least border_bow_min_cell (on smaller ones flat tags look bowed), not in a
-// point-sampled image, some corner's shift one a flat tag would not show (above
-// border_bow_correction and border_significance of its standard error), and none beyond
-// border_max_bent, up to which the shift puts the corners where the bowed sides end.
+// Whether a quad the check failed is worth checking again as a bent print: a bow that a flat
+// tag would not show (bow_to_take_off()), and no corner's shift beyond border_max_bent, up to
+// which the shift puts the corners where the bowed sides end.
 bool bent_print(const QuadBow& bow, const BorderCheck& failed,
                 const std::array<cv::Point2d, 4>& corners, int n, const DetectorSettings& s) {
-  if (!(s.border_max_bent > 0.0) || !(s.border_bow_correction > 0.0) || !bow.measured ||
-      failed.aliased || narrowest_side(corners) / n < s.border_bow_min_cell)
+  if (!(s.border_max_bent > 0.0) || !bow_to_take_off(bow, failed.aliased, corners, n, s))
     return false;
-  bool bowed = false;
-  for (size_t k = 0; k < 4; ++k) {
-    const double shift = cv::norm(bow.corner_shift[k]);
-    if (!(shift <= s.border_max_bent)) return false;
-    bowed = bowed ||
-            (shift > s.border_bow_correction && shift > s.border_significance * bow.corner_se[k]);
-  }
-  return bowed;
+  for (size_t k = 0; k < 4; ++k)
+    if (!(cv::norm(bow.corner_shift[k]) <= s.border_max_bent)) return false;
+  return true;
 }
 
 }  // namespace
