@@ -289,8 +289,8 @@ struct Bitmap {
 };
 
 // A bent print's sides (check_border()'s stage 6): the quad is the one whose corners are where
-// the bowed outer edges end (take_off_bow(), `ends` in ideal pixels), and each side's outer edge
-// lies off that quad's side by the quadratic (side_bow_at()) less its chord between the ends.
+// the bowed outer edges end (bowed_ends_ideal(): `ends`, in ideal pixels), and each side's outer
+// edge lies off that quad's side by the quadratic (side_bow_at()) less its chord between the ends.
 struct BentSides {
   const QuadBow& bow;
   std::array<cv::Point2d, 4> ends;
@@ -782,6 +782,14 @@ void inner_bow(const SideSamples& smp, const QuadBow& bow, double& gamma, double
   se = weight > 0.0 ? 1.0 / std::sqrt(weight) : std::numeric_limits<double>::quiet_NaN();
 }
 
+// Where the bowed sides end (QuadBow::corner_shift), in undistorted (ideal) pixels.
+std::array<cv::Point2d, 4> bowed_ends_ideal(const std::array<cv::Point2d, 4>& corners,
+                                            const QuadBow& bow, const io::Calibration* calib) {
+  std::array<cv::Point2d, 4> c = SquareToImage::ideal_corners(corners, calib);
+  for (size_t k = 0; k < 4; ++k) c[k] += bow.corner_shift[k];
+  return c;
+}
+
 // Whether a quad the check failed is worth checking again as a bent print: a bow that a flat
 // tag would not show (bow_to_take_off()), and no corner's shift beyond border_max_bent, up to
 // which the shift puts the corners where the bowed sides end.
@@ -814,13 +822,11 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
   if (!map.ok()) return out;
   out.checked = true;
 
-  // Stages 1-5 on the quad's straight sides, or on a bent print's (`follow`).
-  SideSamples straight_samples;
+  // Stages 1-5 on the quad's straight sides, or on a bent print's (`follow`); `samples` keeps
+  // what stage 1 sampled.
   const auto run = [&](const std::array<cv::Point2d, 4>& quad, const SquareToImage& to_image,
-                       const BentSides* follow) {
+                       const BentSides* follow, SideSamples& samples) {
     BorderCheck r = out;
-    SideSamples local;
-    SideSamples& samples = follow ? local : straight_samples;
     if (!sample_border(gray, n, white_at, to_image, follow, s, samples, r)) {
       r.checked = false;
       return r;
@@ -834,7 +840,8 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
     if (!follow) judge_bow(gray, quad, n, calib, edges, s, r);
     return r;
   };
-  BorderCheck straight = run(corners, map, nullptr);
+  SideSamples straight_samples;
+  BorderCheck straight = run(corners, map, nullptr, straight_samples);
   if (straight.ok || !straight.checked) return straight;
   // Stage 6: a bent print (DetectorSettings::border_max_bent), checked again on the quad whose
   // corners are where its bowed sides end, every border sample moved off that quad's sides as
@@ -846,13 +853,13 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
   // tell the two apart (2 standard errors between them).
   inner_bow(straight_samples, bow, straight.inner_bow, straight.inner_bow_se);
   if (!(straight.inner_bow > 0.5 && straight.inner_bow_se <= 0.5)) return straight;
-  const std::array<cv::Point2d, 4> ends = take_off_bow(corners, bow, calib);
-  const SquareToImage bent_map(ends, n, calib);
+  const std::array<cv::Point2d, 4> ideal_ends = bowed_ends_ideal(corners, bow, calib);
+  const SquareToImage bent_map(ideal_ends, n, calib, SquareToImage::Ideal{});
   if (!bent_map.ok()) return straight;
-  std::vector<cv::Point2d> ideal(ends.begin(), ends.end());
-  if (calib && calib->has_distortion()) ideal = io::ideal_pixels(ideal, *calib);
-  const BentSides follow{bow, {ideal[0], ideal[1], ideal[2], ideal[3]}};
-  BorderCheck bent = run(ends, bent_map, &follow);
+  const std::vector<cv::Point2d> ends = bent_map.to_image({ideal_ends.begin(), ideal_ends.end()});
+  const BentSides follow{bow, ideal_ends};
+  SideSamples bent_samples;
+  BorderCheck bent = run({ends[0], ends[1], ends[2], ends[3]}, bent_map, &follow, bent_samples);
   if (!bent.ok) return straight;
   bent.bow = bow;
   bent.inner_bow = straight.inner_bow;
@@ -865,11 +872,9 @@ BorderCheck check_border(const cv::Mat& gray, const std::array<cv::Point2d, 4>& 
 std::array<cv::Point2d, 4> take_off_bow(const std::array<cv::Point2d, 4>& corners,
                                         const QuadBow& bow, const io::Calibration* calib) {
   if (!bow.measured) return corners;
-  const io::Calibration* dist = calib && calib->has_distortion() ? calib : nullptr;
-  std::vector<cv::Point2d> c(corners.begin(), corners.end());
-  if (dist) c = io::ideal_pixels(c, *dist);
-  for (size_t k = 0; k < 4; ++k) c[k] += bow.corner_shift[k];
-  if (dist) c = io::distorted_pixels(c, *dist);
+  const std::array<cv::Point2d, 4> ideal = bowed_ends_ideal(corners, bow, calib);
+  if (!calib || !calib->has_distortion()) return ideal;
+  const auto c = io::distorted_pixels({ideal.begin(), ideal.end()}, *calib);
   return {c[0], c[1], c[2], c[3]};
 }
 

@@ -29,9 +29,12 @@ struct SquareSides {
 class SquareToImage {
  public:
   SquareToImage(const std::array<cv::Point2d, 4>& corners, int n, const io::Calibration* calib)
+      : SquareToImage(ideal_corners(corners, calib), n, calib, Ideal{}) {}
+  /// Marks corners given in undistorted (ideal) pixels already.
+  struct Ideal {};
+  /// From corners in undistorted (ideal) pixels; `calib` re-distorts the mapped points.
+  SquareToImage(const std::array<cv::Point2d, 4>& ideal, int n, const io::Calibration* calib, Ideal)
       : calib_(calib && calib->has_distortion() ? calib : nullptr) {
-    std::vector<cv::Point2d> ideal(corners.begin(), corners.end());
-    if (calib_) ideal = io::ideal_pixels(ideal, *calib_);
     // Corner k of the object square is the start of side k (SquareSides): c0 bottom-left, c1
     // bottom-right, c2 top-right, c3 top-left of the printed tag.
     const SquareSides sides(n);
@@ -54,6 +57,13 @@ class SquareToImage {
     ok_ = cv::solve(A, b, h, cv::DECOMP_LU);
     for (int j = 0; j < 8; ++j) H_(j / 3, j % 3) = h(j);
     H_(2, 2) = 1.0;
+  }
+  /// `corners` in undistorted (ideal) pixels where `calib` has distortion, else as they are.
+  static std::array<cv::Point2d, 4> ideal_corners(const std::array<cv::Point2d, 4>& corners,
+                                                  const io::Calibration* calib) {
+    if (!calib || !calib->has_distortion()) return corners;
+    const auto c = io::ideal_pixels({corners.begin(), corners.end()}, *calib);
+    return {c[0], c[1], c[2], c[3]};
   }
   bool ok() const { return ok_; }
   std::vector<cv::Point2d> map(const std::vector<cv::Point2d>& obj) const {
