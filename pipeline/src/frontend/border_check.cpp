@@ -292,13 +292,18 @@ struct Bitmap {
 // the bowed outer edges end (bowed_ends_ideal(): `ends`, in ideal pixels), and each side's outer
 // edge lies off that quad's side by the quadratic (side_bow_at()) less its chord between the ends.
 struct BentSides {
+  BentSides(const QuadBow& bow, const std::array<cv::Point2d, 4>& ends) : bow(bow), ends(ends) {
+    for (size_t k = 0; k < 4; ++k)
+      at_ends[k] = {side_bow_at(bow.sides[k], ends[k]),
+                    side_bow_at(bow.sides[k], ends[(k + 1) % 4])};
+  }
   const QuadBow& bow;
   std::array<cv::Point2d, 4> ends;
+  std::array<std::array<cv::Point2d, 2>, 4> at_ends;  ///< side k's bow at its two ends (the chord)
   cv::Point2d off_side(size_t k, const cv::Point2d& p) const {
-    const SideBow& side = bow.sides[k];
-    const cv::Point2d a = ends[k], b = ends[(k + 1) % 4], ab = b - a;
+    const cv::Point2d a = ends[k], ab = ends[(k + 1) % 4] - a;
     const double f = (p - a).dot(ab) / ab.dot(ab);  // where along the side, 0 at a, 1 at b
-    return side_bow_at(side, p) - (1.0 - f) * side_bow_at(side, a) - f * side_bow_at(side, b);
+    return side_bow_at(bow.sides[k], p) - (1.0 - f) * at_ends[k][0] - f * at_ends[k][1];
   }
 };
 
