@@ -16,7 +16,9 @@
 #                             seconds after the start (async: the common start, once every
 #                             node is ready) (nftables in the bridge's namespace)
 #                             (async: a partition; cameras behind it are isolated);
-#                             OUT/events.txt: the cut's and the heal's wall-clock times
+#                             OUT/events.txt: the start's, the cut's and the heal's
+#                             wall-clock times [s], one per line ("start T", "cut ID T",
+#                             "healed ID T"; the cut's and the heal's once nftables has them)
 #     --delay MS:JITTER       every namespace delays its outgoing packets MS +- JITTER ms
 #                             (tc netem); exits 77 where the kernel has no netem
 #     --timeout S             every node is killed after S seconds (default 120)
@@ -173,6 +175,7 @@ if [ -n "$cut" ]; then  # ID@T:D
   cut_id=${cut%@*} rest=${cut#*@}; cut_at=${rest%:*} cut_for=${rest#*:}
   for k in "${!ids[@]}"; do [ "${ids[$k]}" = "$cut_id" ] && cut_k=$k; done
   [ -n "${cut_k:-}" ] || { echo "netns_run: --cut $cut: no camera $cut_id" >&2; exit 2; }
+  echo "start $start" > "$out/events.txt"
   ( sleep "$(awk -v t="$cut_at" -v s="$start" -v now="$(date +%s.%N)" \
       'BEGIN { d = s + t - now; print (d > 0 ? d : 0) }')"
     # The switch stops forwarding the camera's port (its own link stays up, as when a network
