@@ -1,5 +1,5 @@
 // netvmo trajectories RESULTS [--dataset DATASET] [--out DIR] [--reference REF] [--align]
-// [--max-dt S] [--reference-time-offset S]
+// [--max-dt S] [--reference-time-offset S] [--estimate-time-offset] [--time-offset-search S]
 // A result folder's estimates.csv (and the dataset's ground truth) as TUM trajectory files, and
 // each camera's absolute trajectory error against the truth or a reference.
 #include <cmath>
@@ -18,6 +18,8 @@ void add_trajectories(CLI::App& app, int& exit_code) {
   struct Options {
     std::string results, dataset, out, reference;
     run::TrajectoryComparisonSettings compare;
+    bool estimate_offset = false;
+    run::TimeOffsetSettings offset;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = add_command(
@@ -32,7 +34,8 @@ void add_trajectories(CLI::App& app, int& exit_code) {
       "E.g. evo_ape tum OUT/truth.txt OUT/cam_1.txt (docs/images.md, \"Trajectory files\").\n"
       "With --dataset or --reference, every camera's absolute trajectory error against it\n"
       "(matched in time within --max-dt; with --align after a rigid alignment) is\n"
-      "printed and written to OUT/comparison.json.\n"
+      "printed and written to OUT/comparison.json. --estimate-time-offset first finds the\n"
+      "reference's time offset from the target's speeds (a reference on another clock).\n"
       "Written in OUT.partial-<pid> and swapped into place.");
   cmd->add_option("RESULTS", o->results, "result folder holding estimates.csv")->required();
   cmd->add_option("--dataset", o->dataset,
@@ -53,6 +56,15 @@ void add_trajectories(CLI::App& app, int& exit_code) {
                   "[s] added to the reference's times to put them on the results' clock (for a "
                   "reference recorded on another clock)")
       ->capture_default_str();
+  cmd->add_flag("--estimate-time-offset", o->estimate_offset,
+                "estimate the reference's time offset (the --reference-time-offset at which the "
+                "target's linear and angular speeds agree best over every camera's file, within "
+                "--time-offset-search of --reference-time-offset) and compare at it");
+  cmd->add_option("--time-offset-search", o->offset.search,
+                  "[s] with --estimate-time-offset: the offsets tried lie within this of "
+                  "--reference-time-offset")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   cmd->callback([o, &exit_code]() {
     exit_code = guarded("trajectories", [&]() {
       const std::string out = o->out.empty() ? o->results + "/trajectories" : o->out;
@@ -71,15 +83,29 @@ void add_trajectories(CLI::App& app, int& exit_code) {
         throw InputError(
             "--reference-time-offset: needs --reference (the dataset's truth is on the results' "
             "clock)");
+      if (!reference && o->estimate_offset)
+        throw InputError(
+            "--estimate-time-offset: needs --reference (the dataset's truth is on the results' "
+            "clock)");
       if (!dataset && !reference && o->compare.align)
         throw InputError("--align: nothing to compare with (give --reference or --dataset)");
       io::OutputDir dir(out, "trajectories");
       const auto files = run::write_trajectories(o->results, dataset, dir.path());
-      const auto compared = run::write_comparisons(dir.path(), files, reference, o->compare);
+      const auto done =
+          run::write_comparisons(dir.path(), files, reference, o->compare,
+                                 o->estimate_offset ? std::optional(o->offset) : std::nullopt);
+      const auto& compared = done.cameras;
       dir.commit();
       std::printf("wrote %s:", out.c_str());
       for (const auto& f : files) std::printf(" %s (%zu poses)", f.name.c_str(), f.rows.size());
       std::printf("%s\n", files.empty() ? " nothing (no camera had an estimate)" : "");
+      if (done.time_offset)
+        std::printf(
+            "reference time offset: %.4f s (the speeds' mismatch there %.3g, %.2f of its "
+            "median over %zu offsets tried within %g s of %g s)\n",
+            done.time_offset->offset, done.time_offset->mismatch,
+            done.time_offset->mismatch / done.time_offset->median_mismatch,
+            done.time_offset->offsets, o->offset.search, o->compare.reference_time_offset);
       if (!compared.empty())
         std::printf("absolute trajectory error%s (comparison.json):\n%-28s %8s %10s %10s %10s\n",
                     o->compare.align ? ", aligned" : "", "file", "matched", "pos_rmse_m",

@@ -6,7 +6,10 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
+#include <nlohmann/json.hpp>
+#include <random>
 #include <sstream>
 
 #include "netvmo/pipeline/error.hpp"
@@ -230,7 +233,7 @@ TEST(Trajectories, SeveralTargetsEachTheirOwnFiles) {
   }
   // Each target's cameras compared with that target's truth; one reference for several targets
   // is refused.
-  const auto compared = write_comparisons(dir / "out", files, std::nullopt, {});
+  const auto compared = write_comparisons(dir / "out", files, std::nullopt, {}).cameras;
   ASSERT_EQ(compared.size(), 2u);
   EXPECT_EQ(compared[1].reference, "target_7_truth.txt");
   EXPECT_EQ(compared[1].comparison.matched, 3u);
@@ -249,7 +252,7 @@ TEST(Trajectories, SeveralTargetsEachTheirOwnFiles) {
   const auto without = write_trajectories(dir / "results", dir / "dataset", dir / "out");
   EXPECT_EQ(without.size(), 3u);
   EXPECT_FALSE(fs::exists(dir / "out" / "target_7_truth.txt"));
-  EXPECT_EQ(write_comparisons(dir / "out", without, std::nullopt, {}).size(), 1u);
+  EXPECT_EQ(write_comparisons(dir / "out", without, std::nullopt, {}).cameras.size(), 1u);
 }
 
 // Bad input: one line naming the file, line and column, and no file written.
@@ -461,6 +464,187 @@ TEST(Trajectories, ComparisonIsTheClosedFormAndTheAlignmentUndoesARigidMotion) {
   const std::vector<TumRow> est = {reference[0], reference[1]};
   test::expect_input_error([&] { compare_trajectory(half, est, aligned, "the pair"); },
                            {"the pair", "not unique"});
+}
+
+// A target moved by hand: its speeds change over time, so they fix the time offset.
+obs::SE3 hand_moved(double t) {
+  return obs::make_pose(obs::Vec3(0.5 * std::sin(1.3 * t) + 0.2 * t, 0.3 * std::cos(0.7 * t),
+                                  0.1 * std::sin(2.1 * t)),
+                        obs::Vec3(0.4 * std::sin(0.9 * t), 0.2 * t, 0.3 * std::cos(1.7 * t)));
+}
+
+// A reference sampled at `hz` over [t0, t1] on its own clock.
+std::vector<TumRow> sampled(const std::function<obs::SE3(double)>& pose, double hz, double t0,
+                            double t1) {
+  std::vector<TumRow> rows;
+  for (int j = 0; t0 + j / hz <= t1 + 1e-12; ++j) {
+    TumRow r;
+    r.t = t0 + j / hz;
+    r.g = pose(r.t);
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+// Estimates at 30 Hz over [2, 8] s of the results' clock, in another world frame (the rigid
+// motion A), of the reference's pose `offset` earlier on its clock (a reference pose at t_ref is
+// the estimate's at t_ref + offset), with noise of `sigma_m` and `sigma_rad` per axis (seeded).
+std::vector<TumRow> estimated(const std::function<obs::SE3(double)>& pose, double offset,
+                              double sigma_m, double sigma_rad, unsigned seed) {
+  const obs::SE3 a = obs::make_pose(obs::Vec3(1.5, -2.0, 0.7), obs::Vec3(0.3, -0.5, 1.1));
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::vector<TumRow> rows;
+  for (int k = 0; k <= 180; ++k) {
+    TumRow r;
+    r.t = 2.0 + k / 30.0;
+    const obs::SE3 noise = obs::make_pose(sigma_m * obs::Vec3(n(rng), n(rng), n(rng)),
+                                          sigma_rad * obs::Vec3(n(rng), n(rng), n(rng)));
+    r.g = a * pose(r.t - offset) * noise;
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+// The offset of a reference on another clock from the target's speeds: within a grid step of
+// the truth on noisy estimates in another world frame (two of them, as two cameras), and then
+// the alignment leaves only the noise; refused where the speeds cannot fix it: a target that
+// stands still or moves at one speed, estimates of another motion, a best match at the edge of
+// the offsets tried, and a reference that covers too few offsets.
+TEST(Trajectories, TimeOffsetFromTheSpeedsOrRefusedWhereTheyDoNotFixIt) {
+  const double offset = 0.137;  // [s]
+  const auto reference = sampled(hand_moved, 200.0, 0.0, 10.0);
+  const auto cam1 = estimated(hand_moved, offset, 0.002, 0.0035, 1),
+             cam2 = estimated(hand_moved, offset, 0.002, 0.0035, 2);
+  const double max_dt = 0.01;
+  TimeOffsetSettings s;  // within 1 s of 0, every 1/120 s (a quarter of the estimates' step)
+  const auto found = estimate_time_offset(reference, {&cam1, &cam2}, max_dt, s, "hand");
+  std::printf("offset found %.5f s (true %.3f s), mismatch %.3f, median %.3f, %zu offsets\n",
+              found.offset, offset, found.mismatch, found.median_mismatch, found.offsets);
+  EXPECT_LT(std::abs(found.offset - offset), 1.0 / 120.0);
+  EXPECT_EQ(found.offsets, 241u);     // the reference's 10 s cover every offset within 1 s
+  EXPECT_GE(found.pairs, 2u * 176u);  // each camera's 181 poses, 3-4 frames (0.1 s) apart
+  EXPECT_LT(found.mismatch, s.max_contrast * found.median_mismatch);
+  // Compared at the offset found, aligned: the noise (2 mm per axis) and the rest of the offset.
+  TrajectoryComparisonSettings c;
+  c.align = true;
+  c.reference_time_offset = found.offset;
+  const auto at_found = compare_trajectory(reference, cam1, c, "hand");
+  c.reference_time_offset = 0.0;
+  const auto at_zero = compare_trajectory(reference, cam1, c, "hand");
+  std::printf("aligned position RMSE at the offset found %.4f m, at 0 %.4f m\n",
+              at_found.position_rmse, at_zero.position_rmse);
+  EXPECT_LT(at_found.position_rmse, 0.006);
+  EXPECT_GT(at_zero.position_rmse, 5 * at_found.position_rmse);
+  // Centred elsewhere (a rough offset given), the same offset.
+  TimeOffsetSettings centred = s;
+  centred.centre = 0.4;
+  EXPECT_NEAR(estimate_time_offset(reference, {&cam1}, max_dt, centred, "hand").offset,
+              found.offset, 1.0 / 120.0);
+
+  // A convergence (as an observer's estimate of a still target approaches it): a shifted
+  // exponential is the same one scaled, so the speeds' values fix the offset, not their shape.
+  const auto converging = [](double t) {
+    const double e = std::exp(-t / 1.5);
+    return obs::make_pose(obs::Vec3(0.8, -0.5, 1.2) * e + obs::Vec3(0, 0, 1),
+                          obs::Vec3(0.6, 0.2, -0.4) * e);
+  };
+  const auto converged = estimated(converging, offset, 0.0001, 0.0002, 7);
+  const double from_values =
+      estimate_time_offset(sampled(converging, 200.0, 0.0, 10.0), {&converged}, max_dt, s, "c")
+          .offset;
+  std::printf("convergence: offset found %.5f s\n", from_values);
+  EXPECT_NEAR(from_values, offset, 1.0 / 120.0);
+
+  // A target that stands still, and one that turns at one speed on a circle at one speed.
+  const auto still =
+      sampled([](double) { return obs::make_pose(obs::Vec3(1, 2, 3), obs::Vec3(0.1, 0, 0)); },
+              200.0, 0.0, 10.0);
+  const auto circle = [](double t) {
+    return obs::make_pose(obs::Vec3(std::cos(t), std::sin(t), 0.5), obs::Vec3(0, 0, t));
+  };
+  const auto on_circle = estimated(circle, offset, 0.002, 0.0035, 3);
+  const auto turning = sampled(circle, 200.0, 0.0, 10.0);
+  for (const auto* ref : {&still, &turning})
+    test::expect_input_error([&] { estimate_time_offset(*ref, {&on_circle}, max_dt, s, "steady"); },
+                             {"steady", "speed does not change", "--reference-time-offset"});
+  // Estimates of another motion: the mismatch is flat.
+  const auto other = estimated(
+      [](double t) {
+        return obs::make_pose(obs::Vec3(0.3 * std::sin(2.9 * t), 0.2 * t * t / 10, 0.0),
+                              obs::Vec3(0.0, 0.6 * std::cos(0.4 * t), 0.0));
+      },
+      offset, 0.002, 0.0035, 4);
+  test::expect_input_error([&] { estimate_time_offset(reference, {&other}, max_dt, s, "other"); },
+                           {"other", "do not determine", "median"});
+  // The true offset outside the offsets tried: the best lies at their edge.
+  TimeOffsetSettings narrow = s;
+  narrow.search = 0.1;
+  test::expect_input_error([&] { estimate_time_offset(reference, {&cam1}, max_dt, narrow, "n"); },
+                           {"n", "edge of the offsets tried", "widen"});
+  // A reference 100 s ahead covers no offset within 1 s of 0.
+  std::vector<TumRow> ahead = reference;
+  for (auto& r : ahead) r.t += 100.0;
+  test::expect_input_error([&] { estimate_time_offset(ahead, {&cam1}, max_dt, s, "ahead"); },
+                           {"ahead", "too few of the offsets"});
+}
+
+// The command: a reference 1000 s ahead with a rough offset of -1000 s given, refined to the
+// estimates' own from the speeds (two cameras of simulate's form of estimates.csv), compared at
+// it, and what was found in comparison.json; without --reference, and against a reference of a
+// target that stands still, one line, and the comparison already written stays.
+TEST(Cli, TrajectoriesEstimateAReferencesTimeOffset) {
+  const auto dir = test::scratch_dir("cli_time_offset");
+  const double offset = 0.137;
+  fs::create_directories(dir / "results");
+  {
+    std::ofstream est(dir / "results" / "estimates.csv");
+    est.precision(17);
+    est << io::kSimulationEstimatesHeader << "\n";
+    const auto cam1 = estimated(hand_moved, offset, 0.002, 0.0035, 5),
+               cam2 = estimated(hand_moved, offset, 0.002, 0.0035, 6);
+    for (size_t k = 0; k < cam1.size(); ++k)
+      for (const auto* cam : {&cam1, &cam2}) {
+        const obs::SE3& g = (*cam)[k].g;
+        const obs::Vec3 p = g.translation(), w = obs::rotvec(g);
+        est << (*cam)[k].t << ',' << (cam == &cam1 ? 1 : 2) << ',' << p.x() << ',' << p.y() << ','
+            << p.z() << ',' << w.x() << ',' << w.y() << ',' << w.z() << "\n";
+      }
+    std::ofstream ref(dir / "mocap.txt");
+    for (const TumRow& r : sampled(hand_moved, 200.0, 0.0, 10.0))
+      ref << tum_line(r.t + 1000.0, r.g) << "\n";
+    std::ofstream still(dir / "still.txt");
+    for (int j = 0; j <= 2000; ++j)
+      still << tum_line(1000.0 + j / 200.0, obs::make_pose(obs::Vec3(1, 2, 3), obs::Vec3::Zero()))
+            << "\n";
+  }
+  const std::string cmd = "trajectories " + (dir / "results").string() + " --align";
+  const auto r = test::run_netvmo(cmd + " --reference " + (dir / "mocap.txt").string() +
+                                      " --reference-time-offset -1000 --estimate-time-offset",
+                                  dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("reference time offset: -999.8"), std::string::npos) << r.out;
+  const fs::path json = dir / "results" / "trajectories" / "comparison.json";
+  const auto j = nlohmann::json::parse(test::slurp(json));
+  EXPECT_NEAR(j["reference_time_offset_s"].get<double>(), offset - 1000.0, 1.0 / 120.0);
+  EXPECT_EQ(j["reference_time_offset_estimated"]["centre_s"].get<double>(), -1000.0);
+  EXPECT_EQ(j["reference_time_offset_estimated"]["searched_s"].get<double>(), 1.0);
+  ASSERT_EQ(j["cameras"].size(), 2u);
+  for (const auto& c : j["cameras"]) {
+    EXPECT_EQ(c["matched"].get<int>(), 181);
+    EXPECT_LT(c["position_rmse_m"].get<double>(), 0.006) << c;
+  }
+  const std::string before = test::slurp(json);
+  auto bad = test::run_netvmo(cmd + " --estimate-time-offset", dir);
+  EXPECT_EQ(bad.code, 1);
+  test::expect_one_line(bad.err, {"--estimate-time-offset", "needs --reference"});
+  bad = test::run_netvmo(cmd + " --reference " + (dir / "still.txt").string() +
+                             " --reference-time-offset -1000 --estimate-time-offset",
+                         dir);
+  EXPECT_EQ(bad.code, 1);
+  test::expect_one_line(bad.err, {(dir / "still.txt").string(), "does not change"});
+  EXPECT_EQ(test::slurp(json), before);
+  fs::remove_all(dir);
 }
 
 // The command on netvmo simulate's output (the paper's Section 5): every camera's file holds its

@@ -7,8 +7,10 @@
 #include <cstdlib>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -254,10 +256,178 @@ TrajectoryComparison compare_trajectory(const std::vector<TumRow>& reference,
   return c;
 }
 
-std::vector<CameraComparison> write_comparisons(const fs::path& out,
-                                                const std::vector<TrajectoryFile>& files,
-                                                const std::optional<fs::path>& reference,
-                                                const TrajectoryComparisonSettings& settings) {
+namespace {
+
+// The reference's pose at time t, interpolated between the poses around it (position linearly,
+// orientation along the geodesic) where they are at most `gap` apart; before its first pose or
+// after its last, that pose if it lies within max_dt of t.
+std::optional<obs::SE3> reference_at(const std::vector<TumRow>& ref, double t, double max_dt,
+                                     double gap) {
+  const auto after = std::lower_bound(ref.begin(), ref.end(), t,
+                                      [](const TumRow& r, double t_r) { return r.t < t_r; });
+  if (after == ref.begin())  // at or before the first pose
+    return after->t - t <= max_dt ? std::optional<obs::SE3>(after->g) : std::nullopt;
+  if (after == ref.end())  // after the last
+    return t - ref.back().t <= max_dt ? std::optional<obs::SE3>(ref.back().g) : std::nullopt;
+  const TumRow &a = *(after - 1), &b = *after;
+  if (b.t - a.t > gap) return std::nullopt;
+  const double s = (t - a.t) / (b.t - a.t);
+  obs::SE3 g = obs::SE3::Identity();
+  g.linear() =
+      a.g.linear() * obs::exp_so3(s * obs::log_so3(a.g.linear().transpose() * b.g.linear()));
+  g.translation() = (1.0 - s) * a.g.translation() + s * b.g.translation();
+  return g;
+}
+
+// The target's linear [m/s] and angular [rad/s] speed from g1 to g2, dt apart: the same in any
+// world frame (a rigid motion of the world changes neither |p2 - p1| nor R1^T R2).
+std::pair<double, double> speeds(const obs::SE3& g1, const obs::SE3& g2, double dt) {
+  return {(g2.translation() - g1.translation()).norm() / dt,
+          obs::log_so3(g1.linear().transpose() * g2.linear()).norm() / dt};
+}
+
+double median_of(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+std::string seconds(double s) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.4g s", s);
+  return b;
+}
+
+}  // namespace
+
+TimeOffsetEstimate estimate_time_offset(const std::vector<TumRow>& reference,
+                                        const std::vector<const std::vector<TumRow>*>& estimates,
+                                        double max_dt, const TimeOffsetSettings& settings,
+                                        const std::string& what) {
+  // The estimates' pose pairs `baseline` apart (each pose with the first at least that much
+  // after it) and their speeds; a gap over 3 median steps beyond the baseline (a camera without
+  // an estimate for a while) is no pair.
+  struct Pair {
+    double t1, t2, v, w;
+  };
+  std::vector<Pair> pairs;
+  std::vector<double> steps;
+  for (const auto* e : estimates)
+    for (size_t k = 1; k < e->size(); ++k) steps.push_back((*e)[k].t - (*e)[k - 1].t);
+  if (steps.empty() || reference.size() < 2)
+    throw InputError(what + ": too few poses to estimate a time offset");
+  const double h = median_of(steps);
+  for (const auto* e : estimates)
+    for (size_t k = 0, j = 1; k < e->size(); ++k) {
+      const TumRow& a = (*e)[k];
+      j = std::max(j, k + 1);
+      while (j < e->size() && (*e)[j].t - a.t < settings.baseline) ++j;
+      if (j == e->size()) break;
+      const TumRow& b = (*e)[j];
+      if (b.t - a.t > settings.baseline + 3.0 * h) continue;
+      const auto [v, w] = speeds(a.g, b.g, b.t - a.t);
+      pairs.push_back({a.t, b.t, v, w});
+    }
+  if (pairs.empty())
+    throw InputError(what + ": no two poses of a camera lie " + seconds(settings.baseline) +
+                     " apart without a gap");
+  // The reference is interpolated across its usual step, not across a gap in it (3 steps).
+  std::vector<double> ref_steps;
+  for (size_t k = 1; k < reference.size(); ++k)
+    ref_steps.push_back(reference[k].t - reference[k - 1].t);
+  const double gap = 3.0 * median_of(ref_steps);
+  // The reference's own speed spread, over its span at the baseline (or the estimates' step).
+  const double span = std::max(settings.baseline, h);
+  double sv = 0.0, sw = 0.0, mv = 0.0, mw = 0.0;
+  size_t n = 0;
+  for (double t = reference.front().t; t + span <= reference.back().t; t += span) {
+    const auto g1 = reference_at(reference, t, max_dt, gap),
+               g2 = reference_at(reference, t + span, max_dt, gap);
+    if (!g1 || !g2) continue;
+    const auto [v, w] = speeds(*g1, *g2, span);
+    ++n;  // Welford's running mean and sum of squares
+    const double dv = v - mv, dw = w - mw;
+    mv += dv / static_cast<double>(n);
+    mw += dw / static_cast<double>(n);
+    sv += dv * (v - mv);
+    sw += dw * (w - mw);
+  }
+  sv = n > 1 ? std::sqrt(sv / static_cast<double>(n - 1)) : 0.0;
+  sw = n > 1 ? std::sqrt(sw / static_cast<double>(n - 1)) : 0.0;
+  // A speed that varies by less than a thousandth of its mean is taken as constant (a
+  // reference's interpolation alone varies a constant speed by about a millionth).
+  const bool use_v = sv > 1e-3 * mv, use_w = sw > 1e-3 * mw;
+  if (!use_v && !use_w)
+    throw InputError(what + ": the reference's speed does not change (a target that stands " +
+                     "still or moves at one speed), so it does not determine a time offset; " +
+                     "give --reference-time-offset");
+  const double step = settings.step > 0.0 ? settings.step : h / 4.0;
+  const int half = static_cast<int>(std::floor(settings.search / step));
+  std::vector<double> mismatch(static_cast<size_t>(2 * half + 1),
+                               std::numeric_limits<double>::quiet_NaN());
+  std::vector<size_t> used(mismatch.size(), 0);
+  const auto need = static_cast<size_t>(std::ceil(settings.min_overlap * pairs.size()));
+  for (int i = -half; i <= half; ++i) {
+    const double tau = settings.centre + i * step;
+    double sum = 0.0;
+    size_t m = 0;
+    for (const Pair& p : pairs) {
+      const auto g1 = reference_at(reference, p.t1 - tau, max_dt, gap),
+                 g2 = reference_at(reference, p.t2 - tau, max_dt, gap);
+      if (!g1 || !g2) continue;
+      const auto [v, w] = speeds(*g1, *g2, p.t2 - p.t1);
+      // Each speed's squared difference in units of the reference's spread, at most 9 (three
+      // spreads: a camera's start-up transient is no motion of the reference's).
+      if (use_v) sum += std::min(9.0, std::pow((p.v - v) / sv, 2));
+      if (use_w) sum += std::min(9.0, std::pow((p.w - w) / sw, 2));
+      ++m;
+    }
+    const auto at = static_cast<size_t>(i + half);
+    used[at] = m;
+    if (m > 2 && m >= need) mismatch[at] = sum / static_cast<double>(m);
+  }
+  std::vector<double> judged;
+  size_t best = mismatch.size();
+  for (size_t i = 0; i < mismatch.size(); ++i) {
+    if (std::isnan(mismatch[i])) continue;
+    judged.push_back(mismatch[i]);
+    if (best == mismatch.size() || mismatch[i] < mismatch[best]) best = i;
+  }
+  const std::string window =
+      "within " + seconds(settings.search) + " of " + seconds(settings.centre);
+  if (judged.size() < 3)
+    throw InputError(what + ": the reference covers too few of the offsets " + window +
+                     " (at least " + std::to_string(static_cast<int>(100 * settings.min_overlap)) +
+                     " % of the estimates' poses at each; are they on clocks this far apart?)");
+  TimeOffsetEstimate r;
+  r.offsets = judged.size();
+  r.median_mismatch = median_of(judged);
+  r.mismatch = mismatch[best];
+  r.pairs = used[best];
+  r.offset = settings.centre + (static_cast<double>(best) - half) * step;
+  const bool left = best == 0 || std::isnan(mismatch[best - 1]),
+             right = best + 1 == mismatch.size() || std::isnan(mismatch[best + 1]);
+  if (left || right)
+    throw InputError(what + ": the speeds match best at " + seconds(r.offset) +
+                     ", the edge of the offsets tried " + window +
+                     " (widen the search, or centre it with --reference-time-offset)");
+  char ratio[64];
+  std::snprintf(ratio, sizeof ratio, "%.2f", r.mismatch / r.median_mismatch);
+  if (!(r.mismatch <= settings.max_contrast * r.median_mismatch))
+    throw InputError(what + ": the speeds do not determine a time offset " + window +
+                     ": their mismatch at the best, " + seconds(r.offset) + ", is " + ratio +
+                     " of its median over the offsets tried (a target that barely moves, or at "
+                     "one speed); give --reference-time-offset");
+  // A parabola through the best offset and its two neighbours.
+  const double m0 = mismatch[best - 1], m1 = mismatch[best], m2 = mismatch[best + 1];
+  const double curve = m0 - 2.0 * m1 + m2;
+  if (curve > 0.0) r.offset += std::clamp(0.5 * (m0 - m2) / curve, -0.5, 0.5) * step;
+  return r;
+}
+
+Comparisons write_comparisons(const fs::path& out, const std::vector<TrajectoryFile>& files,
+                              const std::optional<fs::path>& reference,
+                              TrajectoryComparisonSettings settings,
+                              const std::optional<TimeOffsetSettings>& estimate_offset) {
   std::map<int, const TrajectoryFile*> truth_of;  // by target
   for (const TrajectoryFile& f : files)
     if (f.camera < 0) truth_of[f.target] = &f;
@@ -267,8 +437,25 @@ std::vector<CameraComparison> write_comparisons(const fs::path& out,
     throw InputError(reference->string() +
                      ": a reference is compared with the results of one target; these have "
                      "several (compare each target's files with their truth, --dataset)");
+  if (estimate_offset && !reference)
+    throw InputError(
+        "a time offset is estimated for a reference alone (the dataset's truth is "
+        "on the results' clock)");
   std::vector<TumRow> given;
   if (reference) given = read_tum(*reference);
+  Comparisons done;
+  const double centre = settings.reference_time_offset;
+  if (estimate_offset) {
+    std::vector<const std::vector<TumRow>*> cameras;
+    for (const TrajectoryFile& f : files)
+      if (f.camera >= 0) cameras.push_back(&f.rows);
+    if (cameras.empty()) return done;
+    TimeOffsetSettings s = *estimate_offset;
+    s.centre = centre;
+    done.time_offset = estimate_time_offset(given, cameras, settings.max_dt, s,
+                                            reference->string() + " against the cameras' files");
+    settings.reference_time_offset = done.time_offset->offset;
+  }
   std::vector<CameraComparison> out_rows;
   for (const TrajectoryFile& f : files) {
     if (f.camera < 0) continue;
@@ -281,11 +468,23 @@ std::vector<CameraComparison> write_comparisons(const fs::path& out,
         "camera " + std::to_string(f.camera) + " (" + f.name + ") against " + row.reference);
     out_rows.push_back(std::move(row));
   }
-  if (out_rows.empty()) return out_rows;
+  done.cameras = out_rows;
+  if (out_rows.empty()) return done;
   nlohmann::json j;
   j["max_dt_s"] = settings.max_dt;
   j["reference_time_offset_s"] = settings.reference_time_offset;
   j["aligned"] = settings.align;
+  if (done.time_offset) {
+    const TimeOffsetEstimate& e = *done.time_offset;
+    j["reference_time_offset_estimated"] = {{"searched_s", estimate_offset->search},
+                                            {"centre_s", centre},
+                                            {"offsets_tried", e.offsets},
+                                            {"pairs", e.pairs},
+                                            {"mismatch", e.mismatch},
+                                            {"median_mismatch", e.median_mismatch}};
+  } else {
+    j["reference_time_offset_estimated"] = nullptr;
+  }
   j["cameras"] = nlohmann::json::array();
   constexpr double deg = 180.0 / M_PI;
   for (const CameraComparison& r : out_rows) {
@@ -309,7 +508,7 @@ std::vector<CameraComparison> write_comparisons(const fs::path& out,
            {"rotation_vector_rad", {w.x(), w.y(), w.z()}}}}});
   }
   io::write_file_atomic(out / "comparison.json", j.dump(2) + "\n");
-  return out_rows;
+  return done;
 }
 
 }  // namespace netvmo::run

@@ -97,6 +97,60 @@ TrajectoryComparison compare_trajectory(const std::vector<TumRow>& reference,
                                         const TrajectoryComparisonSettings& settings,
                                         const std::string& what);
 
+/// How a reference's time offset is estimated (estimate_time_offset). The defaults suit a
+/// motion-capture reference of a target moved by hand for a few seconds, against estimates at
+/// camera frame rates.
+struct TimeOffsetSettings {
+  /// [s] the offsets tried: reference_time_offset within +-search of `centre`.
+  double search = 1.0;
+  /// [s] the middle of the offsets tried (a rough offset known beforehand).
+  double centre = 0.0;
+  /// [s] the spacing of the offsets tried; 0: a quarter of the estimates' median time step.
+  double step = 0.0;
+  /// [s] the speeds are taken over poses at least this far apart: the noise of an estimate's
+  /// speed is its pose noise divided by this time, over one frame three times what it is here.
+  double baseline = 0.1;
+  /// The offset counts as determined only where the mismatch at the best offset is at most this
+  /// fraction of its median over the offsets tried. A target that barely moves, or whose speed
+  /// changes by less than the estimates' noise, leaves the mismatch flat.
+  double max_contrast = 0.5;
+  /// An offset is judged only where the reference covers at least this fraction of the
+  /// estimates' pose pairs.
+  double min_overlap = 0.5;
+};
+
+/// What estimate_time_offset found.
+struct TimeOffsetEstimate {
+  double offset = 0.0;           ///< [s] the reference_time_offset that matches the speeds best
+  double mismatch = 0.0;         ///< the speeds' mismatch there (see estimate_time_offset)
+  double median_mismatch = 0.0;  ///< its median over the offsets tried
+  size_t pairs = 0;              ///< the estimates' pose pairs compared at the offset found
+  size_t offsets = 0;            ///< the offsets tried that the reference covered
+};
+
+/// The time offset between a reference recorded on another clock and the estimates: the
+/// reference_time_offset (TrajectoryComparisonSettings) at which the target's speeds agree best.
+/// The linear speed |p(t2) - p(t1)| / (t2 - t1) and the angular speed |log(R(t1)^T R(t2))| /
+/// (t2 - t1) are the same in any world frame, so no alignment is needed first. For every pair of
+/// an estimate's poses `baseline` apart (no pair across a gap of over 3 median steps more) the
+/// reference is interpolated at both times less the offset (position linearly, orientation along
+/// the geodesic, between reference poses at most 3 of its median steps apart), and the mismatch
+/// is the mean over the pairs of both speeds' squared differences, each in units of the
+/// reference's own speed spread (its standard deviation over its span, at the baseline) and
+/// capped at 9 (three spreads: a camera's start-up transient is no motion of the reference's).
+/// A speed the reference keeps within a thousandth of its mean is left out. The speeds are
+/// compared as they are, not correlated: a correlation ignores their scale, and a shifted
+/// exponential convergence is the same one scaled. Tried on a grid, the best
+/// offset refined by a parabola through its neighbours. The offset found also holds any lag of
+/// the estimates behind the motion (an observer's tracking delay). InputError (naming `what`)
+/// where the reference's speeds do not change, where it covers fewer than 3 of the offsets,
+/// where the best offset lies at the edge of the search, or its mismatch exceeds max_contrast of
+/// the median.
+TimeOffsetEstimate estimate_time_offset(const std::vector<TumRow>& reference,
+                                        const std::vector<const std::vector<TumRow>*>& estimates,
+                                        double max_dt, const TimeOffsetSettings& settings,
+                                        const std::string& what);
+
 /// A written camera file against its reference (write_comparisons).
 struct CameraComparison {
   std::string file;  ///< the camera's file name in `out`
@@ -106,14 +160,26 @@ struct CameraComparison {
   TrajectoryComparison comparison;
 };
 
+/// What write_comparisons compared.
+struct Comparisons {
+  std::vector<CameraComparison> cameras;
+  /// The reference's time offset where it was estimated (then the one every camera was compared
+  /// at).
+  std::optional<TimeOffsetEstimate> time_offset;
+};
+
 /// Compares every camera trajectory write_trajectories wrote into `out` (`files`) with
 /// `reference`, or without it with its target's truth (cameras of a target without one are left
 /// out), and writes `out`/comparison.json: the settings and, per camera, the matches, the errors
 /// (m, degrees) and the alignment. `reference` needs results of one target (InputError
-/// otherwise). Nothing to compare (no reference, no truth written) writes nothing.
-std::vector<CameraComparison> write_comparisons(
+/// otherwise). With `estimate_offset` (which needs `reference`), the reference's time offset is
+/// first estimated from every camera's file at once (estimate_time_offset, centred on
+/// settings.reference_time_offset) and the cameras are compared at it; comparison.json then also
+/// has what the estimate found. Nothing to compare (no reference, no truth written) writes
+/// nothing.
+Comparisons write_comparisons(
     const std::filesystem::path& out, const std::vector<TrajectoryFile>& files,
-    const std::optional<std::filesystem::path>& reference,
-    const TrajectoryComparisonSettings& settings);
+    const std::optional<std::filesystem::path>& reference, TrajectoryComparisonSettings settings,
+    const std::optional<TimeOffsetSettings>& estimate_offset = std::nullopt);
 
 }  // namespace netvmo::run
