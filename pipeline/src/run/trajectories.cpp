@@ -339,7 +339,9 @@ TimeOffsetEstimate estimate_time_offset(const std::vector<TumRow>& reference,
   const double span = std::max(settings.baseline, h);
   double sv = 0.0, sw = 0.0, mv = 0.0, mw = 0.0;
   size_t n = 0;
-  for (double t = reference.front().t; t + span <= reference.back().t; t += span) {
+  // (At most 100,000 samples of it, whatever its length.)
+  const double stride = std::max(span, (reference.back().t - reference.front().t) / 1e5);
+  for (double t = reference.front().t; t + span <= reference.back().t; t += stride) {
     const auto g1 = reference_at(reference, t, max_dt, gap),
                g2 = reference_at(reference, t + span, max_dt, gap);
     if (!g1 || !g2) continue;
@@ -361,6 +363,11 @@ TimeOffsetEstimate estimate_time_offset(const std::vector<TumRow>& reference,
                      "still or moves at one speed), so it does not determine a time offset; " +
                      "give --reference-time-offset");
   const double step = settings.step > 0.0 ? settings.step : h / 4.0;
+  constexpr double kMaxOffsets = 1e5;
+  if (!(settings.search / step <= kMaxOffsets / 2))
+    throw InputError(what + ": a search within " + seconds(settings.search) + " every " +
+                     seconds(step) + " (a quarter of the estimates' median step) would try more " +
+                     "than 100000 offsets; search a narrower window");
   const int half = static_cast<int>(std::floor(settings.search / step));
   std::vector<double> mismatch(static_cast<size_t>(2 * half + 1),
                                std::numeric_limits<double>::quiet_NaN());
