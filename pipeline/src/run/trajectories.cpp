@@ -291,6 +291,42 @@ double median_of(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// The estimates' pose noise, a variance per axis of the position [m^2] and of the rotation
+// [rad^2]. Over every 5 consecutive poses of a camera (no step over 3 times `h`), a quadratic in
+// time is fitted to each position axis and to each component of the rotation vectors from the
+// middle pose, log(R_mid^T R_k). For white noise of variance s^2 per axis the residuals' sum over
+// the three axes is s^2 times a chi-square of 3 x (5 - 3) = 6 degrees of freedom, whose median is
+// 5.348; the median over the windows (a start-up transient is no noise) over 5.348. Noise
+// correlated over the window (a filter's) is read as motion and left out. Fewer than 5 windows:
+// none.
+std::pair<double, double> pose_noise(const std::vector<const std::vector<TumRow>*>& estimates,
+                                     double h) {
+  constexpr int kWindow = 5;
+  constexpr double kChiSquare6Median = 5.348;
+  std::vector<double> rss_p, rss_r;
+  for (const auto* e : estimates)
+    for (size_t k = 0; k + kWindow <= e->size(); ++k) {
+      const TumRow* w = e->data() + k;
+      bool gap = false;
+      for (int i = 1; i < kWindow; ++i) gap = gap || w[i].t - w[i - 1].t > 3.0 * h;
+      if (gap) continue;
+      Eigen::Matrix<double, kWindow, 3> a;
+      Eigen::Matrix<double, kWindow, 3> p, r;
+      const TumRow& mid = w[kWindow / 2];
+      for (int i = 0; i < kWindow; ++i) {
+        const double t = w[i].t - mid.t;
+        a.row(i) << 1.0, t, t * t;
+        p.row(i) = w[i].g.translation().transpose();
+        r.row(i) = obs::log_so3(mid.g.linear().transpose() * w[i].g.linear()).transpose();
+      }
+      const auto qr = a.colPivHouseholderQr();
+      rss_p.push_back((p - a * qr.solve(p)).squaredNorm());
+      rss_r.push_back((r - a * qr.solve(r)).squaredNorm());
+    }
+  if (rss_p.size() < 5) return {0.0, 0.0};
+  return {median_of(rss_p) / kChiSquare6Median, median_of(rss_r) / kChiSquare6Median};
+}
+
 std::string seconds(double s) {
   char b[32];
   std::snprintf(b, sizeof b, "%.4g s", s);
@@ -316,6 +352,10 @@ TimeOffsetEstimate estimate_time_offset(const std::vector<TumRow>& reference,
   if (steps.empty() || reference.size() < 2)
     throw InputError(what + ": too few poses to estimate a time offset");
   const double h = median_of(steps);
+  // Noise n of variance s^2 per axis on both poses of a pair raises its squared displacement by
+  // 6 s^2 on average (|d + n|^2, n = n2 - n1 over three axes), so a slow target's speeds look
+  // higher than they are; that bias is taken off the squares.
+  const auto [noise_p, noise_r] = pose_noise(estimates, h);
   for (const auto* e : estimates)
     for (size_t k = 0, j = 1; k < e->size(); ++k) {
       const TumRow& a = (*e)[k];
@@ -324,8 +364,10 @@ TimeOffsetEstimate estimate_time_offset(const std::vector<TumRow>& reference,
       if (j == e->size()) break;
       const TumRow& b = (*e)[j];
       if (b.t - a.t > settings.baseline + 3.0 * h) continue;
-      const auto [v, w] = speeds(a.g, b.g, b.t - a.t);
-      pairs.push_back({a.t, b.t, v, w});
+      const double dt = b.t - a.t;
+      const auto [v, w] = speeds(a.g, b.g, dt);
+      const double v2 = v * v - 6.0 * noise_p / (dt * dt), w2 = w * w - 6.0 * noise_r / (dt * dt);
+      pairs.push_back({a.t, b.t, std::sqrt(std::max(0.0, v2)), std::sqrt(std::max(0.0, w2))});
     }
   if (pairs.empty())
     throw InputError(what + ": no two poses of a camera lie " + seconds(settings.baseline) +
@@ -406,6 +448,8 @@ TimeOffsetEstimate estimate_time_offset(const std::vector<TumRow>& reference,
                      " (at least " + std::to_string(static_cast<int>(100 * settings.min_overlap)) +
                      " % of the estimates' poses at each; are they on clocks this far apart?)");
   TimeOffsetEstimate r;
+  r.position_noise = std::sqrt(noise_p);
+  r.rotation_noise = std::sqrt(noise_r);
   r.offsets = judged.size();
   r.median_mismatch = median_of(judged);
   r.mismatch = mismatch[best];
@@ -488,7 +532,9 @@ Comparisons write_comparisons(const fs::path& out, const std::vector<TrajectoryF
                                             {"offsets_tried", e.offsets},
                                             {"pairs", e.pairs},
                                             {"mismatch", e.mismatch},
-                                            {"median_mismatch", e.median_mismatch}};
+                                            {"median_mismatch", e.median_mismatch},
+                                            {"position_noise_m", e.position_noise},
+                                            {"rotation_noise_deg", e.rotation_noise * 180 / M_PI}};
   } else {
     j["reference_time_offset_estimated"] = nullptr;
   }

@@ -126,6 +126,8 @@ struct TimeOffsetEstimate {
   double median_mismatch = 0.0;  ///< its median over the offsets tried
   size_t pairs = 0;              ///< the estimates' pose pairs compared at the offset found
   size_t offsets = 0;            ///< the offsets tried that the reference covered
+  double position_noise = 0.0;   ///< [m] the estimates' pose noise per axis, as read (see below)
+  double rotation_noise = 0.0;   ///< [rad] the same of the orientation
 };
 
 /// The time offset between a reference recorded on another clock and the estimates: the
@@ -138,6 +140,12 @@ struct TimeOffsetEstimate {
 /// is the mean over the pairs of both speeds' squared differences, each in units of the
 /// reference's own speed spread (its standard deviation over its span, at the baseline) and
 /// capped at 9 (three spreads: a camera's start-up transient is no motion of the reference's).
+/// The estimates' speeds are first freed of their noise's bias: noise of variance s^2 per axis
+/// on both poses raises a pair's squared displacement by 6 s^2 on average, and s^2 is read off
+/// the estimates themselves (the median residual of a quadratic in time fitted to every 5
+/// consecutive poses, per axis of the position and of the rotation vector from the middle pose;
+/// noise correlated over 5 poses, a filter's, is read as motion). The reference is taken as
+/// exact.
 /// A speed the reference keeps within a thousandth of its mean is left out. The speeds are
 /// compared as they are, not correlated: a correlation ignores their scale, and a shifted
 /// exponential convergence is the same one scaled. Tried on a grid, the best
