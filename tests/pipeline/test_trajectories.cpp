@@ -634,6 +634,10 @@ TEST(Cli, TrajectoriesEstimateAReferencesTimeOffset) {
   EXPECT_NEAR(j["reference_time_offset_s"].get<double>(), offset - 1000.0, 1.0 / 120.0);
   EXPECT_EQ(j["reference_time_offset_estimated"]["centre_s"].get<double>(), -1000.0);
   EXPECT_EQ(j["reference_time_offset_estimated"]["searched_s"].get<double>(), 1.0);
+  EXPECT_NEAR(j["reference_time_offset_estimated"]["position_noise_m"].get<double>(), 0.002,
+              0.0003);
+  EXPECT_NEAR(j["reference_time_offset_estimated"]["rotation_noise_deg"].get<double>(),
+              0.0035 * 180 / M_PI, 0.0005 * 180 / M_PI);
   ASSERT_EQ(j["cameras"].size(), 2u);
   for (const auto& c : j["cameras"]) {
     EXPECT_EQ(c["matched"].get<int>(), 181);
