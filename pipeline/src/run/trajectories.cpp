@@ -320,8 +320,11 @@ std::pair<double, double> pose_noise(const std::vector<const std::vector<TumRow>
         r.row(i) = obs::log_so3(mid.g.linear().transpose() * w[i].g.linear()).transpose();
       }
       const auto qr = a.colPivHouseholderQr();
-      rss_p.push_back((p - a * qr.solve(p)).squaredNorm());
-      rss_r.push_back((r - a * qr.solve(r)).squaredNorm());
+      const double sp = (p - a * qr.solve(p)).squaredNorm(),
+                   sr = (r - a * qr.solve(r)).squaredNorm();
+      if (!std::isfinite(sp) || !std::isfinite(sr)) continue;  // times or poses beyond doubles
+      rss_p.push_back(sp);
+      rss_r.push_back(sr);
     }
   if (rss_p.size() < 5) return {0.0, 0.0};
   return {median_of(rss_p) / kChiSquare6Median, median_of(rss_r) / kChiSquare6Median};
