@@ -56,15 +56,17 @@ void add_trajectories(CLI::App& app, int& exit_code) {
                   "[s] added to the reference's times to put them on the results' clock (for a "
                   "reference recorded on another clock)")
       ->capture_default_str();
-  cmd->add_flag("--estimate-time-offset", o->estimate_offset,
-                "estimate the reference's time offset (the --reference-time-offset at which the "
-                "target's linear and angular speeds agree best over every camera's file, within "
-                "--time-offset-search of --reference-time-offset) and compare at it");
+  CLI::Option* estimate = cmd->add_flag(
+      "--estimate-time-offset", o->estimate_offset,
+      "estimate the reference's time offset (the --reference-time-offset at which the "
+      "target's linear and angular speeds agree best over every camera's file, within "
+      "--time-offset-search of --reference-time-offset) and compare at it");
   cmd->add_option("--time-offset-search", o->offset.search,
                   "[s] with --estimate-time-offset: the offsets tried lie within this of "
                   "--reference-time-offset")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->needs(estimate);
   cmd->callback([o, &exit_code]() {
     exit_code = guarded("trajectories", [&]() {
       const std::string out = o->out.empty() ? o->results + "/trajectories" : o->out;

@@ -647,6 +647,10 @@ TEST(Cli, TrajectoriesEstimateAReferencesTimeOffset) {
   auto bad = test::run_netvmo(cmd + " --estimate-time-offset", dir);
   EXPECT_EQ(bad.code, 1);
   test::expect_one_line(bad.err, {"--estimate-time-offset", "needs --reference"});
+  bad = test::run_netvmo(cmd + " --time-offset-search 2", dir);  // CLI11's check
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.err.find("--time-offset-search requires --estimate-time-offset"), std::string::npos)
+      << bad.err;
   bad = test::run_netvmo(cmd + " --reference " + (dir / "still.txt").string() +
                              " --reference-time-offset -1000 --estimate-time-offset",
                          dir);
