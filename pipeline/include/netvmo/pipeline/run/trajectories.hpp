@@ -145,11 +145,10 @@ struct TimeOffsetEstimate {
 /// the estimates themselves (the median residual of a quadratic in time fitted to every 5
 /// consecutive poses, per axis of the position and of the rotation vector from the middle pose;
 /// noise correlated over 5 poses, a filter's, is read as motion). The reference is taken as
-/// exact.
-/// A speed the reference keeps within a thousandth of its mean is left out. The speeds are
-/// compared as they are, not correlated: a correlation ignores their scale, and a shifted
-/// exponential convergence is the same one scaled. Tried on a grid, the best
-/// offset refined by a parabola through its neighbours. The offset found also holds any lag of
+/// exact. A speed the reference keeps within a thousandth of its mean is left out. The speeds
+/// are compared as they are, not correlated: a correlation ignores their scale, and a shifted
+/// exponential convergence is the same one scaled. Tried on a grid, the best offset is refined
+/// by a parabola through its neighbours. The offset found also holds any lag of
 /// the estimates behind the motion (an observer's tracking delay). InputError (naming `what`)
 /// where the reference's speeds do not change, where it covers fewer than 3 of the offsets,
 /// where the best offset lies at the edge of the search, or its mismatch exceeds max_contrast of
