@@ -19,6 +19,7 @@
 #include "netvmo/pipeline/io/number_text.hpp"
 #include "netvmo/pipeline/io/truth_io.hpp"
 #include "netvmo/pipeline/run/run_report.hpp"
+#include "netvmo/pipeline/sources/network_source.hpp"
 
 namespace netvmo::run {
 namespace fs = std::filesystem;
@@ -258,25 +259,33 @@ TrajectoryComparison compare_trajectory(const std::vector<TumRow>& reference,
 
 namespace {
 
-// The reference's pose at time t, interpolated between the poses around it (position linearly,
-// orientation along the geodesic) where they are at most `gap` apart; before its first pose or
-// after its last, that pose if it lies within max_dt of t.
-std::optional<obs::SE3> reference_at(const std::vector<TumRow>& ref, double t, double max_dt,
-                                     double gap) {
-  const auto after = std::lower_bound(ref.begin(), ref.end(), t,
-                                      [](const TumRow& r, double t_r) { return r.t < t_r; });
-  if (after == ref.begin())  // at or before the first pose
-    return after->t - t <= max_dt ? std::optional<obs::SE3>(after->g) : std::nullopt;
-  if (after == ref.end())  // after the last
-    return t - ref.back().t <= max_dt ? std::optional<obs::SE3>(ref.back().g) : std::nullopt;
-  const TumRow &a = *(after - 1), &b = *after;
-  if (b.t - a.t > gap) return std::nullopt;
-  const double s = (t - a.t) / (b.t - a.t);
-  obs::SE3 g = obs::SE3::Identity();
-  g.linear() =
-      a.g.linear() * obs::exp_so3(s * obs::log_so3(a.g.linear().transpose() * b.g.linear()));
-  g.translation() = (1.0 - s) * a.g.translation() + s * b.g.translation();
-  return g;
+// A reference cut where it has a gap: its runs of poses whose steps are at most `gap`.
+struct Segment {
+  std::vector<double> times;
+  std::vector<obs::SE3> poses;
+};
+std::vector<Segment> segments(const std::vector<TumRow>& ref, double gap) {
+  std::vector<Segment> out;
+  for (size_t k = 0; k < ref.size(); ++k) {
+    if (k == 0 || ref[k].t - ref[k - 1].t > gap) out.emplace_back();
+    out.back().times.push_back(ref[k].t);
+    out.back().poses.push_back(ref[k].g);
+  }
+  return out;
+}
+
+// The reference's pose at time t: on the segment that holds t, interpolated on the geodesic
+// between the poses around it (sources::pose_at); within max_dt before a segment's first pose or
+// after its last, that pose; in a gap or beyond the ends, none.
+std::optional<obs::SE3> reference_at(const std::vector<Segment>& ref, double t, double max_dt) {
+  const auto after =
+      std::upper_bound(ref.begin(), ref.end(), t + max_dt,
+                       [](double x, const Segment& s) { return x < s.times.front(); });
+  if (after == ref.begin()) return std::nullopt;
+  const Segment& s = *(after - 1);
+  const double inside = std::clamp(t, s.times.front(), s.times.back());
+  if (std::abs(inside - t) > max_dt) return std::nullopt;
+  return sources::pose_at(s.times, s.poses, inside, 0.0);
 }
 
 // The target's linear [m/s] and angular [rad/s] speed from g1 to g2, dt apart: the same in any
@@ -379,7 +388,7 @@ TimeOffsetEstimate estimate_time_offset(const std::vector<TumRow>& reference,
   std::vector<double> ref_steps;
   for (size_t k = 1; k < reference.size(); ++k)
     ref_steps.push_back(reference[k].t - reference[k - 1].t);
-  const double gap = 3.0 * median_of(ref_steps);
+  const auto runs = segments(reference, 3.0 * median_of(ref_steps));
   // The reference's own speed spread, over its span at the baseline (or the estimates' step).
   const double span = std::max(settings.baseline, h);
   double sv = 0.0, sw = 0.0, mv = 0.0, mw = 0.0;
@@ -387,8 +396,7 @@ TimeOffsetEstimate estimate_time_offset(const std::vector<TumRow>& reference,
   // (At most 100,000 samples of it, whatever its length.)
   const double stride = std::max(span, (reference.back().t - reference.front().t) / 1e5);
   for (double t = reference.front().t; t + span <= reference.back().t; t += stride) {
-    const auto g1 = reference_at(reference, t, max_dt, gap),
-               g2 = reference_at(reference, t + span, max_dt, gap);
+    const auto g1 = reference_at(runs, t, max_dt), g2 = reference_at(runs, t + span, max_dt);
     if (!g1 || !g2) continue;
     const auto [v, w] = speeds(*g1, *g2, span);
     ++n;  // Welford's running mean and sum of squares
@@ -423,8 +431,8 @@ TimeOffsetEstimate estimate_time_offset(const std::vector<TumRow>& reference,
     double sum = 0.0;
     size_t m = 0;
     for (const Pair& p : pairs) {
-      const auto g1 = reference_at(reference, p.t1 - tau, max_dt, gap),
-                 g2 = reference_at(reference, p.t2 - tau, max_dt, gap);
+      const auto g1 = reference_at(runs, p.t1 - tau, max_dt),
+                 g2 = reference_at(runs, p.t2 - tau, max_dt);
       if (!g1 || !g2) continue;
       const auto [v, w] = speeds(*g1, *g2, p.t2 - p.t1);
       // Each speed's squared difference in units of the reference's spread, at most 9 (three
@@ -510,7 +518,6 @@ Comparisons write_comparisons(const fs::path& out, const std::vector<TrajectoryF
                                             reference->string() + " against the cameras' files");
     settings.reference_time_offset = done.time_offset->offset;
   }
-  std::vector<CameraComparison> out_rows;
   for (const TrajectoryFile& f : files) {
     if (f.camera < 0) continue;
     const auto truth = truth_of.find(f.target);
@@ -520,10 +527,9 @@ Comparisons write_comparisons(const fs::path& out, const std::vector<TrajectoryF
     row.comparison = compare_trajectory(
         reference ? given : truth->second->rows, f.rows, settings,
         "camera " + std::to_string(f.camera) + " (" + f.name + ") against " + row.reference);
-    out_rows.push_back(std::move(row));
+    done.cameras.push_back(std::move(row));
   }
-  done.cameras = out_rows;
-  if (out_rows.empty()) return done;
+  if (done.cameras.empty()) return done;
   nlohmann::json j;
   j["max_dt_s"] = settings.max_dt;
   j["reference_time_offset_s"] = settings.reference_time_offset;
@@ -543,7 +549,7 @@ Comparisons write_comparisons(const fs::path& out, const std::vector<TrajectoryF
   }
   j["cameras"] = nlohmann::json::array();
   constexpr double deg = 180.0 / M_PI;
-  for (const CameraComparison& r : out_rows) {
+  for (const CameraComparison& r : done.cameras) {
     const TrajectoryComparison& c = r.comparison;
     const obs::Vec3 p = c.alignment.translation(), w = obs::rotvec(c.alignment);
     j["cameras"].push_back(

@@ -135,8 +135,9 @@ struct TimeOffsetEstimate {
 /// The linear speed |p(t2) - p(t1)| / (t2 - t1) and the angular speed |log(R(t1)^T R(t2))| /
 /// (t2 - t1) are the same in any world frame, so no alignment is needed first. For every pair of
 /// an estimate's poses `baseline` apart (no pair across a gap of over 3 median steps more) the
-/// reference is interpolated at both times less the offset (position linearly, orientation along
-/// the geodesic, between reference poses at most 3 of its median steps apart), and the mismatch
+/// reference is interpolated at both times less the offset (on the SE(3) geodesic between the
+/// poses around each, sources::pose_at, as the renderer's keyframes; not across a gap of over 3 of
+/// its median steps), and the mismatch
 /// is the mean over the pairs of both speeds' squared differences, each in units of the
 /// reference's own speed spread (its standard deviation over its span, at the baseline) and
 /// capped at 9 (three spreads: a camera's start-up transient is no motion of the reference's).
